@@ -1,0 +1,270 @@
+// Pinocchio peer benchmark for embedyn.
+//
+// Usage: pinocchio_bench [--floating] [--repeats N] [--batch B] URDF...
+//
+// For every URDF: build the Pinocchio model (free-flyer root with --floating, fixed base
+// otherwise), pre-generate NSTATES random states, then time aba, rnea, crba and
+// computeMinverse while cycling through the states. Each repeat times a batch of B calls with
+// std::chrono::steady_clock and divides by B; the reported figure is the median over the
+// repeats, in ns per call. One JSON object per URDF is printed on its own line on stdout;
+// diagnostics (convention used, spread, checksum) go to stderr.
+//
+// Build: bench/peers/build_pinocchio.sh (header-only use of Pinocchio's algorithms, -O3, no
+// -march=native; the URDF parser comes from the wheel's prebuilt libpinocchio_parsers).
+
+#include <pinocchio/algorithm/aba.hpp>
+#include <pinocchio/algorithm/center-of-mass.hpp>
+#include <pinocchio/algorithm/crba.hpp>
+#include <pinocchio/algorithm/joint-configuration.hpp>
+#include <pinocchio/algorithm/rnea.hpp>
+#include <pinocchio/config.hpp>
+#include <pinocchio/multibody.hpp>
+#include <pinocchio/parsers/urdf.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <ctime>
+#include <string>
+#include <vector>
+
+namespace {
+
+constexpr int kStates = 64;
+constexpr unsigned kSeed = 20240601u;
+const char* const kPinocchioVersion = PINOCCHIO_VERSION;  // from pinocchio/config.hpp
+
+struct Options {
+  bool floating = false;
+  int repeats = 201;
+  int batch = 1000;
+  std::vector<std::string> urdfs;
+};
+
+struct States {
+  std::vector<Eigen::VectorXd> q, v, tau, a;
+};
+
+struct Stats {
+  double median = 0, min = 0, max = 0;
+  double cpu_wall = 0;  // process CPU time / wall time over all timed batches (1.0 = never preempted)
+};
+
+// Checksum sink: every timed call feeds one output element into it, so the compiler cannot
+// drop the work; the total is printed to stderr at the end.
+double g_checksum = 0.0;
+
+void usage(const char* argv0) {
+  std::fprintf(stderr, "usage: %s [--floating] [--repeats N] [--batch B] URDF...\n", argv0);
+}
+
+bool parse_args(int argc, char** argv, Options& opt) {
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (arg == "--floating") {
+      opt.floating = true;
+    } else if (arg == "--repeats" || arg == "--batch") {
+      if (i + 1 >= argc) return false;
+      const int n = std::atoi(argv[++i]);
+      if (n <= 0) return false;
+      (arg == "--repeats" ? opt.repeats : opt.batch) = n;
+    } else if (arg == "-h" || arg == "--help") {
+      return false;
+    } else if (!arg.empty() && arg[0] == '-') {
+      std::fprintf(stderr, "unknown option %s\n", arg.c_str());
+      return false;
+    } else {
+      opt.urdfs.push_back(arg);
+    }
+  }
+  return !opt.urdfs.empty();
+}
+
+std::string path_stem(const std::string& path) {
+  const std::size_t slash = path.find_last_of('/');
+  std::string name = slash == std::string::npos ? path : path.substr(slash + 1);
+  const std::size_t dot = name.find_last_of('.');
+  if (dot != std::string::npos && dot > 0) name.resize(dot);
+  return name;
+}
+
+// randomConfiguration samples uniformly between the position limits and throws on infinite
+// ones. Give the free-flyer translation ±1 m and every other unbounded coordinate ±π.
+void bound_limits(pinocchio::Model& model) {
+  const double pi = 3.14159265358979323846;
+  for (pinocchio::JointIndex j = 1; j < static_cast<pinocchio::JointIndex>(model.njoints); ++j) {
+    const auto& jm = model.joints[j];
+    const int iq = jm.idx_q();
+    if (jm.shortname() == "JointModelFreeFlyer") {
+      for (int k = 0; k < 3; ++k) {
+        model.lowerPositionLimit[iq + k] = -1.0;
+        model.upperPositionLimit[iq + k] = 1.0;
+      }
+      for (int k = 3; k < 7; ++k) {  // quaternion: sampled uniformly on S3 regardless
+        model.lowerPositionLimit[iq + k] = -1.0;
+        model.upperPositionLimit[iq + k] = 1.0;
+      }
+      continue;
+    }
+    for (int k = 0; k < jm.nq(); ++k) {
+      double& lo = model.lowerPositionLimit[iq + k];
+      double& hi = model.upperPositionLimit[iq + k];
+      if (!std::isfinite(lo) || std::fabs(lo) > 1e10) lo = -pi;
+      if (!std::isfinite(hi) || std::fabs(hi) > 1e10) hi = pi;
+    }
+  }
+}
+
+States make_states(const pinocchio::Model& model) {
+  std::srand(kSeed);  // Pinocchio and Eigen's Random() both draw from std::rand
+  States s;
+  for (int i = 0; i < kStates; ++i) {
+    s.q.push_back(pinocchio::randomConfiguration(model));
+    s.v.push_back(Eigen::VectorXd::Random(model.nv));    // uniform in [-1, 1]
+    s.tau.push_back(Eigen::VectorXd::Random(model.nv));
+    s.a.push_back(Eigen::VectorXd::Random(model.nv));
+  }
+  return s;
+}
+
+// Times `call(state_index, call_index)` in `repeats` batches of `batch` calls each.
+template <typename F>
+Stats time_it(const Options& opt, F&& call) {
+  using clock = std::chrono::steady_clock;
+  // Warm-up: one untimed batch (caches, branch predictors, frequency ramp).
+  for (int k = 0; k < opt.batch; ++k) call(k % kStates, k);
+  std::vector<double> per_call(opt.repeats);
+  int k = 0;
+  const std::clock_t cpu0 = std::clock();
+  const auto wall0 = clock::now();
+  for (int r = 0; r < opt.repeats; ++r) {
+    const auto t0 = clock::now();
+    for (int b = 0; b < opt.batch; ++b, ++k) call(k % kStates, k);
+    const auto t1 = clock::now();
+    per_call[r] = std::chrono::duration<double, std::nano>(t1 - t0).count() / opt.batch;
+  }
+  const double cpu_s = double(std::clock() - cpu0) / CLOCKS_PER_SEC;
+  const double wall_s = std::chrono::duration<double>(clock::now() - wall0).count();
+  std::sort(per_call.begin(), per_call.end());
+  Stats st;
+  st.cpu_wall = wall_s > 0 ? cpu_s / wall_s : 1.0;
+  st.min = per_call.front();
+  st.max = per_call.back();
+  const std::size_t n = per_call.size();
+  st.median = n % 2 ? per_call[n / 2] : 0.5 * (per_call[n / 2 - 1] + per_call[n / 2]);
+  return st;
+}
+
+// Untimed sanity line on stderr: a model corrupted at load time (e.g. Eigen alignment mismatch
+// with the prebuilt parser) shows up as a wrong mass, a non-zero residual or NaNs.
+void sanity_check(const pinocchio::Model& model, pinocchio::Data& data, const States& s) {
+  using pinocchio::Convention;
+  const double mass = pinocchio::computeTotalMass(model);
+  const Eigen::VectorXd q0 = pinocchio::neutral(model);
+  const Eigen::VectorXd zero = Eigen::VectorXd::Zero(model.nv);
+  const double fall = pinocchio::aba(model, data, q0, zero, zero, Convention::WORLD).norm();
+  const Eigen::VectorXd qdd = pinocchio::aba(model, data, s.q[0], s.v[0], s.tau[0], Convention::WORLD);
+  const Eigen::VectorXd nle = pinocchio::rnea(model, data, s.q[0], s.v[0], zero);
+  pinocchio::crba(model, data, s.q[0], Convention::LOCAL);
+  Eigen::MatrixXd M = data.M;
+  M.triangularView<Eigen::StrictlyLower>() = M.transpose().triangularView<Eigen::StrictlyLower>();
+  const double residual = (M * qdd + nle - s.tau[0]).lpNorm<Eigen::Infinity>();
+  pinocchio::computeMinverse(model, data, s.q[0]);
+  Eigen::MatrixXd Minv = data.Minv;
+  Minv.triangularView<Eigen::StrictlyLower>() = Minv.transpose().triangularView<Eigen::StrictlyLower>();
+  const double inv_err = (M * Minv - Eigen::MatrixXd::Identity(model.nv, model.nv)).lpNorm<Eigen::Infinity>();
+  std::fprintf(stderr, "  check: mass %.6f kg, |aba(neutral,0,0)| %.9g, |M qdd + nle - tau| %.2e, |M Minv - I| %.2e\n",
+               mass, fall, residual, inv_err);
+}
+
+void report_stats(const std::string& model, const char* algo, const Stats& st) {
+  std::fprintf(stderr, "  %-16s %-10s median %9.1f  min %9.1f  max %9.1f ns  cpu/wall %.2f\n",
+               model.c_str(), algo, st.median, st.min, st.max, st.cpu_wall);
+}
+
+int run_one(const Options& opt, const std::string& path) {
+  pinocchio::Model model;
+  try {
+    if (opt.floating)
+      pinocchio::urdf::buildModel(path, pinocchio::JointModelFreeFlyer(), model);
+    else
+      pinocchio::urdf::buildModel(path, model);  // mimic=false: mimic joints stay independent
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "%s: cannot build model: %s\n", path.c_str(), e.what());
+    return 1;
+  }
+  model.gravity.linear(Eigen::Vector3d(0.0, 0.0, -9.81));
+  bound_limits(model);
+  pinocchio::Data data(model);
+  const States s = make_states(model);
+  const int nv = model.nv;
+  const std::string stem = path_stem(path);
+  using pinocchio::Convention;
+
+  std::fprintf(stderr, "%s (%s): nq=%d nv=%d njoints=%d, aba convention WORLD (LOCAL also timed)\n",
+               path.c_str(), opt.floating ? "floating" : "fixed", model.nq, nv, model.njoints);
+  sanity_check(model, data, s);
+
+  const Stats aba = time_it(opt, [&](int i, int k) {
+    pinocchio::aba(model, data, s.q[i], s.v[i], s.tau[i], Convention::WORLD);
+    g_checksum += data.ddq[k % nv];
+  });
+  const Stats aba_local = time_it(opt, [&](int i, int k) {
+    pinocchio::aba(model, data, s.q[i], s.v[i], s.tau[i], Convention::LOCAL);
+    g_checksum += data.ddq[k % nv];
+  });
+  const Stats rnea = time_it(opt, [&](int i, int k) {
+    pinocchio::rnea(model, data, s.q[i], s.v[i], s.a[i]);
+    g_checksum += data.tau[k % nv];
+  });
+  const Stats crba = time_it(opt, [&](int i, int k) {
+    pinocchio::crba(model, data, s.q[i], Convention::LOCAL);
+    g_checksum += data.M(0, k % nv);
+  });
+  const Stats crba_world = time_it(opt, [&](int i, int k) {
+    pinocchio::crba(model, data, s.q[i], Convention::WORLD);
+    g_checksum += data.M(0, k % nv);
+  });
+  const Stats minv = time_it(opt, [&](int i, int k) {
+    pinocchio::computeMinverse(model, data, s.q[i]);
+    g_checksum += data.Minv(0, k % nv);
+  });
+
+  report_stats(stem, "aba/WORLD", aba);
+  report_stats(stem, "aba/LOCAL", aba_local);
+  report_stats(stem, "rnea", rnea);
+  report_stats(stem, "crba/LOCAL", crba);
+  report_stats(stem, "crba/WORLD", crba_world);
+  report_stats(stem, "minv", minv);
+  double cpu_wall = 1.0;
+  for (const Stats* st : {&aba, &aba_local, &rnea, &crba, &crba_world, &minv})
+    cpu_wall = std::min(cpu_wall, st->cpu_wall);
+
+  std::printf(
+      "{\"model\": \"%s\", \"floating\": %s, \"nq\": %d, \"nv\": %d, \"aba\": %.1f, \"rnea\": %.1f, "
+      "\"crba\": %.1f, \"minv\": %.1f, \"aba_convention\": \"WORLD\", \"aba_local\": %.1f, "
+      "\"crba_world\": %.1f, \"cpu_wall_min\": %.2f, \"repeats\": %d, \"batch\": %d, "
+      "\"pinocchio\": \"%s\"}\n",
+      stem.c_str(), opt.floating ? "true" : "false", model.nq, nv, aba.median, rnea.median,
+      crba.median, minv.median, aba_local.median, crba_world.median, cpu_wall, opt.repeats, opt.batch,
+      kPinocchioVersion);
+  std::fflush(stdout);
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Options opt;
+  if (!parse_args(argc, argv, opt)) {
+    usage(argv[0]);
+    return 2;
+  }
+  int failures = 0;
+  for (const auto& path : opt.urdfs) failures += run_one(opt, path);
+  std::fprintf(stderr, "checksum %.17g\n", g_checksum);
+  return failures ? 1 : 0;
+}

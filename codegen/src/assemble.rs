@@ -1,0 +1,192 @@
+//! From the IR to the runtime's [`Model`]: depth-first numbering, fixed joints merged into their parent
+//! body (inertias combined exactly, in the target scalar), the optional free-flyer root.
+
+use crate::error::{LoadError, Location};
+use crate::ir::{Inertial, JointKind, Origin, Robot};
+use embedyn_runtime::nalgebra::{Matrix3, Vector3};
+use embedyn_runtime::{JointType, Model, ModelError, Real, SpatialInertia, Transform};
+
+/// Choices made when turning a file into a model.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ModelOptions {
+    /// Make the URDF root free with a floating joint named `root_joint` (`--floating`).
+    pub floating: bool,
+    /// Gravity in the world frame (m/s²).
+    pub gravity: [f64; 3],
+}
+
+impl Default for ModelOptions {
+    fn default() -> Self {
+        ModelOptions { floating: false, gravity: [0.0, 0.0, -9.81] }
+    }
+}
+
+/// The name of the joint `--floating` adds.
+pub const ROOT_JOINT: &str = "root_joint";
+
+fn origin_transform<T: Real>(o: &Origin) -> Transform<T> {
+    Transform::from_xyz_rpy(o.xyz, o.rpy)
+}
+
+/// The spatial inertia of a URDF `<inertial>` about its link frame.
+pub fn inertial_about_link<T: Real>(i: &Inertial) -> SpatialInertia<T> {
+    let f = T::from_f64;
+    let [ixx, ixy, ixz, iyy, iyz, izz] = i.inertia;
+    let ic = Matrix3::new(f(ixx), f(ixy), f(ixz), f(ixy), f(iyy), f(iyz), f(ixz), f(iyz), f(izz));
+    let frame: Transform<T> = origin_transform(&i.origin);
+    let ic_link = frame.rotation * ic * frame.rotation.transpose();
+    SpatialInertia::from_com(f(i.mass), frame.translation, ic_link)
+}
+
+/// Builds the model in scalar `T`.
+pub fn build_model<T: Real>(robot: &Robot, options: &ModelOptions) -> Result<Model<T>, LoadError> {
+    let path = &robot.source;
+    let joint_loc = |j: usize| {
+        let joint = &robot.joints[j];
+        Location::new(path, joint.line, format!("joint \"{}\"", joint.name))
+    };
+    let has_floating = robot.joints.iter().position(|j| j.kind == JointKind::Floating);
+    if options.floating {
+        if let Some(j) = has_floating {
+            return Err(LoadError::new(
+                joint_loc(j),
+                "--floating makes the root free, but the file already has a floating joint",
+            ));
+        }
+    }
+    let mut children: Vec<Vec<usize>> = vec![Vec::new(); robot.links.len()];
+    for (j, joint) in robot.joints.iter().enumerate() {
+        children[joint.parent].push(j);
+    }
+
+    // Depth-first walk over links. Each link gets a body (None: fixed to the world) and its pose in that
+    // body's frame.
+    struct Pending<T: Real> {
+        parent: Option<usize>,
+        joint: Option<usize>, // None: the --floating root joint
+        placement: Transform<T>,
+        link: usize,
+        inertia: SpatialInertia<T>,
+        links: Vec<String>,
+    }
+    let mut bodies: Vec<Pending<T>> = Vec::new();
+    let mut link_body: Vec<Option<(Option<usize>, Transform<T>)>> = vec![None; robot.links.len()];
+    let root_body = if options.floating {
+        bodies.push(Pending {
+            parent: None,
+            joint: None,
+            placement: Transform::identity(),
+            link: robot.root,
+            inertia: SpatialInertia::zero(),
+            links: vec![],
+        });
+        Some(0)
+    } else {
+        None
+    };
+    link_body[robot.root] = Some((root_body, Transform::identity()));
+    // Explicit stack so that very deep chains (1000+ bodies) do not overflow the call stack;
+    // children are pushed in reverse to visit them in file order.
+    let mut stack: Vec<usize> = children[robot.root].iter().rev().copied().collect();
+    while let Some(j) = stack.pop() {
+        let joint = &robot.joints[j];
+        let (parent_body, parent_pose) = link_body[joint.parent].expect("parent visited first");
+        let pose = parent_pose.compose(&origin_transform(&joint.origin));
+        if joint.kind.is_moving() {
+            if joint.kind == JointKind::Floating && parent_body.is_some() {
+                return Err(LoadError::new(
+                    joint_loc(j),
+                    "a floating joint must connect the root (a link fixed to the world) to the rest of the tree",
+                ));
+            }
+            bodies.push(Pending {
+                parent: parent_body,
+                joint: Some(j),
+                placement: pose,
+                link: joint.child,
+                inertia: SpatialInertia::zero(),
+                links: vec![],
+            });
+            link_body[joint.child] = Some((Some(bodies.len() - 1), Transform::identity()));
+        } else {
+            link_body[joint.child] = Some((parent_body, pose));
+        }
+        stack.extend(children[joint.child].iter().rev());
+    }
+    // Merge every link's inertia into its body; links fixed to the world carry none that matters.
+    for (l, link) in robot.links.iter().enumerate() {
+        let (body, pose) = link_body[l].expect("every link is reachable from the root");
+        if let Some(b) = body {
+            bodies[b].links.push(link.name.clone());
+            if let Some(inertial) = &link.inertial {
+                let i = inertial_about_link::<T>(inertial).act(&pose);
+                bodies[b].inertia = bodies[b].inertia + i;
+            }
+        }
+    }
+
+    let g = options.gravity;
+    let mut builder = Model::<T>::builder(robot.name.clone())
+        .gravity(Vector3::new(T::from_f64(g[0]), T::from_f64(g[1]), T::from_f64(g[2])));
+    for (b, pending) in bodies.iter().enumerate() {
+        let (name, jtype, axis) = match pending.joint {
+            None => (ROOT_JOINT.to_string(), JointType::Floating, [0.0; 3]),
+            Some(j) => {
+                let joint = &robot.joints[j];
+                let t = match joint.kind {
+                    JointKind::Revolute => JointType::Revolute,
+                    JointKind::Continuous => JointType::Continuous,
+                    JointKind::Prismatic => JointType::Prismatic,
+                    JointKind::Floating => JointType::Floating,
+                    JointKind::Fixed => unreachable!("fixed joints were merged"),
+                };
+                (joint.name.clone(), t, joint.axis)
+            }
+        };
+        let axis = Vector3::new(T::from_f64(axis[0]), T::from_f64(axis[1]), T::from_f64(axis[2]));
+        let index = builder
+            .add_body(
+                pending.parent,
+                name,
+                jtype,
+                axis,
+                pending.placement,
+                robot.links[pending.link].name.clone(),
+                pending.inertia,
+            )
+            .map_err(|e| model_error(robot, &bodies_joint(&bodies, b), e))?;
+        let mut links = pending.links.clone();
+        // The body's own link first.
+        if let Some(k) = links.iter().position(|n| *n == robot.links[pending.link].name) {
+            links.swap(0, k);
+        }
+        builder.set_merged_links(index, links);
+    }
+    fn bodies_joint<T: Real>(bodies: &[Pending<T>], b: usize) -> Option<usize> {
+        bodies[b].joint
+    }
+    builder.build().map_err(|e| {
+        let joint = match &e {
+            ModelError::NoInertiaAboutAxis { joint, .. } => robot.joints.iter().position(|j| &j.name == joint),
+            _ => None,
+        };
+        model_error(robot, &joint, e)
+    })
+}
+
+fn model_error(robot: &Robot, joint: &Option<usize>, e: ModelError) -> LoadError {
+    let location = match joint {
+        Some(j) => {
+            let joint = &robot.joints[*j];
+            Location::new(&robot.source, joint.line, format!("joint \"{}\"", joint.name))
+        }
+        None => Location::new(&robot.source, None, format!("joint \"{ROOT_JOINT}\"")),
+    };
+    let message = match e {
+        ModelError::NoInertiaAboutAxis { d, .. } => format!(
+            "the links this joint moves have no inertia about its axis (D = {d:e}), so its acceleration is undetermined; give the child link an <inertial> or make the joint fixed"
+        ),
+        other => other.to_string(),
+    };
+    LoadError::new(location, message)
+}

@@ -1,0 +1,1 @@
+//! The `embedyn` command line.

@@ -1,0 +1,75 @@
+//! Errors and warnings of model loading, each pointing at the file, the element and the line.
+
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+/// Where in a model file something is: the file, the element (`joint "knee"`) and its line.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Location {
+    pub file: PathBuf,
+    /// 1-based line, when known.
+    pub line: Option<u32>,
+    /// The element, e.g. `joint "knee"` or `link "thigh" <inertial>`.
+    pub element: String,
+}
+
+impl Location {
+    pub fn new(file: &Path, line: Option<u32>, element: impl Into<String>) -> Self {
+        Location {
+            file: file.to_path_buf(),
+            line,
+            element: element.into(),
+        }
+    }
+}
+
+impl fmt::Display for Location {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}", self.file.display())?;
+        if let Some(l) = self.line {
+            write!(f, ":{l}")?;
+        }
+        if !self.element.is_empty() {
+            write!(f, ": {}", self.element)?;
+        }
+        Ok(())
+    }
+}
+
+/// A model that cannot be loaded. The message names the file, the element and, where possible, the line.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct LoadError {
+    pub location: Location,
+    pub message: String,
+}
+
+impl LoadError {
+    pub fn new(location: Location, message: impl Into<String>) -> Self {
+        LoadError {
+            location,
+            message: message.into(),
+        }
+    }
+}
+
+impl fmt::Display for LoadError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}: {}", self.location, self.message)
+    }
+}
+
+impl std::error::Error for LoadError {}
+
+/// Unusual but valid data (a massless body with rotational inertia, an inertia violating the triangle
+/// inequality): the model loads and the warning is reported.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Warning {
+    pub location: Location,
+    pub message: String,
+}
+
+impl fmt::Display for Warning {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "warning: {}: {}", self.location, self.message)
+    }
+}

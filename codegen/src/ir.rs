@@ -1,0 +1,87 @@
+//! The model IR: what a model file says, checked and in SI units, before any choice of scalar type.
+//!
+//! Every output (the interpreted model, generated code, `embedyn info`) is made from this one structure.
+//! Numbers stay as the file wrote them (`f64`), so that each scalar type evaluates the trigonometry of
+//! `rpy` and the merging of fixed joints in its own precision.
+
+use std::path::PathBuf;
+
+/// `<origin xyz rpy>`.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Origin {
+    pub xyz: [f64; 3],
+    pub rpy: [f64; 3],
+}
+
+impl Origin {
+    pub fn is_identity(&self) -> bool {
+        self.xyz == [0.0; 3] && self.rpy == [0.0; 3]
+    }
+}
+
+/// `<inertial>`: mass, centre-of-mass frame, inertia about the centre of mass in that frame.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Inertial {
+    pub origin: Origin,
+    pub mass: f64,
+    /// `[ixx, ixy, ixz, iyy, iyz, izz]`.
+    pub inertia: [f64; 6],
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Link {
+    pub name: String,
+    pub inertial: Option<Inertial>,
+    pub line: Option<u32>,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum JointKind {
+    Revolute,
+    Continuous,
+    Prismatic,
+    Fixed,
+    Floating,
+}
+
+impl JointKind {
+    pub fn is_moving(self) -> bool {
+        self != JointKind::Fixed
+    }
+}
+
+/// `<mimic joint multiplier offset>`: this joint's coordinate = multiplier · q_joint + offset.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Mimic {
+    pub joint: String,
+    pub multiplier: f64,
+    pub offset: f64,
+    pub line: Option<u32>,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Joint {
+    pub name: String,
+    pub kind: JointKind,
+    /// Index into [`Robot::links`].
+    pub parent: usize,
+    pub child: usize,
+    pub origin: Origin,
+    /// As written (not normalized); `[1, 0, 0]` when absent, as URDF specifies.
+    pub axis: [f64; 3],
+    pub mimics: Vec<Mimic>,
+    /// URDF+'s `independent` attribute, if given.
+    pub independent: Option<bool>,
+    pub line: Option<u32>,
+}
+
+/// A robot as read from URDF: links, joints, the root link; loops and couplings come with URDF+.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Robot {
+    pub name: String,
+    pub source: PathBuf,
+    pub links: Vec<Link>,
+    pub joints: Vec<Joint>,
+    /// Index of the root link (the one that is no joint's child).
+    pub root: usize,
+}

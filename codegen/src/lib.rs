@@ -1,0 +1,38 @@
+//! # embedyn-codegen
+//!
+//! Model loading (URDF; URDF+ loops and couplings arrive with constraint embedding), the one model IR
+//! every output is made from, and the `embedyn` command line. Code generation proper (the library API
+//! for `build.rs` and the `robot!` macro) builds on the same IR.
+//!
+//! ```no_run
+//! use embedyn_codegen::{load, ModelOptions};
+//! let robot = load("models/arm7.urdf".as_ref()).unwrap();
+//! for w in &robot.warnings { eprintln!("{w}"); }
+//! let model = robot.model::<f64>(&ModelOptions::default()).unwrap();
+//! println!("{} has {} degrees of freedom", model.name, model.nv());
+//! ```
+
+mod assemble;
+pub mod cli;
+mod error;
+pub mod ir;
+mod urdf;
+
+pub use assemble::{build_model, inertial_about_link, ModelOptions, ROOT_JOINT};
+pub use error::{LoadError, Location, Warning};
+pub use urdf::{load_urdf, parse_urdf, Loaded};
+
+use embedyn_runtime::{Model, Real};
+use std::path::Path;
+
+/// Loads a model file (URDF or URDF+).
+pub fn load(path: &Path) -> Result<Loaded, LoadError> {
+    load_urdf(path)
+}
+
+impl Loaded {
+    /// The interpreted model in scalar `T`.
+    pub fn model<T: Real>(&self, options: &ModelOptions) -> Result<Model<T>, LoadError> {
+        build_model(&self.robot, options)
+    }
+}

@@ -1,0 +1,360 @@
+//! Reads URDF into the model IR with `roxmltree`, keeping line numbers for messages.
+//!
+//! `urdf-rs` is not used: it drops URDF+ elements, keeps no source positions and rejects a joint with two
+//! `<mimic>` children (a differential).
+
+use crate::error::{LoadError, Location, Warning};
+use crate::ir::{Inertial, Joint, JointKind, Link, Mimic, Origin, Robot};
+use roxmltree::{Document, Node};
+use std::collections::HashMap;
+use std::path::Path;
+
+/// A parsed model and the warnings its data raised.
+#[derive(Clone, Debug)]
+pub struct Loaded {
+    pub robot: Robot,
+    pub warnings: Vec<Warning>,
+}
+
+/// Reads and checks a URDF file.
+pub fn load_urdf(path: &Path) -> Result<Loaded, LoadError> {
+    let text = std::fs::read_to_string(path).map_err(|e| {
+        LoadError::new(Location::new(path, None, ""), format!("cannot read the model file: {e}"))
+    })?;
+    parse_urdf(&text, path)
+}
+
+/// Parses URDF text; `path` is used in messages only.
+pub fn parse_urdf(text: &str, path: &Path) -> Result<Loaded, LoadError> {
+    let doc = Document::parse(text).map_err(|e| {
+        let pos = e.pos();
+        LoadError::new(Location::new(path, Some(pos.row), "XML"), format!("malformed XML: {e}"))
+    })?;
+    let mut p = Parser { doc: &doc, path, warnings: Vec::new() };
+    let robot = p.robot()?;
+    Ok(Loaded { robot, warnings: p.warnings })
+}
+
+struct Parser<'a, 'input> {
+    doc: &'a Document<'input>,
+    path: &'a Path,
+    warnings: Vec<Warning>,
+}
+
+impl<'a, 'input> Parser<'a, 'input> {
+    fn line(&self, node: Node) -> Option<u32> {
+        Some(self.doc.text_pos_at(node.range().start).row)
+    }
+
+    fn loc(&self, node: Node, element: impl Into<String>) -> Location {
+        Location::new(self.path, self.line(node), element)
+    }
+
+    fn err<T>(&self, node: Node, element: impl Into<String>, msg: impl Into<String>) -> Result<T, LoadError> {
+        Err(LoadError::new(self.loc(node, element), msg))
+    }
+
+    fn warn(&mut self, node: Node, element: impl Into<String>, msg: impl Into<String>) {
+        let w = Warning { location: self.loc(node, element), message: msg.into() };
+        self.warnings.push(w);
+    }
+
+    fn robot(&mut self) -> Result<Robot, LoadError> {
+        let root = self.doc.root_element();
+        if root.tag_name().name() != "robot" {
+            return self.err(root, format!("<{}>", root.tag_name().name()), "the root element must be <robot>");
+        }
+        let name = root.attribute("name").unwrap_or("robot").to_string();
+        let mut links = Vec::new();
+        let mut link_index: HashMap<String, usize> = HashMap::new();
+        for node in root.children().filter(|n| n.has_tag_name("link")) {
+            let link = self.link(node)?;
+            if link_index.insert(link.name.clone(), links.len()).is_some() {
+                return self.err(node, format!("link \"{}\"", link.name), "a link of this name is already defined");
+            }
+            links.push(link);
+        }
+        let mut joints: Vec<Joint> = Vec::new();
+        let mut joint_names: HashMap<String, usize> = HashMap::new();
+        let mut parent_joint: Vec<Option<usize>> = vec![None; links.len()];
+        for node in root.children().filter(|n| n.has_tag_name("joint")) {
+            let joint = self.joint(node, &link_index)?;
+            let what = format!("joint \"{}\"", joint.name);
+            if joint_names.insert(joint.name.clone(), joints.len()).is_some() {
+                return self.err(node, what, "a joint of this name is already defined");
+            }
+            if let Some(other) = parent_joint[joint.child] {
+                return self.err(
+                    node,
+                    what,
+                    format!(
+                        "link \"{}\" is already the child of joint \"{}\"; a link has at most one parent (close loops with URDF+ <loop>)",
+                        links[joint.child].name, joints[other].name
+                    ),
+                );
+            }
+            if joint.parent == joint.child {
+                return self.err(node, what, "parent and child are the same link");
+            }
+            parent_joint[joint.child] = Some(joints.len());
+            joints.push(joint);
+        }
+        if links.is_empty() {
+            return self.err(root, format!("robot \"{name}\""), "the model has no <link>");
+        }
+        // Exactly one root; every link reachable from it (otherwise the joints form a cycle).
+        let roots: Vec<usize> = (0..links.len()).filter(|&l| parent_joint[l].is_none()).collect();
+        let root_link = match roots.as_slice() {
+            [r] => *r,
+            [] => {
+                let j = &joints[0];
+                return Err(LoadError::new(
+                    Location::new(self.path, j.line, format!("joint \"{}\"", j.name)),
+                    "the joints form a cycle: every link is some joint's child, so there is no root link",
+                ));
+            }
+            [_, second, ..] => {
+                let names: Vec<&str> = roots.iter().map(|&r| links[r].name.as_str()).collect();
+                let l = &links[*second];
+                return Err(LoadError::new(
+                    Location::new(self.path, l.line, format!("link \"{}\"", l.name)),
+                    format!(
+                        "the model has {} root links ({}); a URDF tree has exactly one",
+                        roots.len(),
+                        names.join(", ")
+                    ),
+                ));
+            }
+        };
+        let mut children: Vec<Vec<usize>> = vec![Vec::new(); links.len()];
+        for (j, joint) in joints.iter().enumerate() {
+            children[joint.parent].push(j);
+        }
+        let mut seen = vec![false; links.len()];
+        let mut stack = vec![root_link];
+        while let Some(l) = stack.pop() {
+            seen[l] = true;
+            stack.extend(children[l].iter().map(|&j| joints[j].child));
+        }
+        if let Some(l) = seen.iter().position(|s| !s) {
+            let j = &joints[parent_joint[l].unwrap()];
+            return Err(LoadError::new(
+                Location::new(self.path, j.line, format!("joint \"{}\"", j.name)),
+                format!(
+                    "the joints form a cycle through link \"{}\", which is not connected to the root link \"{}\"",
+                    links[l].name, links[root_link].name
+                ),
+            ));
+        }
+        // Mimic targets must exist.
+        for joint in &joints {
+            for m in &joint.mimics {
+                if !joint_names.contains_key(&m.joint) {
+                    return Err(LoadError::new(
+                        Location::new(self.path, m.line, format!("joint \"{}\" <mimic>", joint.name)),
+                        format!("<mimic> names joint \"{}\", which does not exist", m.joint),
+                    ));
+                }
+            }
+        }
+        Ok(Robot { name, source: self.path.to_path_buf(), links, joints, root: root_link })
+    }
+
+    fn link(&mut self, node: Node) -> Result<Link, LoadError> {
+        let Some(name) = node.attribute("name") else {
+            return self.err(node, "<link>", "missing attribute `name`");
+        };
+        let what = format!("link \"{name}\"");
+        let inertial = match node.children().find(|n| n.has_tag_name("inertial")) {
+            None => None,
+            Some(inode) => Some(self.inertial(inode, &what)?),
+        };
+        Ok(Link { name: name.to_string(), inertial, line: self.line(node) })
+    }
+
+    fn inertial(&mut self, node: Node, link: &str) -> Result<Inertial, LoadError> {
+        let what = format!("{link} <inertial>");
+        let origin = self.origin(node, &what)?;
+        let Some(mnode) = node.children().find(|n| n.has_tag_name("mass")) else {
+            return self.err(node, what, "missing <mass>");
+        };
+        let mass = self.number(mnode, "value", None, &format!("{what} <mass>"))?;
+        if mass < 0.0 {
+            return self.err(mnode, format!("{what} <mass>"), format!("negative mass {mass}"));
+        }
+        let Some(inode) = node.children().find(|n| n.has_tag_name("inertia")) else {
+            return self.err(node, what, "missing <inertia>");
+        };
+        let iw = format!("{what} <inertia>");
+        let mut inertia = [0.0; 6];
+        for (k, a) in ["ixx", "ixy", "ixz", "iyy", "iyz", "izz"].iter().enumerate() {
+            inertia[k] = self.number(inode, a, None, &iw)?;
+        }
+        let [ixx, ixy, ixz, iyy, iyz, izz] = inertia;
+        let m = [[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]];
+        if !is_psd(&m) {
+            return self.err(
+                inode,
+                iw,
+                format!(
+                    "the inertia tensor is not positive semi-definite (ixx={ixx}, iyy={iyy}, izz={izz}, ixy={ixy}, ixz={ixz}, iyz={iyz})"
+                ),
+            );
+        }
+        // The principal moments of a physical body satisfy the triangle inequality, equivalently
+        // ½ tr(I) 1 − I (the body's second moment of mass) is positive semi-definite.
+        let h = 0.5 * (ixx + iyy + izz);
+        let sigma = [[h - ixx, -ixy, -ixz], [-ixy, h - iyy, -iyz], [-ixz, -iyz, h - izz]];
+        if !is_psd(&sigma) {
+            self.warn(inode, iw.clone(), "the principal moments of inertia violate the triangle inequality (no rigid body has them); loaded as given");
+        }
+        if mass == 0.0 && m.iter().flatten().any(|&x| x != 0.0) {
+            self.warn(mnode, iw, "zero mass with a non-zero rotational inertia (a massless rotor); loaded as given");
+        }
+        Ok(Inertial { origin, mass, inertia })
+    }
+
+    fn joint(&mut self, node: Node, links: &HashMap<String, usize>) -> Result<Joint, LoadError> {
+        let Some(name) = node.attribute("name") else {
+            return self.err(node, "<joint>", "missing attribute `name`");
+        };
+        let what = format!("joint \"{name}\"");
+        let kind = match node.attribute("type") {
+            Some("revolute") => JointKind::Revolute,
+            Some("continuous") => JointKind::Continuous,
+            Some("prismatic") => JointKind::Prismatic,
+            Some("fixed") => JointKind::Fixed,
+            Some("floating") => JointKind::Floating,
+            Some("planar") => {
+                return self.err(node, what, "joint type \"planar\" is not supported (model it as two prismatic joints and a revolute joint)")
+            }
+            Some(t) => {
+                return self.err(node, what, format!("unknown joint type \"{t}\" (expected revolute, continuous, prismatic, fixed or floating)"))
+            }
+            None => return self.err(node, what, "missing attribute `type`"),
+        };
+        let link_of = |tag: &str| -> Result<usize, LoadError> {
+            let Some(n) = node.children().find(|n| n.has_tag_name(tag)) else {
+                return self.err(node, what.clone(), format!("missing <{tag}>"));
+            };
+            let Some(l) = n.attribute("link") else {
+                return self.err(n, format!("{what} <{tag}>"), "missing attribute `link`");
+            };
+            match links.get(l) {
+                Some(&i) => Ok(i),
+                None => self.err(n, format!("{what} <{tag}>"), format!("names link \"{l}\", which does not exist")),
+            }
+        };
+        let parent = link_of("parent")?;
+        let child = link_of("child")?;
+        let origin = self.origin(node, &what)?;
+        let axis = match node.children().find(|n| n.has_tag_name("axis")) {
+            None => [1.0, 0.0, 0.0],
+            Some(a) => self.vec3(a, "xyz", Some([1.0, 0.0, 0.0]), &format!("{what} <axis>"))?,
+        };
+        if matches!(kind, JointKind::Revolute | JointKind::Continuous | JointKind::Prismatic)
+            && axis.iter().all(|&x| x == 0.0)
+        {
+            let a = node.children().find(|n| n.has_tag_name("axis")).unwrap_or(node);
+            return self.err(a, format!("{what} <axis>"), "the joint axis is zero");
+        }
+        let mut mimics = Vec::new();
+        for m in node.children().filter(|n| n.has_tag_name("mimic")) {
+            let mw = format!("{what} <mimic>");
+            let Some(target) = m.attribute("joint") else {
+                return self.err(m, mw, "missing attribute `joint`");
+            };
+            mimics.push(Mimic {
+                joint: target.to_string(),
+                multiplier: self.number(m, "multiplier", Some(1.0), &mw)?,
+                offset: self.number(m, "offset", Some(0.0), &mw)?,
+                line: self.line(m),
+            });
+        }
+        let independent = match node.attribute("independent") {
+            None => None,
+            Some("true") => Some(true),
+            Some("false") => Some(false),
+            Some(x) => return self.err(node, what, format!("attribute `independent` must be \"true\" or \"false\", not \"{x}\"")),
+        };
+        Ok(Joint {
+            name: name.to_string(),
+            kind,
+            parent,
+            child,
+            origin,
+            axis,
+            mimics,
+            independent,
+            line: self.line(node),
+        })
+    }
+
+    fn origin(&self, parent: Node, what: &str) -> Result<Origin, LoadError> {
+        match parent.children().find(|n| n.has_tag_name("origin")) {
+            None => Ok(Origin::default()),
+            Some(o) => {
+                let w = format!("{what} <origin>");
+                Ok(Origin {
+                    xyz: self.vec3(o, "xyz", Some([0.0; 3]), &w)?,
+                    rpy: self.vec3(o, "rpy", Some([0.0; 3]), &w)?,
+                })
+            }
+        }
+    }
+
+    fn number(&self, node: Node, attr: &str, default: Option<f64>, what: &str) -> Result<f64, LoadError> {
+        match node.attribute(attr) {
+            None => match default {
+                Some(d) => Ok(d),
+                None => self.err(node, what, format!("missing attribute `{attr}`")),
+            },
+            Some(s) => match s.trim().parse::<f64>() {
+                Ok(x) if x.is_finite() => Ok(x),
+                Ok(_) => self.err(node, what, format!("`{attr}=\"{s}\"` is not a finite number")),
+                Err(_) => self.err(node, what, format!("`{attr}=\"{s}\"` is not a number")),
+            },
+        }
+    }
+
+    fn vec3(&self, node: Node, attr: &str, default: Option<[f64; 3]>, what: &str) -> Result<[f64; 3], LoadError> {
+        let Some(s) = node.attribute(attr) else {
+            return match default {
+                Some(d) => Ok(d),
+                None => self.err(node, what, format!("missing attribute `{attr}`")),
+            };
+        };
+        let parts: Vec<&str> = s.split_whitespace().collect();
+        if parts.len() != 3 {
+            return self.err(node, what, format!("`{attr}=\"{s}\"` must be three numbers"));
+        }
+        let mut out = [0.0; 3];
+        for (k, p) in parts.iter().enumerate() {
+            out[k] = match p.parse::<f64>() {
+                Ok(x) if x.is_finite() => x,
+                Ok(_) => return self.err(node, what, format!("`{attr}=\"{s}\"` contains a number that is not finite")),
+                Err(_) => return self.err(node, what, format!("`{attr}=\"{s}\"`: \"{p}\" is not a number")),
+            };
+        }
+        Ok(out)
+    }
+}
+
+/// Whether a symmetric 3×3 matrix is positive semi-definite, up to rounding: every principal minor of
+/// order k is at least −1e-12 · sᵏ with s the largest entry.
+fn is_psd(m: &[[f64; 3]; 3]) -> bool {
+    let s = m.iter().flatten().fold(0.0f64, |a, &x| a.max(x.abs()));
+    if s == 0.0 {
+        return true;
+    }
+    let tol = 1e-12;
+    let d1 = [m[0][0], m[1][1], m[2][2]];
+    let d2 = [
+        m[0][0] * m[1][1] - m[0][1] * m[1][0],
+        m[0][0] * m[2][2] - m[0][2] * m[2][0],
+        m[1][1] * m[2][2] - m[1][2] * m[2][1],
+    ];
+    let d3 = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
+        + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
+    d1.iter().all(|&x| x >= -tol * s) && d2.iter().all(|&x| x >= -tol * s * s) && d3 >= -tol * s * s * s
+}

@@ -1,0 +1,51 @@
+//! The mass matrix by the composite-rigid-body algorithm: `ℳ = H φ M φ* H*` (Eq. 3), one column block
+//! per joint, walking from the joint to the root.
+
+use super::{check_len, DynamicsError, Workspace};
+use crate::model::Model;
+use crate::spatial::ArticulatedInertia;
+use crate::Real;
+use nalgebra::DMatrix;
+
+/// The joint-space mass matrix `M(q)` (symmetric, both triangles filled). Left in `ws.mass_matrix`.
+pub fn crba<'w, T: Real>(
+    model: &Model<T>,
+    ws: &'w mut Workspace<T>,
+    q: &[T],
+) -> Result<&'w DMatrix<T>, DynamicsError> {
+    check_len("q", q.len(), model.nq())?;
+    for (i, joint) in model.joints.iter().enumerate() {
+        ws.parent_placement[i] = joint.placement.compose(&joint.joint_transform(q));
+        ws.inertia[i] = ArticulatedInertia::from(model.bodies[i].inertia);
+    }
+    // Composite inertias, leaves first.
+    for i in (0..model.nbodies()).rev() {
+        if let Some(p) = model.joints[i].parent {
+            let ic = ws.inertia[i].act(&ws.parent_placement[i]);
+            ws.inertia[p] += ic;
+        }
+    }
+    let m = &mut ws.mass_matrix;
+    for (i, joint) in model.joints.iter().enumerate() {
+        for k in 0..joint.nv() {
+            let col = joint.v_index + k;
+            let mut f = ws.inertia[i].mul_motion(&joint.subspace_column(k));
+            for r in 0..joint.nv() {
+                m[(joint.v_index + r, col)] = joint.subspace_column(r).dot(&f);
+            }
+            let mut j = i;
+            while let Some(p) = model.joints[j].parent {
+                f = ws.parent_placement[j].act_force(&f);
+                j = p;
+                let jp = &model.joints[j];
+                for r in 0..jp.nv() {
+                    let row = jp.v_index + r;
+                    let val = jp.subspace_column(r).dot(&f);
+                    m[(row, col)] = val;
+                    m[(col, row)] = val;
+                }
+            }
+        }
+    }
+    Ok(&ws.mass_matrix)
+}

@@ -1,0 +1,44 @@
+use super::{check_len, velocity_sweep, DynamicsError, Workspace};
+use crate::model::Model;
+use crate::Real;
+
+/// Forward kinematics: each body's pose in the parent and world frames, and its spatial velocity.
+pub fn forward_kinematics<T: Real>(
+    model: &Model<T>,
+    ws: &mut Workspace<T>,
+    q: &[T],
+    v: &[T],
+) -> Result<(), DynamicsError> {
+    check_len("q", q.len(), model.nq())?;
+    check_len("v", v.len(), model.nv())?;
+    velocity_sweep(model, ws, q, v);
+    for (i, joint) in model.joints.iter().enumerate() {
+        ws.world_placement[i] = match joint.parent {
+            Some(p) => ws.world_placement[p].compose(&ws.parent_placement[i]),
+            None => ws.parent_placement[i],
+        };
+    }
+    Ok(())
+}
+
+/// Kinetic energy ½ vᵀ M(q) v, from the velocities of the last [`forward_kinematics`] call.
+pub fn kinetic_energy<T: Real>(model: &Model<T>, ws: &Workspace<T>) -> T {
+    model
+        .bodies
+        .iter()
+        .zip(&ws.velocity)
+        .fold(T::zero(), |e, (b, v)| e + b.inertia.kinetic_energy(v))
+}
+
+/// Potential energy −Σ mᵢ gᵀ cᵢ in the model's gravity field, from the poses of the last
+/// [`forward_kinematics`] call.
+pub fn potential_energy<T: Real>(model: &Model<T>, ws: &Workspace<T>) -> T {
+    model
+        .bodies
+        .iter()
+        .zip(&ws.world_placement)
+        .fold(T::zero(), |e, (b, x)| {
+            let mc = x.rotation * b.inertia.first_moment + x.translation * b.inertia.mass;
+            e - model.gravity.dot(&mc)
+        })
+}

@@ -1,0 +1,110 @@
+//! The interpreted algorithms: each a forward and/or backward sweep over the tree, one small step per
+//! joint (as in the paper's Eqs. 1, 9 and 6). They are the oracle the generated code is tested against.
+
+mod aba;
+mod crba;
+mod kinematics;
+mod minv;
+mod rnea;
+mod workspace;
+
+pub use aba::aba;
+pub use crba::crba;
+pub use kinematics::{forward_kinematics, kinetic_energy, potential_energy};
+pub use minv::mass_matrix_inverse;
+pub use rnea::{rnea, rnea_with_gravity};
+pub use workspace::Workspace;
+
+use crate::model::{JointType, Model, ModelError};
+use crate::spatial::{Motion, Transform};
+use crate::Real;
+
+/// Errors of an algorithm call.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum DynamicsError {
+    #[error("`{name}` has length {got}, the model needs {expected}")]
+    WrongLength {
+        name: &'static str,
+        got: usize,
+        expected: usize,
+    },
+    #[error("joint `{joint}`: the articulated inertia about its axis is not positive (D = {d:e})")]
+    SingularJoint { joint: String, d: f64 },
+}
+
+pub(crate) fn check_len(name: &'static str, got: usize, expected: usize) -> Result<(), DynamicsError> {
+    if got == expected {
+        Ok(())
+    } else {
+        Err(DynamicsError::WrongLength { name, got, expected })
+    }
+}
+
+/// The first forward sweep shared by RNEA and ABA: `ᵖX_i(q)`, `V(k)`, and `a(k) = V(k) ×ₘ H*θ̇(k)`.
+#[inline(always)]
+pub(crate) fn velocity_sweep<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, q: &[T], v: &[T]) {
+    for (i, joint) in model.joints.iter().enumerate() {
+        let x = joint.placement.compose(&joint.joint_transform(q));
+        let vj = joint.joint_motion(v);
+        let vel = match joint.parent {
+            Some(p) => x.inv_act_motion(&ws.velocity[p]) + vj,
+            None => vj,
+        };
+        ws.coriolis[i] = vel.cross_motion(&vj);
+        ws.parent_placement[i] = x;
+        ws.velocity[i] = vel;
+    }
+}
+
+/// The acceleration of the world frame that stands in for gravity, `−g`, expressed in `x`'s child frame.
+#[inline(always)]
+pub(crate) fn gravity_in<T: Real>(gravity: &nalgebra::Vector3<T>, x: &Transform<T>) -> Motion<T> {
+    Motion::new(nalgebra::Vector3::zeros(), -x.rotation.tr_mul(gravity))
+}
+
+/// Rejects a model in which some joint's `D(k)` vanishes at two unrelated configurations (then it
+/// vanishes identically: the joint moves no inertia, e.g. a massless leaf, and ABA would divide by zero).
+pub(crate) fn check_articulated_inertia<T: Real>(model: &Model<T>) -> Result<(), ModelError> {
+    if model.nbodies() == 0 {
+        return Ok(());
+    }
+    let scale = model
+        .bodies
+        .iter()
+        .fold(T::zero(), |s, b| s + b.inertia.mass + b.inertia.rotational.trace());
+    let tol = (T::one().max(scale)) * T::from_f64(1e-12);
+    let mut ws = Workspace::new(model);
+    let q0 = model.neutral_configuration();
+    let mut q1 = q0.clone();
+    // A fixed, irrational-looking configuration: no symmetry of a hand-written model lines up with it.
+    for (k, x) in q1.iter_mut().enumerate() {
+        *x += T::from_f64(0.37 + 0.61 * ((k as f64) * 1.618_033_988_749).sin());
+    }
+    model.normalize_configuration(&mut q1);
+    let v = vec![T::zero(); model.nv()];
+    let tau = v.clone();
+    // `last_d[i]` keeps the value of D for the error message; `regular[i]` is set once D > tol anywhere.
+    let mut regular = vec![false; model.nbodies()];
+    let mut last_d = vec![0.0; model.nbodies()];
+    for q in [&q0, &q1] {
+        aba::articulate(model, &mut ws, q, &v, &tau);
+        for (i, j) in model.joints.iter().enumerate() {
+            let d = match j.joint_type {
+                JointType::Floating => aba::floating_min_pivot(&ws),
+                _ => {
+                    let h = j.subspace_column(0);
+                    h.dot(&ws.inertia[i].mul_motion(&h))
+                }
+            };
+            regular[i] |= d.is_finite() && d > tol;
+            last_d[i] = d.to_f64();
+        }
+    }
+    match regular.iter().position(|r| !r) {
+        Some(i) => Err(ModelError::NoInertiaAboutAxis {
+            joint: model.joints[i].name.clone(),
+            d: last_d[i],
+        }),
+        None => Ok(()),
+    }
+}

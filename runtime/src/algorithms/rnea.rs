@@ -1,0 +1,64 @@
+//! Inverse dynamics by the recursive Newton–Euler algorithm (the paper's Eqs. 1–3).
+
+use super::{check_len, gravity_in, velocity_sweep, DynamicsError, Workspace};
+use crate::model::{JointType, Model};
+use crate::Real;
+
+/// Inverse dynamics `τ = M(q) qdd + C(q, v) + g(q)` with the model's gravity. Left in `ws.tau` too.
+pub fn rnea<'w, T: Real>(
+    model: &Model<T>,
+    ws: &'w mut Workspace<T>,
+    q: &[T],
+    v: &[T],
+    qdd: &[T],
+) -> Result<&'w [T], DynamicsError> {
+    rnea_with_gravity(model, ws, q, v, qdd, true)
+}
+
+/// [`rnea`] with gravity switched on or off (off gives `M qdd + C v`; with `v = 0`, `M qdd`).
+pub fn rnea_with_gravity<'w, T: Real>(
+    model: &Model<T>,
+    ws: &'w mut Workspace<T>,
+    q: &[T],
+    v: &[T],
+    qdd: &[T],
+    gravity: bool,
+) -> Result<&'w [T], DynamicsError> {
+    check_len("q", q.len(), model.nq())?;
+    check_len("v", v.len(), model.nv())?;
+    check_len("qdd", qdd.len(), model.nv())?;
+    velocity_sweep(model, ws, q, v);
+    // Outward: α(k) = φ*(k+1,k) α(k+1) + H*(k) θ̈(k) + a(k), with the base accelerating at −g.
+    for (i, joint) in model.joints.iter().enumerate() {
+        let x = &ws.parent_placement[i];
+        let a_parent = match joint.parent {
+            Some(p) => x.inv_act_motion(&ws.acceleration[p]),
+            None if gravity => gravity_in(&model.gravity, x),
+            None => crate::spatial::Motion::zero(),
+        };
+        let a = a_parent + joint.joint_motion(qdd) + ws.coriolis[i];
+        let inertia = &model.bodies[i].inertia;
+        let vel = &ws.velocity[i];
+        // f(k) = M(k) α(k) + b(k), b(k) = V ×* M V; children are added in the inward sweep.
+        ws.force[i] = inertia.mul_motion(&a) + vel.cross_force(&inertia.mul_motion(vel));
+        ws.acceleration[i] = a;
+    }
+    // Inward: f(k) += φ(k,k−1) f(k−1);  𝒯(k) = H(k) f(k).
+    for i in (0..model.nbodies()).rev() {
+        let joint = &model.joints[i];
+        let f = ws.force[i];
+        match joint.joint_type {
+            JointType::Floating => {
+                let t = &mut ws.tau[joint.v_index..joint.v_index + 6];
+                t[..3].copy_from_slice(f.linear.as_slice());
+                t[3..].copy_from_slice(f.angular.as_slice());
+            }
+            _ => ws.tau[joint.v_index] = joint.subspace_column(0).dot(&f),
+        }
+        if let Some(p) = joint.parent {
+            let fp = ws.parent_placement[i].act_force(&f);
+            ws.force[p] += fp;
+        }
+    }
+    Ok(&ws.tau)
+}

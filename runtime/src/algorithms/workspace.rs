@@ -1,0 +1,87 @@
+use crate::model::Model;
+use crate::spatial::{ArticulatedInertia, Force, Motion, Transform};
+use crate::Real;
+use nalgebra::{DMatrix, Matrix6};
+
+/// Scratch memory for the algorithms of one model, allocated once by [`Workspace::new`] and reused by
+/// every call, so that no algorithm call touches the heap (what a real-time loop needs).
+///
+/// Per-body entries are indexed like `model.bodies`. Results of the last call stay readable here.
+#[derive(Clone, Debug)]
+pub struct Workspace<T: Real> {
+    /// Pose of each body frame in its parent body frame (`ᵖX_i` as a placement).
+    pub parent_placement: Vec<Transform<T>>,
+    /// Pose of each body frame in the world, filled by [`crate::forward_kinematics`].
+    pub world_placement: Vec<Transform<T>>,
+    /// Spatial velocity of each body, in its own frame.
+    pub velocity: Vec<Motion<T>>,
+    /// Spatial acceleration of each body (RNEA, ABA), in its own frame, with gravity's −g added at the root.
+    pub acceleration: Vec<Motion<T>>,
+    /// Velocity-product acceleration `a(k) = V(k) ×ₘ H*(k) θ̇(k)` (the paper's Coriolis term).
+    pub(crate) coriolis: Vec<Motion<T>>,
+    /// RNEA: joint forces `f(k)`; ABA: the articulated bias force `𝔷(k)`.
+    pub force: Vec<Force<T>>,
+    /// Articulated (ABA) or composite (CRBA) inertia `P(k)`.
+    pub inertia: Vec<ArticulatedInertia<T>>,
+    /// `P(k) H*(k)` for 1-DoF joints.
+    pub(crate) u: Vec<Force<T>>,
+    /// `D(k)⁻¹` for 1-DoF joints.
+    pub(crate) d_inv: Vec<T>,
+    /// `ε(k) = 𝒯(k) − H(k) 𝔷(k)` for 1-DoF joints.
+    pub(crate) epsilon: Vec<T>,
+    /// `D` of a floating root (6×6, in the order of `v`), factored in place.
+    pub(crate) floating_d: Matrix6<T>,
+    pub(crate) floating_eps: [T; 6],
+    /// Smallest pivot of the last `floating_d` factorization.
+    pub(crate) floating_pivot: T,
+    /// Output of `aba`.
+    pub qdd: Vec<T>,
+    /// Output of `rnea`.
+    pub tau: Vec<T>,
+    /// Output of `crba` and `mass_matrix_inverse`.
+    pub mass_matrix: DMatrix<T>,
+    /// Per body, `6 × nv` force columns and acceleration columns for the operator inverse of Eq. 6.
+    pub(crate) minv_force: Vec<[T; 6]>,
+    pub(crate) minv_accel: Vec<[T; 6]>,
+}
+
+impl<T: Real> Workspace<T> {
+    /// Allocates everything the algorithms need for `model`.
+    ///
+    /// Memory is O(N) except for the mass matrix (nv²) and the operator inverse's column buffers
+    /// (12 · N · nv scalars), which are allocated on first use by [`Workspace::reserve_inverse`].
+    pub fn new(model: &Model<T>) -> Self {
+        let n = model.nbodies();
+        let nv = model.nv();
+        Workspace {
+            parent_placement: vec![Transform::identity(); n],
+            world_placement: vec![Transform::identity(); n],
+            velocity: vec![Motion::zero(); n],
+            acceleration: vec![Motion::zero(); n],
+            coriolis: vec![Motion::zero(); n],
+            force: vec![Force::zero(); n],
+            inertia: vec![ArticulatedInertia::zero(); n],
+            u: vec![Force::zero(); n],
+            d_inv: vec![T::zero(); n],
+            epsilon: vec![T::zero(); n],
+            floating_d: Matrix6::zeros(),
+            floating_eps: [T::zero(); 6],
+            floating_pivot: T::one(),
+            qdd: vec![T::zero(); nv],
+            tau: vec![T::zero(); nv],
+            mass_matrix: DMatrix::zeros(nv, nv),
+            minv_force: Vec::new(),
+            minv_accel: Vec::new(),
+        }
+    }
+
+    /// Allocates the buffers of [`crate::mass_matrix_inverse`] (done automatically on its first call; call
+    /// this beforehand to keep that first call allocation-free too).
+    pub fn reserve_inverse(&mut self, model: &Model<T>) {
+        let len = model.nbodies() * model.nv();
+        if self.minv_force.len() != len {
+            self.minv_force = vec![[T::zero(); 6]; len];
+            self.minv_accel = vec![[T::zero(); 6]; len];
+        }
+    }
+}

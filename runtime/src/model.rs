@@ -1,0 +1,420 @@
+//! The kinematic tree the algorithms run on.
+//!
+//! Bodies are numbered so that a parent precedes its children and every subtree occupies a contiguous
+//! range of indices (depth-first order). Body `i` is moved by joint `i`. A URDF's fixed joints are already
+//! merged away: every joint here moves. Coordinates follow CONTRACT §2.
+//!
+//! Design note: the algorithms walk the tree node by node, and each step touches only the node's parent.
+//! Constraint embedding replaces a group of bodies by one *aggregate link* with a configuration-dependent
+//! joint map; that enters as a new node kind with its own forward and backward step, not as a change to
+//! the recursions.
+
+use crate::spatial::{Motion, SpatialInertia, Transform};
+use crate::Real;
+use nalgebra::Vector3;
+
+/// The kind of a moving joint.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum JointType {
+    /// One angle about `axis` (rad).
+    Revolute,
+    /// A revolute joint without limits; still one plain angle.
+    Continuous,
+    /// One displacement along `axis` (m).
+    Prismatic,
+    /// Six DoF: `q = [x y z qx qy qz qw]`, `v = [v_lin; ω]` in the body frame (Pinocchio's free-flyer).
+    Floating,
+}
+
+impl JointType {
+    pub fn nq(self) -> usize {
+        match self {
+            JointType::Floating => 7,
+            _ => 1,
+        }
+    }
+    pub fn nv(self) -> usize {
+        match self {
+            JointType::Floating => 6,
+            _ => 1,
+        }
+    }
+    /// The name used in the CLI's JSON (`"revolute"`, `"continuous"`, `"prismatic"`, `"floating"`).
+    pub fn as_str(self) -> &'static str {
+        match self {
+            JointType::Revolute => "revolute",
+            JointType::Continuous => "continuous",
+            JointType::Prismatic => "prismatic",
+            JointType::Floating => "floating",
+        }
+    }
+}
+
+/// A moving joint: connects body `parent` (or the world) to the body of the same index.
+#[derive(Clone, Debug)]
+pub struct Joint<T: Real> {
+    pub name: String,
+    pub joint_type: JointType,
+    /// Unit axis in the joint frame (unused by floating joints).
+    pub axis: Vector3<T>,
+    /// Parent body, `None` for a joint attached to the world.
+    pub parent: Option<usize>,
+    /// Pose of the joint frame in the parent body frame; at zero displacement the child body frame is
+    /// the joint frame.
+    pub placement: Transform<T>,
+    pub q_index: usize,
+    pub v_index: usize,
+}
+
+impl<T: Real> Joint<T> {
+    pub fn nq(&self) -> usize {
+        self.joint_type.nq()
+    }
+    pub fn nv(&self) -> usize {
+        self.joint_type.nv()
+    }
+
+    /// `X_J(q)`: the pose of the child body frame in the joint frame.
+    #[inline(always)]
+    pub fn joint_transform(&self, q: &[T]) -> Transform<T> {
+        match self.joint_type {
+            JointType::Revolute | JointType::Continuous => {
+                Transform::rotation_about(&self.axis, q[self.q_index])
+            }
+            JointType::Prismatic => Transform::translation_along(&self.axis, q[self.q_index]),
+            JointType::Floating => {
+                let s = &q[self.q_index..self.q_index + 7];
+                Transform::new(
+                    quaternion_to_rotation([s[3], s[4], s[5], s[6]]),
+                    Vector3::new(s[0], s[1], s[2]),
+                )
+            }
+        }
+    }
+
+    /// `S q̇`: the joint's relative velocity in the child body frame.
+    #[inline(always)]
+    pub fn joint_motion(&self, v: &[T]) -> Motion<T> {
+        let i = self.v_index;
+        match self.joint_type {
+            JointType::Revolute | JointType::Continuous => {
+                Motion::new(self.axis * v[i], Vector3::zeros())
+            }
+            JointType::Prismatic => Motion::new(Vector3::zeros(), self.axis * v[i]),
+            JointType::Floating => Motion::new(
+                Vector3::new(v[i + 3], v[i + 4], v[i + 5]),
+                Vector3::new(v[i], v[i + 1], v[i + 2]),
+            ),
+        }
+    }
+
+    /// Column `k` of the motion subspace `S` (the paper's `H*(k)`), in the child body frame.
+    #[inline(always)]
+    pub fn subspace_column(&self, k: usize) -> Motion<T> {
+        match self.joint_type {
+            JointType::Revolute | JointType::Continuous => Motion::new(self.axis, Vector3::zeros()),
+            JointType::Prismatic => Motion::new(Vector3::zeros(), self.axis),
+            JointType::Floating => {
+                let mut m = [T::zero(); 6];
+                // v = [v_lin; ω] while motions are [ω; v_lin].
+                m[(k + 3) % 6] = T::one();
+                Motion::from_array(m)
+            }
+        }
+    }
+}
+
+/// A rigid body: one moving joint's child link with every link fixed to it merged in.
+#[derive(Clone, Debug)]
+pub struct Body<T: Real> {
+    /// Name of the URDF link that carries the body frame.
+    pub name: String,
+    /// Inertia about the body frame, fixed-joint children included.
+    pub inertia: SpatialInertia<T>,
+    /// Names of the URDF links merged into this body (the first is `name`).
+    pub links: Vec<String>,
+}
+
+/// A kinematic tree ready for the algorithms. Build it with [`Model::builder`].
+#[derive(Clone, Debug)]
+pub struct Model<T: Real> {
+    pub name: String,
+    pub joints: Vec<Joint<T>>,
+    pub bodies: Vec<Body<T>>,
+    /// Gravity in the world frame, (0, 0, −9.81) m/s² by default.
+    pub gravity: Vector3<T>,
+    nq: usize,
+    nv: usize,
+    /// `subtree_end[i]`: one past the last body of the subtree rooted at body `i`.
+    subtree_end: Vec<usize>,
+}
+
+/// Errors in the structure of a model given to [`ModelBuilder`].
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ModelError {
+    #[error("joint `{joint}`: parent body {parent} must be added before its children")]
+    ParentNotYetAdded { joint: String, parent: usize },
+    #[error("joint `{joint}`: the axis must be a non-zero finite vector")]
+    BadAxis { joint: String },
+    #[error("joint `{joint}`: a floating joint must connect a body to the world")]
+    FloatingNotRoot { joint: String },
+    #[error("joint `{joint}`: the bodies of the subtree it moves have no inertia about its axis (D = {d:e}), so its acceleration is undetermined")]
+    NoInertiaAboutAxis { joint: String, d: f64 },
+    #[error("body `{body}`: the subtree starting here is not contiguous in depth-first order")]
+    NotDepthFirst { body: String },
+}
+
+/// Adds bodies one at a time, parents before children, in depth-first order.
+#[derive(Clone, Debug)]
+pub struct ModelBuilder<T: Real> {
+    name: String,
+    joints: Vec<Joint<T>>,
+    bodies: Vec<Body<T>>,
+    gravity: Vector3<T>,
+    nq: usize,
+    nv: usize,
+}
+
+impl<T: Real> Model<T> {
+    pub fn builder(name: impl Into<String>) -> ModelBuilder<T> {
+        ModelBuilder {
+            name: name.into(),
+            joints: Vec::new(),
+            bodies: Vec::new(),
+            gravity: Vector3::new(T::zero(), T::zero(), T::from_f64(-9.81)),
+            nq: 0,
+            nv: 0,
+        }
+    }
+
+    /// Length of `q`.
+    pub fn nq(&self) -> usize {
+        self.nq
+    }
+    /// Length of `v`, `tau` and `qdd`.
+    pub fn nv(&self) -> usize {
+        self.nv
+    }
+    pub fn nbodies(&self) -> usize {
+        self.bodies.len()
+    }
+    /// One past the last body of the subtree of body `i` (subtrees are contiguous).
+    pub fn subtree_end(&self, i: usize) -> usize {
+        self.subtree_end[i]
+    }
+    /// Velocity indices `[v_index(i), end)` of the subtree rooted at body `i`.
+    pub fn subtree_v_range(&self, i: usize) -> core::ops::Range<usize> {
+        let start = self.joints[i].v_index;
+        let end = self
+            .joints
+            .get(self.subtree_end[i])
+            .map_or(self.nv, |j| j.v_index);
+        start..end
+    }
+
+    pub fn joint_index(&self, name: &str) -> Option<usize> {
+        self.joints.iter().position(|j| j.name == name)
+    }
+
+    /// The neutral configuration: zero angles and displacements, identity quaternions.
+    pub fn neutral_configuration(&self) -> Vec<T> {
+        let mut q = vec![T::zero(); self.nq];
+        for j in &self.joints {
+            if j.joint_type == JointType::Floating {
+                q[j.q_index + 6] = T::one();
+            }
+        }
+        q
+    }
+
+    /// `q̇` from `v` (the floating base's quaternion and position rates), for integrating in time.
+    pub fn configuration_rate(&self, q: &[T], v: &[T], qdot: &mut [T]) {
+        let half = T::from_f64(0.5);
+        for j in &self.joints {
+            let (iq, iv) = (j.q_index, j.v_index);
+            match j.joint_type {
+                JointType::Floating => {
+                    let x = j.joint_transform(q);
+                    let pdot = x.rotation * Vector3::new(v[iv], v[iv + 1], v[iv + 2]);
+                    // d/dt quat = ½ quat ⊗ (ω, 0), ω in the body frame.
+                    let (x, y, z, w) = (q[iq + 3], q[iq + 4], q[iq + 5], q[iq + 6]);
+                    let (wx, wy, wz) = (v[iv + 3], v[iv + 4], v[iv + 5]);
+                    qdot[iq] = pdot.x;
+                    qdot[iq + 1] = pdot.y;
+                    qdot[iq + 2] = pdot.z;
+                    qdot[iq + 3] = (w * wx + y * wz - z * wy) * half;
+                    qdot[iq + 4] = (w * wy + z * wx - x * wz) * half;
+                    qdot[iq + 5] = (w * wz + x * wy - y * wx) * half;
+                    qdot[iq + 6] = -(x * wx + y * wy + z * wz) * half;
+                }
+                _ => qdot[iq] = v[iv],
+            }
+        }
+    }
+
+    /// Rescales every floating joint's quaternion to unit length.
+    pub fn normalize_configuration(&self, q: &mut [T]) {
+        for j in &self.joints {
+            if j.joint_type == JointType::Floating {
+                let s = &mut q[j.q_index + 3..j.q_index + 7];
+                let n = (s[0] * s[0] + s[1] * s[1] + s[2] * s[2] + s[3] * s[3]).sqrt();
+                for x in s.iter_mut() {
+                    *x /= n;
+                }
+            }
+        }
+    }
+
+    /// Converts the model to another scalar type (rounding every constant once).
+    pub fn cast<U: Real>(&self) -> Model<U> {
+        let c = |x: T| U::from_f64(x.to_f64());
+        Model {
+            name: self.name.clone(),
+            joints: self
+                .joints
+                .iter()
+                .map(|j| Joint {
+                    name: j.name.clone(),
+                    joint_type: j.joint_type,
+                    axis: j.axis.map(c),
+                    parent: j.parent,
+                    placement: j.placement.cast(),
+                    q_index: j.q_index,
+                    v_index: j.v_index,
+                })
+                .collect(),
+            bodies: self
+                .bodies
+                .iter()
+                .map(|b| Body {
+                    name: b.name.clone(),
+                    inertia: b.inertia.cast(),
+                    links: b.links.clone(),
+                })
+                .collect(),
+            gravity: self.gravity.map(c),
+            nq: self.nq,
+            nv: self.nv,
+            subtree_end: self.subtree_end.clone(),
+        }
+    }
+}
+
+impl<T: Real> ModelBuilder<T> {
+    pub fn gravity(mut self, g: Vector3<T>) -> Self {
+        self.gravity = g;
+        self
+    }
+
+    /// Adds a body moved by a joint. `placement` is the joint frame in the parent body frame, `inertia`
+    /// the body's inertia about its own frame. Returns the new body's index.
+    #[allow(clippy::too_many_arguments)]
+    pub fn add_body(
+        &mut self,
+        parent: Option<usize>,
+        joint_name: impl Into<String>,
+        joint_type: JointType,
+        axis: Vector3<T>,
+        placement: Transform<T>,
+        body_name: impl Into<String>,
+        inertia: SpatialInertia<T>,
+    ) -> Result<usize, ModelError> {
+        let joint_name = joint_name.into();
+        if let Some(p) = parent {
+            if p >= self.bodies.len() {
+                return Err(ModelError::ParentNotYetAdded { joint: joint_name, parent: p });
+            }
+        }
+        let axis = match joint_type {
+            JointType::Floating => {
+                if parent.is_some() {
+                    return Err(ModelError::FloatingNotRoot { joint: joint_name });
+                }
+                Vector3::zeros()
+            }
+            _ => {
+                let n = axis.dot(&axis).sqrt();
+                if !(n.is_finite() && n > T::zero()) {
+                    return Err(ModelError::BadAxis { joint: joint_name });
+                }
+                axis / n
+            }
+        };
+        let body_name = body_name.into();
+        self.joints.push(Joint {
+            name: joint_name,
+            joint_type,
+            axis,
+            parent,
+            placement,
+            q_index: self.nq,
+            v_index: self.nv,
+        });
+        self.nq += joint_type.nq();
+        self.nv += joint_type.nv();
+        self.bodies.push(Body {
+            links: vec![body_name.clone()],
+            name: body_name,
+            inertia,
+        });
+        Ok(self.bodies.len() - 1)
+    }
+
+    /// Records the URDF links merged into a body (for reports).
+    pub fn set_merged_links(&mut self, body: usize, links: Vec<String>) {
+        self.bodies[body].links = links;
+    }
+
+    /// Checks the structure and that every joint's acceleration is determined (`D(k) > 0` at two
+    /// configurations: a joint that is singular at both is singular everywhere except on a null set).
+    pub fn build(self) -> Result<Model<T>, ModelError> {
+        let n = self.bodies.len();
+        let mut subtree_end: Vec<usize> = (0..n).map(|i| i + 1).collect();
+        for i in (0..n).rev() {
+            if let Some(p) = self.joints[i].parent {
+                subtree_end[p] = subtree_end[p].max(subtree_end[i]);
+            }
+        }
+        // Depth-first: the children of every body lie inside its range.
+        for i in 0..n {
+            for k in i + 1..subtree_end[i] {
+                let p = self.joints[k].parent;
+                if p.is_none() || p.unwrap() < i {
+                    return Err(ModelError::NotDepthFirst { body: self.bodies[i].name.clone() });
+                }
+            }
+        }
+        let model = Model {
+            name: self.name,
+            joints: self.joints,
+            bodies: self.bodies,
+            gravity: self.gravity,
+            nq: self.nq,
+            nv: self.nv,
+            subtree_end,
+        };
+        crate::algorithms::check_articulated_inertia(&model)?;
+        Ok(model)
+    }
+}
+
+/// Rotation matrix of a quaternion `[x, y, z, w]` (scalar last), normalized on the way so that a
+/// quaternion that drifted off unit length by integration still gives a rotation.
+#[inline(always)]
+pub(crate) fn quaternion_to_rotation<T: Real>(q: [T; 4]) -> nalgebra::Matrix3<T> {
+    let [x, y, z, w] = q;
+    let n2 = w * w + x * x + y * y + z * z;
+    let s = T::from_f64(2.0) / n2;
+    let one = T::one();
+    nalgebra::Matrix3::new(
+        one - s * (y * y + z * z),
+        s * (x * y - w * z),
+        s * (x * z + w * y),
+        s * (x * y + w * z),
+        one - s * (x * x + z * z),
+        s * (y * z - w * x),
+        s * (x * z - w * y),
+        s * (y * z + w * x),
+        one - s * (x * x + y * y),
+    )
+}

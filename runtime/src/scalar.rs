@@ -1,0 +1,115 @@
+//! The scalar types the solver is generic over.
+//!
+//! `f64` is the working precision, `f32` the firmware precision, and [`DoubleDouble`] (about 106 bits of
+//! mantissa) computes reference answers against which the other two are measured. nalgebra's `RealField`
+//! is not used as the bound because a double-double type would have to implement several dozen methods
+//! the solver never calls; [`Real`] asks only for what the dynamics needs.
+
+use core::fmt::Debug;
+use core::ops::{Add, AddAssign, Div, DivAssign, Mul, MulAssign, Neg, Sub, SubAssign};
+use num_traits::{One, Zero};
+
+pub use crate::double_double::DoubleDouble;
+
+/// A real scalar the spatial algebra and the algorithms can run on.
+pub trait Real:
+    nalgebra::Scalar
+    + Copy
+    + Debug
+    + PartialOrd
+    + Zero
+    + One
+    + Add<Output = Self>
+    + Sub<Output = Self>
+    + Mul<Output = Self>
+    + Div<Output = Self>
+    + Neg<Output = Self>
+    + AddAssign
+    + SubAssign
+    + MulAssign
+    + DivAssign
+    + Send
+    + Sync
+    + 'static
+{
+    /// Short name used in reports and benchmark tables (`"f64"`, `"f32"`, `"dd"`).
+    const NAME: &'static str;
+    /// Converts from `f64`, rounding to nearest where the type is narrower.
+    fn from_f64(x: f64) -> Self;
+    /// Converts to `f64`, rounding to nearest where the type is wider.
+    fn to_f64(self) -> f64;
+    fn sqrt(self) -> Self;
+    fn sin(self) -> Self;
+    fn cos(self) -> Self;
+    fn sin_cos(self) -> (Self, Self) {
+        (self.sin(), self.cos())
+    }
+    fn abs(self) -> Self;
+    /// The unit roundoff of the type (2⁻⁵² for f64).
+    fn epsilon() -> Self;
+    fn is_finite(self) -> bool;
+
+    #[inline(always)]
+    fn max(self, other: Self) -> Self {
+        if self >= other {
+            self
+        } else {
+            other
+        }
+    }
+    #[inline(always)]
+    fn min(self, other: Self) -> Self {
+        if self <= other {
+            self
+        } else {
+            other
+        }
+    }
+}
+
+macro_rules! impl_real_for_float {
+    ($t:ty, $name:literal) => {
+        impl Real for $t {
+            const NAME: &'static str = $name;
+            #[inline(always)]
+            fn from_f64(x: f64) -> Self {
+                x as $t
+            }
+            #[inline(always)]
+            fn to_f64(self) -> f64 {
+                self as f64
+            }
+            #[inline(always)]
+            fn sqrt(self) -> Self {
+                <$t>::sqrt(self)
+            }
+            #[inline(always)]
+            fn sin(self) -> Self {
+                <$t>::sin(self)
+            }
+            #[inline(always)]
+            fn cos(self) -> Self {
+                <$t>::cos(self)
+            }
+            #[inline(always)]
+            fn sin_cos(self) -> (Self, Self) {
+                <$t>::sin_cos(self)
+            }
+            #[inline(always)]
+            fn abs(self) -> Self {
+                <$t>::abs(self)
+            }
+            #[inline(always)]
+            fn epsilon() -> Self {
+                <$t>::EPSILON
+            }
+            #[inline(always)]
+            fn is_finite(self) -> bool {
+                <$t>::is_finite(self)
+            }
+        }
+    };
+}
+
+impl_real_for_float!(f64, "f64");
+impl_real_for_float!(f32, "f32");

@@ -1,0 +1,97 @@
+use crate::spatial::{rotate_tensor, skew, Force, Motion, SpatialInertia, Transform};
+use crate::Real;
+use nalgebra::{Matrix3, Matrix6};
+
+/// A symmetric 6×6 inertia `[[A, B], [Bᵀ, C]]` in `[angular; linear]` order: the paper's articulated
+/// inertia `P(k)` (and the composite inertia of CRBA), which is no longer a rigid-body inertia once a joint
+/// has been articulated, so it keeps its three blocks.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ArticulatedInertia<T: Real> {
+    /// Angular–angular block (symmetric).
+    pub a: Matrix3<T>,
+    /// Angular–linear block.
+    pub b: Matrix3<T>,
+    /// Linear–linear block (symmetric).
+    pub c: Matrix3<T>,
+}
+
+impl<T: Real> ArticulatedInertia<T> {
+    pub fn zero() -> Self {
+        Self {
+            a: Matrix3::zeros(),
+            b: Matrix3::zeros(),
+            c: Matrix3::zeros(),
+        }
+    }
+
+    /// `P v`.
+    #[inline(always)]
+    pub fn mul_motion(&self, v: &Motion<T>) -> Force<T> {
+        Force::new(
+            self.a * v.angular + self.b * v.linear,
+            self.b.tr_mul(&v.angular) + self.c * v.linear,
+        )
+    }
+
+    /// `P − u uᵀ s`: the rank-one update that articulates a 1-DoF joint (`u = P h`, `s = 1/D`).
+    #[inline(always)]
+    pub fn sub_rank_one(&mut self, u: &Force<T>, s: T) {
+        let (ua, ul) = (&u.angular, &u.linear);
+        let sa = ua * s;
+        let sl = ul * s;
+        self.a -= sa * ua.transpose();
+        self.b -= sa * ul.transpose();
+        self.c -= sl * ul.transpose();
+    }
+
+    /// The same inertia expressed in the parent frame of `x` (`Xᵀ P X` in Featherstone's notation).
+    ///
+    /// Rotate each block, then shift the reference point with `[p]×`; written in blocks so the cost is a few
+    /// 3×3 products rather than two 6×6 ones.
+    #[inline(always)]
+    pub fn act(&self, x: &Transform<T>) -> ArticulatedInertia<T> {
+        let r = &x.rotation;
+        let a = rotate_tensor(r, &self.a);
+        let b = r * self.b * r.transpose();
+        let c = rotate_tensor(r, &self.c);
+        let px = skew(&x.translation);
+        let pxc = px * c;
+        let bpx = b * px;
+        // top-left: A − B[p]× + [p]×Bᵀ − [p]×C[p]×, where [p]×Bᵀ = −(B[p]×)ᵀ; top-right: B + [p]×C.
+        let a_new = a - bpx - bpx.transpose() - pxc * px;
+        ArticulatedInertia {
+            a: a_new,
+            b: b + pxc,
+            c,
+        }
+    }
+
+    /// As a dense 6×6 matrix (for tests and for multi-DoF joints).
+    pub fn to_matrix(&self) -> Matrix6<T> {
+        let mut m = Matrix6::zeros();
+        m.fixed_view_mut::<3, 3>(0, 0).copy_from(&self.a);
+        m.fixed_view_mut::<3, 3>(0, 3).copy_from(&self.b);
+        m.fixed_view_mut::<3, 3>(3, 0).copy_from(&self.b.transpose());
+        m.fixed_view_mut::<3, 3>(3, 3).copy_from(&self.c);
+        m
+    }
+}
+
+impl<T: Real> From<SpatialInertia<T>> for ArticulatedInertia<T> {
+    fn from(i: SpatialInertia<T>) -> Self {
+        ArticulatedInertia {
+            a: i.rotational,
+            b: skew(&i.first_moment),
+            c: Matrix3::identity() * i.mass,
+        }
+    }
+}
+
+impl<T: Real> core::ops::AddAssign for ArticulatedInertia<T> {
+    #[inline(always)]
+    fn add_assign(&mut self, o: Self) {
+        self.a += o.a;
+        self.b += o.b;
+        self.c += o.c;
+    }
+}

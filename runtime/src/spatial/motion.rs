@@ -1,0 +1,94 @@
+use crate::spatial::Force;
+use crate::Real;
+use core::ops::{Add, AddAssign, Mul, Neg, Sub, SubAssign};
+use nalgebra::Vector3;
+
+/// A spatial motion vector (velocity or acceleration) `[ω; v]`, the linear part taken at the frame origin.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Motion<T: Real> {
+    pub angular: Vector3<T>,
+    pub linear: Vector3<T>,
+}
+
+impl<T: Real> Motion<T> {
+    #[inline(always)]
+    pub fn new(angular: Vector3<T>, linear: Vector3<T>) -> Self {
+        Self { angular, linear }
+    }
+    #[inline(always)]
+    pub fn zero() -> Self {
+        Self::new(Vector3::zeros(), Vector3::zeros())
+    }
+    /// From `[ω; v]` as a 6-array.
+    pub fn from_array(a: [T; 6]) -> Self {
+        Self::new(Vector3::new(a[0], a[1], a[2]), Vector3::new(a[3], a[4], a[5]))
+    }
+    pub fn to_array(&self) -> [T; 6] {
+        let (w, v) = (&self.angular, &self.linear);
+        [w.x, w.y, w.z, v.x, v.y, v.z]
+    }
+    /// Motion cross product `self ×ₘ m` (the paper's ad operator on motions).
+    #[inline(always)]
+    pub fn cross_motion(&self, m: &Motion<T>) -> Motion<T> {
+        Motion::new(
+            self.angular.cross(&m.angular),
+            self.angular.cross(&m.linear) + self.linear.cross(&m.angular),
+        )
+    }
+    /// Force cross product `self ×* f` (the dual of [`Motion::cross_motion`]).
+    #[inline(always)]
+    pub fn cross_force(&self, f: &Force<T>) -> Force<T> {
+        Force::new(
+            self.angular.cross(&f.angular) + self.linear.cross(&f.linear),
+            self.angular.cross(&f.linear),
+        )
+    }
+    /// The pairing `mᵀ f` (power).
+    #[inline(always)]
+    pub fn dot(&self, f: &Force<T>) -> T {
+        self.angular.dot(&f.angular) + self.linear.dot(&f.linear)
+    }
+}
+
+impl<T: Real> Add for Motion<T> {
+    type Output = Self;
+    #[inline(always)]
+    fn add(self, o: Self) -> Self {
+        Self::new(self.angular + o.angular, self.linear + o.linear)
+    }
+}
+impl<T: Real> Sub for Motion<T> {
+    type Output = Self;
+    #[inline(always)]
+    fn sub(self, o: Self) -> Self {
+        Self::new(self.angular - o.angular, self.linear - o.linear)
+    }
+}
+impl<T: Real> AddAssign for Motion<T> {
+    #[inline(always)]
+    fn add_assign(&mut self, o: Self) {
+        self.angular += o.angular;
+        self.linear += o.linear;
+    }
+}
+impl<T: Real> SubAssign for Motion<T> {
+    #[inline(always)]
+    fn sub_assign(&mut self, o: Self) {
+        self.angular -= o.angular;
+        self.linear -= o.linear;
+    }
+}
+impl<T: Real> Neg for Motion<T> {
+    type Output = Self;
+    #[inline(always)]
+    fn neg(self) -> Self {
+        Self::new(-self.angular, -self.linear)
+    }
+}
+impl<T: Real> Mul<T> for Motion<T> {
+    type Output = Self;
+    #[inline(always)]
+    fn mul(self, s: T) -> Self {
+        Self::new(self.angular * s, self.linear * s)
+    }
+}

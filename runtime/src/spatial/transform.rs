@@ -1,0 +1,139 @@
+use crate::spatial::{Force, Motion};
+use crate::Real;
+use nalgebra::{Matrix3, Vector3};
+
+/// A rigid transform: the pose of a child frame in a parent frame.
+///
+/// `rotation` has the child's axes as columns, in parent coordinates; `translation` is the child origin in
+/// parent coordinates (Pinocchio's `SE3` placement; Featherstone's `X` from parent to child is the motion
+/// map [`Transform::inv_act_motion`]). Points map child → parent as `p_parent = R p_child + t`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Transform<T: Real> {
+    pub rotation: Matrix3<T>,
+    pub translation: Vector3<T>,
+}
+
+impl<T: Real> Transform<T> {
+    #[inline(always)]
+    pub fn new(rotation: Matrix3<T>, translation: Vector3<T>) -> Self {
+        Self { rotation, translation }
+    }
+
+    pub fn identity() -> Self {
+        Self::new(Matrix3::identity(), Vector3::zeros())
+    }
+
+    /// The URDF `<origin xyz rpy>` transform, computed in `T` from the file's numbers (so that a
+    /// higher-precision scalar evaluates the trigonometry in its own precision).
+    /// URDF's rpy are fixed-axis roll about x, then pitch about y, then yaw about z: `R = Rz Ry Rx`.
+    pub fn from_xyz_rpy(xyz: [f64; 3], rpy: [f64; 3]) -> Self {
+        let (sr, cr) = T::from_f64(rpy[0]).sin_cos();
+        let (sp, cp) = T::from_f64(rpy[1]).sin_cos();
+        let (sy, cy) = T::from_f64(rpy[2]).sin_cos();
+        let rotation = Matrix3::new(
+            cy * cp,
+            cy * sp * sr - sy * cr,
+            cy * sp * cr + sy * sr,
+            sy * cp,
+            sy * sp * sr + cy * cr,
+            sy * sp * cr - cy * sr,
+            -sp,
+            cp * sr,
+            cp * cr,
+        );
+        let t = Vector3::new(T::from_f64(xyz[0]), T::from_f64(xyz[1]), T::from_f64(xyz[2]));
+        Self::new(rotation, t)
+    }
+
+    /// Rotation by `angle` about the unit vector `axis` (Rodrigues), no translation.
+    #[inline(always)]
+    pub fn rotation_about(axis: &Vector3<T>, angle: T) -> Self {
+        let (s, c) = angle.sin_cos();
+        Self::new(rotation_matrix(axis, s, c), Vector3::zeros())
+    }
+
+    /// Translation by `d` along the unit vector `axis`, no rotation.
+    #[inline(always)]
+    pub fn translation_along(axis: &Vector3<T>, d: T) -> Self {
+        Self::new(Matrix3::identity(), axis * d)
+    }
+
+    /// `self ∘ other`: the pose of `other`'s child frame in `self`'s parent frame.
+    #[inline(always)]
+    pub fn compose(&self, other: &Transform<T>) -> Transform<T> {
+        Transform::new(
+            self.rotation * other.rotation,
+            self.translation + self.rotation * other.translation,
+        )
+    }
+
+    pub fn inverse(&self) -> Transform<T> {
+        let rt = self.rotation.transpose();
+        Transform::new(rt, -(rt * self.translation))
+    }
+
+    /// Maps a point from child to parent coordinates.
+    #[inline(always)]
+    pub fn act_point(&self, p: &Vector3<T>) -> Vector3<T> {
+        self.rotation * p + self.translation
+    }
+
+    /// A motion in child coordinates expressed in parent coordinates.
+    #[inline(always)]
+    pub fn act_motion(&self, m: &Motion<T>) -> Motion<T> {
+        let w = self.rotation * m.angular;
+        let v = self.rotation * m.linear + self.translation.cross(&w);
+        Motion::new(w, v)
+    }
+
+    /// A motion in parent coordinates expressed in child coordinates (Featherstone's `X m`).
+    #[inline(always)]
+    pub fn inv_act_motion(&self, m: &Motion<T>) -> Motion<T> {
+        let v = m.linear - self.translation.cross(&m.angular);
+        Motion::new(
+            self.rotation.tr_mul(&m.angular),
+            self.rotation.tr_mul(&v),
+        )
+    }
+
+    /// A force in child coordinates expressed in parent coordinates (Featherstone's `Xᵀ f`).
+    #[inline(always)]
+    pub fn act_force(&self, f: &Force<T>) -> Force<T> {
+        let lin = self.rotation * f.linear;
+        let ang = self.rotation * f.angular + self.translation.cross(&lin);
+        Force::new(ang, lin)
+    }
+
+    /// A force in parent coordinates expressed in child coordinates.
+    #[inline(always)]
+    pub fn inv_act_force(&self, f: &Force<T>) -> Force<T> {
+        let n = f.angular - self.translation.cross(&f.linear);
+        Force::new(self.rotation.tr_mul(&n), self.rotation.tr_mul(&f.linear))
+    }
+
+    /// Converts every entry to another scalar type.
+    pub fn cast<U: Real>(&self) -> Transform<U> {
+        Transform::new(
+            self.rotation.map(|x| U::from_f64(x.to_f64())),
+            self.translation.map(|x| U::from_f64(x.to_f64())),
+        )
+    }
+}
+
+/// Rodrigues' formula `R = c I + s [a]× + (1 − c) a aᵀ` from a unit axis and the angle's sine and cosine.
+#[inline(always)]
+pub fn rotation_matrix<T: Real>(a: &Vector3<T>, s: T, c: T) -> Matrix3<T> {
+    let t = T::one() - c;
+    let (x, y, z) = (a.x, a.y, a.z);
+    Matrix3::new(
+        c + t * x * x,
+        t * x * y - s * z,
+        t * x * z + s * y,
+        t * x * y + s * z,
+        c + t * y * y,
+        t * y * z - s * x,
+        t * x * z - s * y,
+        t * y * z + s * x,
+        c + t * z * z,
+    )
+}

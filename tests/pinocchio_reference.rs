@@ -1,0 +1,109 @@
+//! Reproduces reference answers computed with Pinocchio 4.1.0 on example-robot-data 6.0.0 URDFs
+//! (tests/data/pinocchio/README.md): ABA, RNEA, non-linear effects and the mass matrix, to 1e-9 relative.
+
+mod common;
+
+use common::{load_model, repo_path};
+use embedyn::{aba, crba, relative_error, rnea, Workspace};
+use serde_json::Value;
+
+const TOL: f64 = 1e-9;
+
+fn vecf(v: &Value) -> Vec<f64> {
+    v.as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect()
+}
+
+fn check_robot(name: &str, floating: bool) {
+    let json: Value = serde_json::from_str(
+        &std::fs::read_to_string(repo_path(&format!("tests/data/pinocchio/{name}.json"))).unwrap(),
+    )
+    .unwrap();
+    let model = load_model::<f64>(&format!("tests/data/pinocchio/{name}.urdf"), floating);
+    assert_eq!(model.nq() as u64, json["nq_angle"].as_u64().unwrap(), "{name}: nq");
+    assert_eq!(model.nv() as u64, json["nv"].as_u64().unwrap(), "{name}: nv");
+    // Joint order: ours is depth-first in file order; map Pinocchio's by name anyway.
+    let pin_joints = json["joints"].as_array().unwrap();
+    let mut v_map = vec![0usize; model.nv()]; // our v index -> Pinocchio v index
+    let mut q_map = vec![0usize; model.nq()];
+    for j in &model.joints {
+        let pj = pin_joints
+            .iter()
+            .find(|p| p["name"].as_str() == Some(j.name.as_str()))
+            .unwrap_or_else(|| panic!("{name}: joint {} not in the reference", j.name));
+        let (pv, pq) = (pj["idx_v"].as_u64().unwrap() as usize, pj["idx_q_angle"].as_u64().unwrap() as usize);
+        for k in 0..j.nv() {
+            v_map[j.v_index + k] = pv + k;
+        }
+        for k in 0..j.nq() {
+            q_map[j.q_index + k] = pq + k;
+        }
+    }
+    let pick = |x: &[f64], map: &[usize]| -> Vec<f64> { map.iter().map(|&i| x[i]).collect() };
+    let mut ws = Workspace::new(&model);
+    let samples = json["samples"].as_array().unwrap();
+    assert_eq!(samples.len(), 20);
+    let mut worst = [0.0f64; 4];
+    for s in samples {
+        let q = pick(&vecf(&s["q_angle"]), &q_map);
+        let v = pick(&vecf(&s["v"]), &v_map);
+        let tau = pick(&vecf(&s["tau"]), &v_map);
+        let qdd_ref = pick(&vecf(&s["qdd"]), &v_map);
+        let qdd = aba(&model, &mut ws, &q, &v, &tau).unwrap().to_vec();
+        worst[0] = worst[0].max(relative_error(&qdd, &qdd_ref));
+
+        let a = pick(&vecf(&s["qdd_for_rnea"]), &v_map);
+        let tau_ref = pick(&vecf(&s["tau_rnea"]), &v_map);
+        let t = rnea(&model, &mut ws, &q, &v, &a).unwrap().to_vec();
+        worst[1] = worst[1].max(relative_error(&t, &tau_ref));
+
+        let nle_ref = pick(&vecf(&s["nle"]), &v_map);
+        let nle = rnea(&model, &mut ws, &q, &v, &vec![0.0; model.nv()]).unwrap().to_vec();
+        worst[2] = worst[2].max(relative_error(&nle, &nle_ref));
+
+        let m_ref: Vec<Vec<f64>> = s["M"].as_array().unwrap().iter().map(vecf).collect();
+        let m = crba(&model, &mut ws, &q).unwrap();
+        let mut ours = Vec::new();
+        let mut theirs = Vec::new();
+        for r in 0..model.nv() {
+            for c in 0..model.nv() {
+                ours.push(m[(r, c)]);
+                theirs.push(m_ref[v_map[r]][v_map[c]]);
+            }
+        }
+        worst[3] = worst[3].max(relative_error(&ours, &theirs));
+    }
+    eprintln!("{name}: worst relative error aba {:.1e} rnea {:.1e} nle {:.1e} crba {:.1e}", worst[0], worst[1], worst[2], worst[3]);
+    for (what, w) in ["aba", "rnea", "nle", "crba"].iter().zip(worst) {
+        assert!(w <= TOL, "{name}: {what} differs from Pinocchio by {w:e} (relative)");
+    }
+}
+
+#[test]
+fn double_pendulum() {
+    check_robot("double_pendulum", false);
+}
+
+#[test]
+fn double_pendulum_continuous() {
+    check_robot("double_pendulum_continuous", false);
+}
+
+#[test]
+fn ur5() {
+    check_robot("ur5", false);
+}
+
+#[test]
+fn panda() {
+    check_robot("panda", false);
+}
+
+#[test]
+fn solo12() {
+    check_robot("solo12", false);
+}
+
+#[test]
+fn solo12_floating_base() {
+    check_robot("solo12_floating", true);
+}
