@@ -88,10 +88,10 @@ pub fn quick_two_sum(a: f64, b: f64) -> (f64, f64) {
 /// (barring overflow and underflow).
 ///
 /// The rounding error of a product is itself a double, and a fused multiply-add computes `a·b − p`
-/// with a single rounding, so `mul_add` yields it exactly in one operation. This is both simpler and
-/// cheaper than Dekker's splitting (17 flops). `f64::mul_add` is correctly rounded on every target: it
-/// maps to the FMA instruction where the target enables it and to the C library's (exact) `fma`
-/// otherwise, so correctness never depends on CPU features, only speed does.
+/// with a single rounding, so `mul_add` yields it exactly in one operation, where Dekker's splitting
+/// needs 17 flops and a careful argument about overflow. `f64::mul_add` is correctly rounded on every
+/// target: it is the FMA instruction where the target enables it (e.g. `-C target-cpu=native`) and the
+/// C library's exact `fma` otherwise, so correctness never depends on CPU features, only speed does.
 #[inline]
 pub fn two_prod(a: f64, b: f64) -> (f64, f64) {
     let p = a * b;

@@ -26,12 +26,17 @@ pub fn crba<'w, T: Real>(
         }
     }
     let m = &mut ws.mass_matrix;
+    // Entries of joints on different branches are zero and never written below.
+    m.fill(T::zero());
     for (i, joint) in model.joints.iter().enumerate() {
         for k in 0..joint.nv() {
             let col = joint.v_index + k;
             let mut f = ws.inertia[i].mul_motion(&joint.subspace_column(k));
-            for r in 0..joint.nv() {
-                m[(joint.v_index + r, col)] = joint.subspace_column(r).dot(&f);
+            // The joint's own block, mirrored so that M is exactly symmetric.
+            for r in k..joint.nv() {
+                let val = joint.subspace_column(r).dot(&f);
+                m[(joint.v_index + r, col)] = val;
+                m[(col, joint.v_index + r)] = val;
             }
             let mut j = i;
             while let Some(p) = model.joints[j].parent {

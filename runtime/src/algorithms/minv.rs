@@ -12,7 +12,7 @@ use crate::spatial::{ArticulatedInertia, Force, Motion};
 use crate::Real;
 use nalgebra::{DMatrix, Matrix6};
 
-/// `M(q)⁻¹`, symmetric, both triangles filled. Left in `ws.mass_matrix`.
+/// `M(q)⁻¹`, symmetric, both triangles filled. Left in `ws.inverse_mass_matrix`.
 pub fn mass_matrix_inverse<'w, T: Real>(
     model: &Model<T>,
     ws: &'w mut Workspace<T>,
@@ -26,7 +26,7 @@ pub fn mass_matrix_inverse<'w, T: Real>(
         ws.inertia[i] = ArticulatedInertia::from(model.bodies[i].inertia);
     }
     ws.minv_force.fill([T::zero(); 6]);
-    ws.mass_matrix.fill(T::zero());
+    ws.inverse_mass_matrix.fill(T::zero());
     let mut d6 = Matrix6::<T>::zeros();
 
     // Backward sweep: rows of 𝒟⁻¹[I − Hψ𝒦], restricted to each subtree's columns.
@@ -55,7 +55,7 @@ pub fn mass_matrix_inverse<'w, T: Real>(
                     }
                     cholesky_solve_in_place(&d6, &mut rhs);
                     for (k, x) in rhs.iter().enumerate() {
-                        ws.mass_matrix[(joint.v_index + k, col)] = *x;
+                        ws.inverse_mass_matrix[(joint.v_index + k, col)] = *x;
                     }
                 }
                 // A floating joint is a root: nothing to pass on.
@@ -68,15 +68,15 @@ pub fn mass_matrix_inverse<'w, T: Real>(
                     return Err(DynamicsError::SingularJoint { joint: joint.name.clone(), d: (T::one() / d_inv).to_f64() });
                 }
                 let row = joint.v_index;
-                ws.mass_matrix[(row, row)] = d_inv;
+                ws.inverse_mass_matrix[(row, row)] = d_inv;
                 for col in cols.start + 1..cols.end {
                     let f = Force::from_array(ws.minv_force[i * nv + col]);
-                    ws.mass_matrix[(row, col)] = -d_inv * h.dot(&f);
+                    ws.inverse_mass_matrix[(row, col)] = -d_inv * h.dot(&f);
                 }
                 if let Some(parent) = joint.parent {
                     let x = ws.parent_placement[i];
                     for col in cols {
-                        let f = Force::from_array(ws.minv_force[i * nv + col]) + u * ws.mass_matrix[(row, col)];
+                        let f = Force::from_array(ws.minv_force[i * nv + col]) + u * ws.inverse_mass_matrix[(row, col)];
                         let fp = Force::from_array(ws.minv_force[parent * nv + col]) + x.act_force(&f);
                         ws.minv_force[parent * nv + col] = fp.to_array();
                     }
@@ -103,14 +103,14 @@ pub fn mass_matrix_inverse<'w, T: Real>(
             match joint.joint_type {
                 JointType::Floating => {
                     for k in 0..6 {
-                        a += joint.subspace_column(k) * ws.mass_matrix[(start + k, col)];
+                        a += joint.subspace_column(k) * ws.inverse_mass_matrix[(start + k, col)];
                     }
                 }
                 _ => {
                     if joint.parent.is_some() {
-                        ws.mass_matrix[(start, col)] -= ws.d_inv[i] * a_parent.dot(&ws.u[i]);
+                        ws.inverse_mass_matrix[(start, col)] -= ws.d_inv[i] * a_parent.dot(&ws.u[i]);
                     }
-                    a += joint.subspace_column(0) * ws.mass_matrix[(start, col)];
+                    a += joint.subspace_column(0) * ws.inverse_mass_matrix[(start, col)];
                 }
             }
             ws.minv_accel[i * nv + col] = a.to_array();
@@ -119,8 +119,8 @@ pub fn mass_matrix_inverse<'w, T: Real>(
     // Mirror the upper triangle.
     for c in 0..nv {
         for r in c + 1..nv {
-            ws.mass_matrix[(r, c)] = ws.mass_matrix[(c, r)];
+            ws.inverse_mass_matrix[(r, c)] = ws.inverse_mass_matrix[(c, r)];
         }
     }
-    Ok(&ws.mass_matrix)
+    Ok(&ws.inverse_mass_matrix)
 }

@@ -100,7 +100,9 @@ pub(crate) fn check_articulated_inertia<T: Real>(model: &Model<T>) -> Result<(),
             last_d[i] = d.to_f64();
         }
     }
-    match regular.iter().position(|r| !r) {
+    // A singular joint poisons its ancestors (D = NaN there): report the last one in depth-first
+    // order, which has no singular descendant and is the cause.
+    match regular.iter().rposition(|r| !r) {
         Some(i) => Err(ModelError::NoInertiaAboutAxis {
             joint: model.joints[i].name.clone(),
             d: last_d[i],

@@ -38,8 +38,10 @@ pub struct Workspace<T: Real> {
     pub qdd: Vec<T>,
     /// Output of `rnea`.
     pub tau: Vec<T>,
-    /// Output of `crba` and `mass_matrix_inverse`.
+    /// Output of `crba`.
     pub mass_matrix: DMatrix<T>,
+    /// Output of `mass_matrix_inverse` (allocated on first use, see [`Workspace::reserve_inverse`]).
+    pub inverse_mass_matrix: DMatrix<T>,
     /// Per body, `6 × nv` force columns and acceleration columns for the operator inverse of Eq. 6.
     pub(crate) minv_force: Vec<[T; 6]>,
     pub(crate) minv_accel: Vec<[T; 6]>,
@@ -70,6 +72,7 @@ impl<T: Real> Workspace<T> {
             qdd: vec![T::zero(); nv],
             tau: vec![T::zero(); nv],
             mass_matrix: DMatrix::zeros(nv, nv),
+            inverse_mass_matrix: DMatrix::zeros(0, 0),
             minv_force: Vec::new(),
             minv_accel: Vec::new(),
         }
@@ -82,6 +85,7 @@ impl<T: Real> Workspace<T> {
         if self.minv_force.len() != len {
             self.minv_force = vec![[T::zero(); 6]; len];
             self.minv_accel = vec![[T::zero(); 6]; len];
+            self.inverse_mass_matrix = DMatrix::zeros(model.nv(), model.nv());
         }
     }
 }
