@@ -3,10 +3,11 @@
 // Usage: pinocchio_bench [--floating] [--repeats N] [--batch B] URDF...
 //
 // For every URDF: build the Pinocchio model (free-flyer root with --floating, fixed base
-// otherwise), pre-generate NSTATES random states, then time aba, rnea, crba and
-// computeMinverse while cycling through the states. Each repeat times a batch of B calls with
-// std::chrono::steady_clock and divides by B; the reported figure is the median over the
-// repeats, in ns per call. One JSON object per URDF is printed on its own line on stdout;
+// otherwise), pre-generate kStates random states, then time aba, rnea, crba and
+// computeMinverse while cycling through the states. Each repeat (default 1001) times a batch of
+// calls with std::chrono::steady_clock and divides by the batch size (default: calibrated to
+// ~0.2 ms per batch, 10..1000 calls; --batch B fixes it); the reported figure is the median over
+// the repeats, in ns per call. One JSON object per URDF is printed on its own line on stdout;
 // diagnostics (convention used, spread, checksum) go to stderr.
 //
 // Build: bench/peers/build_pinocchio.sh (header-only use of Pinocchio's algorithms, -O3, no
@@ -35,12 +36,13 @@ namespace {
 
 constexpr int kStates = 64;
 constexpr unsigned kSeed = 20240601u;
+constexpr double kBatchTargetNs = 200e3;  // 0.2 ms per timed batch unless --batch is given
 const char* const kPinocchioVersion = PINOCCHIO_VERSION;  // from pinocchio/config.hpp
 
 struct Options {
   bool floating = false;
-  int repeats = 201;
-  int batch = 1000;
+  int repeats = 1001;
+  int batch = 0;  // 0: calibrate per algorithm to about kBatchTargetNs per batch
   std::vector<std::string> urdfs;
 };
 
@@ -51,6 +53,7 @@ struct States {
 struct Stats {
   double median = 0, min = 0, max = 0;
   double cpu_wall = 0;  // process CPU time / wall time over all timed batches (1.0 = never preempted)
+  int batch = 0;        // calls per timed batch
 };
 
 // Checksum sink: every timed call feeds one output element into it, so the compiler cannot
@@ -69,7 +72,7 @@ bool parse_args(int argc, char** argv, Options& opt) {
     } else if (arg == "--repeats" || arg == "--batch") {
       if (i + 1 >= argc) return false;
       const int n = std::atoi(argv[++i]);
-      if (n <= 0) return false;
+      if (n <= 0) return false;  // --batch must be explicit and positive; omit it for auto
       (arg == "--repeats" ? opt.repeats : opt.batch) = n;
     } else if (arg == "-h" || arg == "--help") {
       return false;
@@ -130,27 +133,48 @@ States make_states(const pinocchio::Model& model) {
   return s;
 }
 
-// Times `call(state_index, call_index)` in `repeats` batches of `batch` calls each.
+// Times `call(state_index, call_index)` in `repeats` batches; returns ns per call.
+// Batch size: --batch N if given, else calibrated so one batch lasts about kBatchTargetNs.
+// Short batches matter on a shared machine: a batch longer than a scheduler time slice (a few ms)
+// is almost always cut by preemption when another task shares the core, and then the median is
+// inflated too; with ~0.2 ms batches the preempted ones are a minority that the median ignores.
 template <typename F>
 Stats time_it(const Options& opt, F&& call) {
   using clock = std::chrono::steady_clock;
-  // Warm-up: one untimed batch (caches, branch predictors, frequency ramp).
-  for (int k = 0; k < opt.batch; ++k) call(k % kStates, k);
+  // Warm-up (caches, branch predictors, frequency ramp) that also calibrates the batch size.
+  int batch = opt.batch;
+  {
+    int n = 0;
+    const auto t0 = clock::now();
+    double elapsed = 0;
+    while (n < 20000 && (n < 100 || elapsed < 2e6)) {
+      call(n % kStates, n);
+      ++n;
+      if (n % 16 == 0) elapsed = std::chrono::duration<double, std::nano>(clock::now() - t0).count();
+    }
+    elapsed = std::chrono::duration<double, std::nano>(clock::now() - t0).count();
+    if (batch <= 0) {
+      const double per_call = elapsed / n;
+      batch = static_cast<int>(std::lround(kBatchTargetNs / per_call));
+      batch = std::max(10, std::min(batch, 1000));
+    }
+  }
   std::vector<double> per_call(opt.repeats);
   int k = 0;
   const std::clock_t cpu0 = std::clock();
   const auto wall0 = clock::now();
   for (int r = 0; r < opt.repeats; ++r) {
     const auto t0 = clock::now();
-    for (int b = 0; b < opt.batch; ++b, ++k) call(k % kStates, k);
+    for (int b = 0; b < batch; ++b, ++k) call(k % kStates, k);
     const auto t1 = clock::now();
-    per_call[r] = std::chrono::duration<double, std::nano>(t1 - t0).count() / opt.batch;
+    per_call[r] = std::chrono::duration<double, std::nano>(t1 - t0).count() / batch;
   }
   const double cpu_s = double(std::clock() - cpu0) / CLOCKS_PER_SEC;
   const double wall_s = std::chrono::duration<double>(clock::now() - wall0).count();
   std::sort(per_call.begin(), per_call.end());
   Stats st;
   st.cpu_wall = wall_s > 0 ? cpu_s / wall_s : 1.0;
+  st.batch = batch;
   st.min = per_call.front();
   st.max = per_call.back();
   const std::size_t n = per_call.size();
@@ -181,8 +205,8 @@ void sanity_check(const pinocchio::Model& model, pinocchio::Data& data, const St
 }
 
 void report_stats(const std::string& model, const char* algo, const Stats& st) {
-  std::fprintf(stderr, "  %-16s %-10s median %9.1f  min %9.1f  max %9.1f ns  cpu/wall %.2f\n",
-               model.c_str(), algo, st.median, st.min, st.max, st.cpu_wall);
+  std::fprintf(stderr, "  %-16s %-10s median %9.1f  min %9.1f  max %9.1f ns  batch %4d  cpu/wall %.2f\n",
+               model.c_str(), algo, st.median, st.min, st.max, st.batch, st.cpu_wall);
 }
 
 int run_one(const Options& opt, const std::string& path) {
@@ -246,10 +270,10 @@ int run_one(const Options& opt, const std::string& path) {
   std::printf(
       "{\"model\": \"%s\", \"floating\": %s, \"nq\": %d, \"nv\": %d, \"aba\": %.1f, \"rnea\": %.1f, "
       "\"crba\": %.1f, \"minv\": %.1f, \"aba_convention\": \"WORLD\", \"aba_local\": %.1f, "
-      "\"crba_world\": %.1f, \"cpu_wall_min\": %.2f, \"repeats\": %d, \"batch\": %d, "
+      "\"crba_world\": %.1f, \"cpu_wall_min\": %.2f, \"repeats\": %d, \"batch_aba\": %d, "
       "\"pinocchio\": \"%s\"}\n",
       stem.c_str(), opt.floating ? "true" : "false", model.nq, nv, aba.median, rnea.median,
-      crba.median, minv.median, aba_local.median, crba_world.median, cpu_wall, opt.repeats, opt.batch,
+      crba.median, minv.median, aba_local.median, crba_world.median, cpu_wall, opt.repeats, aba.batch,
       kPinocchioVersion);
   std::fflush(stdout);
   return 0;

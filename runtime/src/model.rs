@@ -160,11 +160,9 @@ pub enum ModelError {
     FloatingNotRoot { joint: String },
     #[error("joint `{joint}`: the bodies of the subtree it moves have no inertia about its axis (D = {d:e}), so its acceleration is undetermined")]
     NoInertiaAboutAxis { joint: String, d: f64 },
-    #[error("body `{body}`: the subtree starting here is not contiguous in depth-first order")]
-    NotDepthFirst { body: String },
 }
 
-/// Adds bodies one at a time, parents before children, in depth-first order.
+/// Adds bodies one at a time, each after its parent; [`ModelBuilder::build`] renumbers them depth-first.
 #[derive(Clone, Debug)]
 pub struct ModelBuilder<T: Real> {
     name: String,
@@ -307,7 +305,8 @@ impl<T: Real> ModelBuilder<T> {
     }
 
     /// Adds a body moved by a joint. `placement` is the joint frame in the parent body frame, `inertia`
-    /// the body's inertia about its own frame. Returns the new body's index.
+    /// the body's inertia about its own frame. Returns the index to name this body as a parent in later
+    /// calls (the built model numbers bodies depth-first, which may differ).
     #[allow(clippy::too_many_arguments)]
     pub fn add_body(
         &mut self,
@@ -365,32 +364,56 @@ impl<T: Real> ModelBuilder<T> {
         self.bodies[body].links = links;
     }
 
-    /// Checks the structure and that every joint's acceleration is determined (`D(k) > 0` at two
-    /// configurations: a joint that is singular at both is singular everywhere except on a null set).
+    /// Numbers the bodies depth-first (siblings in the order they were added; CONTRACT §2), assigns
+    /// the coordinate indices, and checks that every joint's acceleration is determined: `D(k) > 0` at
+    /// two unrelated configurations (a joint singular at both is singular everywhere but on a null set).
     pub fn build(self) -> Result<Model<T>, ModelError> {
         let n = self.bodies.len();
-        let mut subtree_end: Vec<usize> = (0..n).map(|i| i + 1).collect();
-        for i in (0..n).rev() {
-            if let Some(p) = self.joints[i].parent {
-                subtree_end[p] = subtree_end[p].max(subtree_end[i]);
+        let mut children: Vec<Vec<usize>> = vec![Vec::new(); n];
+        let mut roots = Vec::new();
+        for (i, j) in self.joints.iter().enumerate() {
+            match j.parent {
+                Some(p) => children[p].push(i),
+                None => roots.push(i),
             }
         }
-        // Depth-first: the children of every body lie inside its range.
-        for i in 0..n {
-            for k in i + 1..subtree_end[i] {
-                let p = self.joints[k].parent;
-                if p.is_none() || p.unwrap() < i {
-                    return Err(ModelError::NotDepthFirst { body: self.bodies[i].name.clone() });
-                }
+        // Depth-first order with an explicit stack (chains of thousands of bodies are fine).
+        let mut order = Vec::with_capacity(n);
+        let mut stack: Vec<usize> = roots.into_iter().rev().collect();
+        while let Some(i) = stack.pop() {
+            order.push(i);
+            stack.extend(children[i].iter().rev());
+        }
+        let mut new_index = vec![0; n];
+        for (k, &i) in order.iter().enumerate() {
+            new_index[i] = k;
+        }
+        let (mut nq, mut nv) = (0, 0);
+        let mut joints = Vec::with_capacity(n);
+        let mut bodies = Vec::with_capacity(n);
+        for &i in &order {
+            let mut j = self.joints[i].clone();
+            j.parent = j.parent.map(|p| new_index[p]);
+            j.q_index = nq;
+            j.v_index = nv;
+            nq += j.nq();
+            nv += j.nv();
+            joints.push(j);
+            bodies.push(self.bodies[i].clone());
+        }
+        let mut subtree_end: Vec<usize> = (0..n).map(|i| i + 1).collect();
+        for i in (0..n).rev() {
+            if let Some(p) = joints[i].parent {
+                subtree_end[p] = subtree_end[p].max(subtree_end[i]);
             }
         }
         let model = Model {
             name: self.name,
-            joints: self.joints,
-            bodies: self.bodies,
+            joints,
+            bodies,
             gravity: self.gravity,
-            nq: self.nq,
-            nv: self.nv,
+            nq,
+            nv,
             subtree_end,
         };
         crate::algorithms::check_articulated_inertia(&model)?;

@@ -64,3 +64,55 @@ pub fn cast<T: Real>(x: &[f64]) -> Vec<T> {
 pub fn to_f64<T: Real>(x: &[T]) -> Vec<f64> {
     x.iter().map(|v| v.to_f64()).collect()
 }
+
+/// A random kinematic tree of `n` bodies: random branching (half the time a chain continues from the
+/// last body), revolute or prismatic joints with axis-aligned or general axes, random placements and
+/// physically valid random inertias. With `floating`, body 0 hangs on a floating joint.
+pub fn random_tree(rng: &mut Rng, n: usize, floating: bool) -> Model<f64> {
+    use embedyn::nalgebra::{Matrix3, Vector3};
+    use embedyn::{JointType, SpatialInertia, Transform};
+    let mut b = Model::<f64>::builder(format!("random{n}"));
+    for i in 0..n {
+        let parent = if i == 0 {
+            None
+        } else if rng.uniform(0.0, 1.0) < 0.5 {
+            Some(i - 1)
+        } else {
+            Some((rng.next_u64() % i as u64) as usize)
+        };
+        let jtype = if i == 0 && floating {
+            JointType::Floating
+        } else if rng.uniform(0.0, 1.0) < 0.2 {
+            JointType::Prismatic
+        } else {
+            JointType::Revolute
+        };
+        let axis = match rng.next_u64() % 5 {
+            0 => Vector3::x(),
+            1 => Vector3::y(),
+            2 => Vector3::z(),
+            3 => -Vector3::z(),
+            _ => {
+                let a = Vector3::new(rng.uniform(-1.0, 1.0), rng.uniform(-1.0, 1.0), rng.uniform(-1.0, 1.0));
+                a / a.norm()
+            }
+        };
+        let rpy = if rng.uniform(0.0, 1.0) < 0.3 { [0.0; 3] } else { [rng.uniform(-3.0, 3.0), rng.uniform(-1.5, 1.5), rng.uniform(-3.0, 3.0)] };
+        let placement = Transform::from_xyz_rpy([rng.uniform(-0.4, 0.4), rng.uniform(-0.4, 0.4), rng.uniform(-0.4, 0.4)], rpy);
+        let mass = rng.uniform(0.1, 5.0);
+        let com = Vector3::new(rng.uniform(-0.2, 0.2), rng.uniform(-0.2, 0.2), rng.uniform(-0.2, 0.2));
+        // Principal moments from a random box: they satisfy the triangle inequality.
+        let (x, y, z) = (rng.uniform(0.02, 0.4), rng.uniform(0.02, 0.4), rng.uniform(0.02, 0.4));
+        let d = Matrix3::from_diagonal(&Vector3::new(y * y + z * z, x * x + z * z, x * x + y * y)) * (mass / 12.0);
+        let r = Transform::<f64>::from_xyz_rpy([0.0; 3], [rng.uniform(-3.0, 3.0), rng.uniform(-1.5, 1.5), rng.uniform(-3.0, 3.0)]).rotation;
+        let inertia = SpatialInertia::from_com(mass, com, r * d * r.transpose());
+        b.add_body(parent, format!("j{i}"), jtype, axis, placement, format!("b{i}"), inertia).unwrap();
+    }
+    b.build().unwrap()
+}
+
+/// Spectral condition number of a symmetric positive-definite matrix.
+pub fn condition_number(m: &embedyn::nalgebra::DMatrix<f64>) -> f64 {
+    let e = m.clone().symmetric_eigen().eigenvalues;
+    e.max() / e.min()
+}
