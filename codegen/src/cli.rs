@@ -1,1 +1,0 @@
-//! The `embedyn` command line.

@@ -1,0 +1,122 @@
+//! The `embedyn` command line (CONTRACT §3): JSON on stdout, errors on stderr with a non-zero exit code.
+
+mod eval;
+mod info;
+mod samples;
+
+use crate::{load, LoadError, Loaded, ModelOptions};
+use clap::{Parser, Subcommand, ValueEnum};
+use std::path::{Path, PathBuf};
+
+#[derive(Parser, Debug)]
+#[command(name = "embedyn", version, about = "Exact, fast rigid-body dynamics from URDF and URDF+")]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// Print the model's structure: joints in coordinate order, bodies, loops and couplings.
+    Info {
+        /// The model file (URDF or URDF+).
+        model: PathBuf,
+        /// Make the URDF root free with a floating joint named `root_joint`.
+        #[arg(long)]
+        floating: bool,
+    },
+    /// Evaluate an algorithm on the samples of a JSON file (or stdin).
+    Eval {
+        model: PathBuf,
+        #[arg(long, value_enum)]
+        algo: Algo,
+        #[arg(long, value_enum, default_value = "interpreted")]
+        engine: Engine,
+        #[arg(long, value_enum, default_value = "f64")]
+        scalar: Scalar,
+        #[arg(long)]
+        floating: bool,
+        /// JSON input: `{"samples": [...]}`; stdin when absent.
+        #[arg(long)]
+        input: Option<PathBuf>,
+    },
+}
+
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Algo {
+    /// Forward dynamics (articulated-body algorithm).
+    Aba,
+    /// Inverse dynamics (recursive Newton–Euler).
+    Rnea,
+    /// Mass matrix (composite-rigid-body algorithm).
+    Crba,
+}
+
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Engine {
+    /// The interpreted solver (the oracle).
+    Interpreted,
+    /// Generated straight-line code, compiled on demand.
+    Generated,
+}
+
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Scalar {
+    F64,
+    F32,
+}
+
+/// An error of the command line: a message for stderr.
+#[derive(Debug)]
+pub struct CliError(pub String);
+
+impl From<LoadError> for CliError {
+    fn from(e: LoadError) -> Self {
+        CliError(e.to_string())
+    }
+}
+
+/// Runs a parsed command, returning the JSON to print.
+pub fn run(cli: Cli) -> Result<serde_json::Value, CliError> {
+    match cli.command {
+        Command::Info { model, floating } => {
+            let loaded = load_reporting(&model)?;
+            info::info(&loaded, &options(floating))
+        }
+        Command::Eval { model, algo, engine, scalar, floating, input } => {
+            if engine == Engine::Generated {
+                return Err(CliError(
+                    "--engine generated is not available yet in this version: code generation is under construction; use --engine interpreted".into(),
+                ));
+            }
+            let loaded = load_reporting(&model)?;
+            let text = read_input(input.as_deref())?;
+            eval::eval(&loaded, &options(floating), algo, scalar, &text)
+        }
+    }
+}
+
+fn options(floating: bool) -> ModelOptions {
+    ModelOptions { floating, ..Default::default() }
+}
+
+/// Loads the model and prints its warnings to stderr.
+fn load_reporting(path: &Path) -> Result<Loaded, CliError> {
+    let loaded = load(path)?;
+    for w in &loaded.warnings {
+        eprintln!("{w}");
+    }
+    Ok(loaded)
+}
+
+fn read_input(path: Option<&Path>) -> Result<String, CliError> {
+    match path {
+        Some(p) => std::fs::read_to_string(p).map_err(|e| CliError(format!("{}: cannot read the input: {e}", p.display()))),
+        None => {
+            let mut s = String::new();
+            std::io::Read::read_to_string(&mut std::io::stdin(), &mut s)
+                .map_err(|e| CliError(format!("cannot read the input from stdin: {e}")))?;
+            Ok(s)
+        }
+    }
+}
