@@ -1,9 +1,13 @@
-//! The mass matrix by the composite-rigid-body algorithm: `ℳ = H φ M φ* H*` (Eq. 3), one column block
-//! per joint, walking from the joint to the root.
+//! The mass matrix by the composite-rigid-body algorithm: `ℳ = H φ M φ* H*` (Eq. 3).
+//!
+//! Composite inertias and joint axes are expressed in the world frame, so that the entry of joint `j` in
+//! joint `i`'s column is one dot product `H(j) · (I_c(i) H*(i))` per ancestor, with no per-ancestor frame
+//! change: the composite of a rigid subtree is itself a rigid-body inertia (10 numbers), so the sums are
+//! cheap too.
 
 use super::{check_len, DynamicsError, Workspace};
 use crate::model::Model;
-use crate::spatial::ArticulatedInertia;
+use crate::spatial::{Force, SpatialInertia};
 use crate::Real;
 use nalgebra::DMatrix;
 
@@ -14,38 +18,48 @@ pub fn crba<'w, T: Real>(
     q: &[T],
 ) -> Result<&'w DMatrix<T>, DynamicsError> {
     check_len("q", q.len(), model.nq())?;
+    let n = model.nbodies();
+    // World poses, world-frame body inertias.
     for (i, joint) in model.joints.iter().enumerate() {
-        ws.parent_placement[i] = joint.placement.compose(&joint.joint_transform(q));
-        ws.inertia[i] = ArticulatedInertia::from(model.bodies[i].inertia);
+        let x = joint.placement.compose(&joint.joint_transform(q));
+        let world = match joint.parent {
+            Some(p) => ws.world_placement[p].compose(&x),
+            None => x,
+        };
+        ws.parent_placement[i] = x;
+        ws.world_placement[i] = world;
+        ws.composite[i] = model.bodies[i].inertia.act(&world);
+        for k in 0..joint.nv() {
+            ws.world_subspace[joint.v_index + k] = world.act_motion(&joint.subspace_column(k));
+        }
     }
-    // Composite inertias, leaves first.
-    for i in (0..model.nbodies()).rev() {
+    // Composite inertias, leaves first: in a common frame, a plain sum.
+    for i in (0..n).rev() {
         if let Some(p) = model.joints[i].parent {
-            let ic = ws.inertia[i].act(&ws.parent_placement[i]);
-            ws.inertia[p] += ic;
+            let c = ws.composite[i];
+            ws.composite[p] = ws.composite[p] + c;
         }
     }
     let m = &mut ws.mass_matrix;
     // Entries of joints on different branches are zero and never written below.
-    m.fill(T::zero());
+    m.as_mut_slice().fill(T::zero());
+    let sw = &ws.world_subspace;
     for (i, joint) in model.joints.iter().enumerate() {
         for k in 0..joint.nv() {
             let col = joint.v_index + k;
-            let mut f = ws.inertia[i].mul_motion(&joint.subspace_column(k));
+            let f: Force<T> = SpatialInertia::mul_motion(&ws.composite[i], &sw[col]);
             // The joint's own block, mirrored so that M is exactly symmetric.
-            for r in k..joint.nv() {
-                let val = joint.subspace_column(r).dot(&f);
-                m[(joint.v_index + r, col)] = val;
-                m[(col, joint.v_index + r)] = val;
+            for row in col..joint.v_index + joint.nv() {
+                let val = sw[row].dot(&f);
+                m[(row, col)] = val;
+                m[(col, row)] = val;
             }
             let mut j = i;
             while let Some(p) = model.joints[j].parent {
-                f = ws.parent_placement[j].act_force(&f);
                 j = p;
                 let jp = &model.joints[j];
-                for r in 0..jp.nv() {
-                    let row = jp.v_index + r;
-                    let val = jp.subspace_column(r).dot(&f);
+                for row in jp.v_index..jp.v_index + jp.nv() {
+                    let val = sw[row].dot(&f);
                     m[(row, col)] = val;
                     m[(col, row)] = val;
                 }

@@ -1,5 +1,5 @@
 use crate::model::Model;
-use crate::spatial::{ArticulatedInertia, Force, Motion, Transform};
+use crate::spatial::{ArticulatedInertia, Force, Motion, SpatialInertia, Transform};
 use crate::Real;
 use nalgebra::{DMatrix, Matrix6};
 
@@ -23,6 +23,10 @@ pub struct Workspace<T: Real> {
     pub force: Vec<Force<T>>,
     /// Articulated (ABA) or composite (CRBA) inertia `P(k)`.
     pub inertia: Vec<ArticulatedInertia<T>>,
+    /// CRBA: composite rigid-body inertia of each subtree, in the world frame.
+    pub(crate) composite: Vec<SpatialInertia<T>>,
+    /// CRBA: each column of the motion subspace `H*` in the world frame, indexed like `v`.
+    pub(crate) world_subspace: Vec<Motion<T>>,
     /// `P(k) H*(k)` for 1-DoF joints.
     pub(crate) u: Vec<Force<T>>,
     /// `D(k)⁻¹` for 1-DoF joints.
@@ -63,6 +67,8 @@ impl<T: Real> Workspace<T> {
             coriolis: vec![Motion::zero(); n],
             force: vec![Force::zero(); n],
             inertia: vec![ArticulatedInertia::zero(); n],
+            composite: vec![SpatialInertia::zero(); n],
+            world_subspace: vec![Motion::zero(); nv],
             u: vec![Force::zero(); n],
             d_inv: vec![T::zero(); n],
             epsilon: vec![T::zero(); n],

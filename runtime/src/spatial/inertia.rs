@@ -68,10 +68,15 @@ impl<T: Real> SpatialInertia<T> {
         let p = &x.translation;
         let h_rot = r * self.first_moment;
         // I_o about the new origin: rotate, then shift the reference point by −p using
-        // I_new = I_rot − [p]×[h]× − [h]×[p]× − m [p]×[p]× (h the rotated first moment).
-        let px = skew(p);
-        let hx = skew(&h_rot);
-        let rot = rotate_tensor(r, &self.rotational) - px * hx - hx * px - px * px * self.mass;
+        // I_new = I_rot − [p]×[h]× − [h]×[p]× − m [p]×[p]× (h the rotated first moment), which with
+        // [a]×[b]× = b aᵀ − (a·b) 1 is (2 p·h + m |p|²) 1 − h pᵀ − p hᵀ − m p pᵀ.
+        let m = self.mass;
+        let h = &h_rot;
+        let diag = (p.dot(h) + p.dot(h)) + m * p.dot(p);
+        let s = |i: usize, j: usize| -(h[i] * p[j] + p[i] * h[j] + m * p[i] * p[j]);
+        let (xy, xz, yz) = (s(0, 1), s(0, 2), s(1, 2));
+        let shift = Matrix3::new(diag + s(0, 0), xy, xz, xy, diag + s(1, 1), yz, xz, yz, diag + s(2, 2));
+        let rot = rotate_tensor(r, &self.rotational) + shift;
         SpatialInertia {
             mass: self.mass,
             first_moment: h_rot + p * self.mass,
