@@ -4,7 +4,9 @@
 //! `cargo run --release --example demo [MODEL.urdf] [--floating]`
 
 use embedyn::linalg::solve_spd;
-use embedyn::{aba, crba, load, mass_matrix_inverse, relative_error, rnea, ModelOptions, Workspace};
+use embedyn::{
+    aba, crba, load, mass_matrix_inverse, relative_error, rnea, ModelOptions, Workspace,
+};
 use std::time::Instant;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -14,17 +16,33 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .iter()
         .find(|a| !a.starts_with("--"))
         .cloned()
-        .unwrap_or_else(|| concat!(env!("CARGO_MANIFEST_DIR"), "/models/humanoid34.urdf").to_string());
+        .unwrap_or_else(|| {
+            concat!(env!("CARGO_MANIFEST_DIR"), "/models/humanoid34.urdf").to_string()
+        });
 
     let loaded = load(path.as_ref())?;
     for w in &loaded.warnings {
         eprintln!("{w}");
     }
-    let model = loaded.model::<f64>(&ModelOptions { floating, ..Default::default() })?;
-    println!("{}: {} bodies, nq = {}, nv = {}  ({path})", model.name, model.nbodies(), model.nq(), model.nv());
-    println!("{:>3}  {:<20} {:<11} {:<20} {:>9}  merged links", "#", "joint", "type", "parent body", "mass kg");
+    let model = loaded.model::<f64>(&ModelOptions {
+        floating,
+        ..Default::default()
+    })?;
+    println!(
+        "{}: {} bodies, nq = {}, nv = {}  ({path})",
+        model.name,
+        model.nbodies(),
+        model.nq(),
+        model.nv()
+    );
+    println!(
+        "{:>3}  {:<20} {:<11} {:<20} {:>9}  merged links",
+        "#", "joint", "type", "parent body", "mass kg"
+    );
     for (i, (j, b)) in model.joints.iter().zip(&model.bodies).enumerate() {
-        let parent = j.parent.map_or("(world)", |p| model.bodies[p].name.as_str());
+        let parent = j
+            .parent
+            .map_or("(world)", |p| model.bodies[p].name.as_str());
         println!(
             "{i:>3}  {:<20} {:<11} {:<20} {:>9.3}  {}",
             j.name,
@@ -42,8 +60,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             q[j.q_index] = 0.3;
         }
     }
-    let v: Vec<f64> = (0..model.nv()).map(|i| 0.1 * ((i % 5) as f64 - 2.0)).collect();
-    let tau: Vec<f64> = (0..model.nv()).map(|i| 0.5 * ((i % 3) as f64 - 1.0)).collect();
+    let v: Vec<f64> = (0..model.nv())
+        .map(|i| 0.1 * ((i % 5) as f64 - 2.0))
+        .collect();
+    let tau: Vec<f64> = (0..model.nv())
+        .map(|i| 0.5 * ((i % 3) as f64 - 1.0))
+        .collect();
     let mut ws = Workspace::new(&model);
     let qdd = aba(&model, &mut ws, &q, &v, &tau)?.to_vec();
 
@@ -55,11 +77,19 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let back = rnea(&model, &mut ws, &q, &v, &qdd)?.to_vec();
 
     println!("\nforward dynamics (ABA, paper Eq. 9) at q = 0.3:");
-    for (j, chunk) in model.joints.iter().map(|j| (j, &qdd[j.v_index..j.v_index + j.nv()])) {
+    for (j, chunk) in model
+        .joints
+        .iter()
+        .map(|j| (j, &qdd[j.v_index..j.v_index + j.nv()]))
+    {
         let vals: Vec<String> = chunk.iter().map(|x| format!("{x:+.6}")).collect();
         println!("  {:<20} qdd = {}", j.name, vals.join(" "));
     }
-    println!("\nchecks: ABA vs CRBA+Cholesky {:.1e}, RNEA(ABA) vs tau {:.1e} (relative)", relative_error(&qdd, &qdd_chol), relative_error(&back, &tau));
+    println!(
+        "\nchecks: ABA vs CRBA+Cholesky {:.1e}, RNEA(ABA) vs tau {:.1e} (relative)",
+        relative_error(&qdd, &qdd_chol),
+        relative_error(&back, &tau)
+    );
 
     // Timing: median of batches, each over many calls, in-process.
     let time = |f: &mut dyn FnMut()| -> f64 {
@@ -85,7 +115,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     });
     ws.reserve_inverse(&model);
     let t_minv = time(&mut || {
-        std::hint::black_box(mass_matrix_inverse(&model, &mut ws, std::hint::black_box(&q)).unwrap());
+        std::hint::black_box(
+            mass_matrix_inverse(&model, &mut ws, std::hint::black_box(&q)).unwrap(),
+        );
     });
     println!("\ninterpreted solver, f64, median ns per call: aba {t_aba:.0}, rnea {t_rnea:.0}, crba {t_crba:.0}, M⁻¹ (Eq. 6) {t_minv:.0}");
     println!("(code generation, the faster path, arrives with the code-generation issue)");

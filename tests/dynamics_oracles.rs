@@ -30,13 +30,19 @@ fn check_model(model: &Model<f64>, seed: u64, samples: usize) {
         let tau = rng.vec(nv, -20.0, 20.0);
 
         let qdd = aba(model, &mut ws, &q, &v, &tau).unwrap().to_vec();
-        let nle = rnea(model, &mut ws, &q, &v, &vec![0.0; nv]).unwrap().to_vec();
+        let nle = rnea(model, &mut ws, &q, &v, &vec![0.0; nv])
+            .unwrap()
+            .to_vec();
         let m = crba(model, &mut ws, &q).unwrap().clone();
 
         // M symmetric (exactly: both triangles are written from one value) and positive definite.
         assert_eq!(m, m.transpose(), "{}: M not symmetric", model.name);
         let mut l = m.clone();
-        assert!(cholesky_in_place(&mut l) > 0.0, "{}: M not positive definite", model.name);
+        assert!(
+            cholesky_in_place(&mut l) > 0.0,
+            "{}: M not positive definite",
+            model.name
+        );
 
         // ABA against M⁻¹ (τ − nle) by Cholesky.
         let rhs: Vec<f64> = tau.iter().zip(&nle).map(|(t, n)| t - n).collect();
@@ -58,8 +64,20 @@ fn check_model(model: &Model<f64>, seed: u64, samples: usize) {
         "{} (nv {nv}): aba vs crba+chol {:.1e}, rnea(aba) {:.1e}, M·Minv−I {:.1e}, Minv asym {:.1e}",
         model.name, worst[0], worst[1], worst[2], worst[3]
     );
-    for (what, w) in ["ABA vs CRBA+Cholesky", "RNEA(ABA) vs tau", "M·Minv vs I", "Minv symmetry"].iter().zip(worst) {
-        assert!(w <= TOL, "{}: {what}: relative error {w:e} > {TOL:e}", model.name);
+    for (what, w) in [
+        "ABA vs CRBA+Cholesky",
+        "RNEA(ABA) vs tau",
+        "M·Minv vs I",
+        "Minv symmetry",
+    ]
+    .iter()
+    .zip(worst)
+    {
+        assert!(
+            w <= TOL,
+            "{}: {what}: relative error {w:e} > {TOL:e}",
+            model.name
+        );
     }
 }
 

@@ -14,7 +14,14 @@ fn energy(model: &Model<f64>, ws: &mut Workspace<f64>, q: &[f64], v: &[f64]) -> 
 }
 
 /// One classical Runge–Kutta step of (q, v) with qdd = ABA(q, v, τ).
-fn rk4_step(model: &Model<f64>, ws: &mut Workspace<f64>, q: &mut Vec<f64>, v: &mut Vec<f64>, tau: &[f64], h: f64) {
+fn rk4_step(
+    model: &Model<f64>,
+    ws: &mut Workspace<f64>,
+    q: &mut [f64],
+    v: &mut [f64],
+    tau: &[f64],
+    h: f64,
+) {
     let (nq, nv) = (model.nq(), model.nv());
     let mut deriv = |q: &[f64], v: &[f64]| -> (Vec<f64>, Vec<f64>) {
         let mut qd = vec![0.0; nq];
@@ -22,7 +29,9 @@ fn rk4_step(model: &Model<f64>, ws: &mut Workspace<f64>, q: &mut Vec<f64>, v: &m
         let a = aba(model, ws, q, v, tau).unwrap().to_vec();
         (qd, a)
     };
-    let axpy = |x: &[f64], d: &[f64], s: f64| -> Vec<f64> { x.iter().zip(d).map(|(a, b)| a + s * b).collect() };
+    let axpy = |x: &[f64], d: &[f64], s: f64| -> Vec<f64> {
+        x.iter().zip(d).map(|(a, b)| a + s * b).collect()
+    };
     let (k1q, k1v) = deriv(q, v);
     let (k2q, k2v) = deriv(&axpy(q, &k1q, h / 2.0), &axpy(v, &k1v, h / 2.0));
     let (k3q, k3v) = deriv(&axpy(q, &k2q, h / 2.0), &axpy(v, &k2v, h / 2.0));
@@ -62,7 +71,10 @@ fn check_drift_order(path: &str, floating: bool, h: f64) {
     eprintln!("{path}: energy drift {d1:.3e} (h = {h}), {d2:.3e} (h/2), ratio {ratio:.1}");
     // RK4: the error shrinks 2⁴ = 16× per halving; accept 11–23 (the asymptotic regime is approached,
     // not reached exactly). A wrong acceleration would make energy drift at O(1), not shrink.
-    assert!((11.0..23.0).contains(&ratio), "{path}: drift ratio {ratio} is not 4th order");
+    assert!(
+        (11.0..23.0).contains(&ratio),
+        "{path}: drift ratio {ratio} is not 4th order"
+    );
     assert!(d1 < 1e-4, "{path}: drift {d1:e} J too large");
 }
 
@@ -79,7 +91,11 @@ fn energy_is_conserved_at_the_integrators_order_quadruped() {
 #[test]
 fn power_balance_at_an_instant() {
     // dE/dt = τ·v, with dE/dt by a central difference along the motion qdd = ABA(q, v, τ).
-    for (path, floating) in [("models/arm7.urdf", false), ("models/humanoid34.urdf", false), ("models/quadruped.urdf", false)] {
+    for (path, floating) in [
+        ("models/arm7.urdf", false),
+        ("models/humanoid34.urdf", false),
+        ("models/quadruped.urdf", false),
+    ] {
         let model = load_model::<f64>(path, floating);
         let mut ws = Workspace::new(&model);
         let mut rng = Rng(17);
@@ -97,7 +113,9 @@ fn power_balance_at_an_instant() {
             energy(&model, ws, &qs, &vs)
         };
         // Fourth-order central stencil: truncation O(h⁴), rounding O(ε E / h).
-        let de = (-at(2.0 * h, &mut ws) + 8.0 * at(h, &mut ws) - 8.0 * at(-h, &mut ws) + at(-2.0 * h, &mut ws)) / (12.0 * h);
+        let de = (-at(2.0 * h, &mut ws) + 8.0 * at(h, &mut ws) - 8.0 * at(-h, &mut ws)
+            + at(-2.0 * h, &mut ws))
+            / (12.0 * h);
         let power: f64 = tau.iter().zip(&v).map(|(t, w)| t * w).sum();
         let err = (de - power).abs() / power.abs().max(1.0);
         eprintln!("{path}: dE/dt {de:.9}, τ·v {power:.9}, relative difference {err:.1e}");

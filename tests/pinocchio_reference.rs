@@ -10,7 +10,11 @@ use serde_json::Value;
 const TOL: f64 = 1e-9;
 
 fn vecf(v: &Value) -> Vec<f64> {
-    v.as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect()
+    v.as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect()
 }
 
 fn check_robot(name: &str, floating: bool) {
@@ -19,8 +23,16 @@ fn check_robot(name: &str, floating: bool) {
     )
     .unwrap();
     let model = load_model::<f64>(&format!("tests/data/pinocchio/{name}.urdf"), floating);
-    assert_eq!(model.nq() as u64, json["nq_angle"].as_u64().unwrap(), "{name}: nq");
-    assert_eq!(model.nv() as u64, json["nv"].as_u64().unwrap(), "{name}: nv");
+    assert_eq!(
+        model.nq() as u64,
+        json["nq_angle"].as_u64().unwrap(),
+        "{name}: nq"
+    );
+    assert_eq!(
+        model.nv() as u64,
+        json["nv"].as_u64().unwrap(),
+        "{name}: nv"
+    );
     // Joint order: ours is depth-first in file order; map Pinocchio's by name anyway.
     let pin_joints = json["joints"].as_array().unwrap();
     let mut v_map = vec![0usize; model.nv()]; // our v index -> Pinocchio v index
@@ -30,7 +42,10 @@ fn check_robot(name: &str, floating: bool) {
             .iter()
             .find(|p| p["name"].as_str() == Some(j.name.as_str()))
             .unwrap_or_else(|| panic!("{name}: joint {} not in the reference", j.name));
-        let (pv, pq) = (pj["idx_v"].as_u64().unwrap() as usize, pj["idx_q_angle"].as_u64().unwrap() as usize);
+        let (pv, pq) = (
+            pj["idx_v"].as_u64().unwrap() as usize,
+            pj["idx_q_angle"].as_u64().unwrap() as usize,
+        );
         for k in 0..j.nv() {
             v_map[j.v_index + k] = pv + k;
         }
@@ -57,7 +72,9 @@ fn check_robot(name: &str, floating: bool) {
         worst[1] = worst[1].max(relative_error(&t, &tau_ref));
 
         let nle_ref = pick(&vecf(&s["nle"]), &v_map);
-        let nle = rnea(&model, &mut ws, &q, &v, &vec![0.0; model.nv()]).unwrap().to_vec();
+        let nle = rnea(&model, &mut ws, &q, &v, &vec![0.0; model.nv()])
+            .unwrap()
+            .to_vec();
         worst[2] = worst[2].max(relative_error(&nle, &nle_ref));
 
         let m_ref: Vec<Vec<f64>> = s["M"].as_array().unwrap().iter().map(vecf).collect();
@@ -72,9 +89,15 @@ fn check_robot(name: &str, floating: bool) {
         }
         worst[3] = worst[3].max(relative_error(&ours, &theirs));
     }
-    eprintln!("{name}: worst relative error aba {:.1e} rnea {:.1e} nle {:.1e} crba {:.1e}", worst[0], worst[1], worst[2], worst[3]);
+    eprintln!(
+        "{name}: worst relative error aba {:.1e} rnea {:.1e} nle {:.1e} crba {:.1e}",
+        worst[0], worst[1], worst[2], worst[3]
+    );
     for (what, w) in ["aba", "rnea", "nle", "crba"].iter().zip(worst) {
-        assert!(w <= TOL, "{name}: {what} differs from Pinocchio by {w:e} (relative)");
+        assert!(
+            w <= TOL,
+            "{name}: {what} differs from Pinocchio by {w:e} (relative)"
+        );
     }
 }
 

@@ -14,7 +14,13 @@ struct Errors {
     crba: f64,
 }
 
-fn run<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, q: &[f64], v: &[f64], x: &[f64]) -> [Vec<f64>; 3] {
+fn run<T: Real>(
+    model: &Model<T>,
+    ws: &mut Workspace<T>,
+    q: &[f64],
+    v: &[f64],
+    x: &[f64],
+) -> [Vec<f64>; 3] {
     let (q, v, x) = (cast::<T>(q), cast::<T>(v), cast::<T>(x));
     let a = to_f64(aba(model, ws, &q, &v, &x).unwrap());
     let r = to_f64(rnea(model, ws, &q, &v, &x).unwrap());
@@ -28,7 +34,11 @@ fn compare<T: Real, R: Real>(path: &str, floating: bool, samples: usize) -> Erro
     let mut ws_t = Workspace::new(&model_t);
     let mut ws_r = Workspace::new(&model_r);
     let mut rng = Rng(23);
-    let mut e = Errors { aba: 0.0, rnea: 0.0, crba: 0.0 };
+    let mut e = Errors {
+        aba: 0.0,
+        rnea: 0.0,
+        crba: 0.0,
+    };
     let model64 = load_model::<f64>(path, floating);
     for _ in 0..samples {
         let q = rng.configuration(&model64);
@@ -64,7 +74,10 @@ fn f64_matches_double_double_to_1e_12() {
     for (path, floating) in MODELS {
         let e = compare::<f64, DoubleDouble>(path, floating, 10);
         for (what, err) in [("aba", e.aba), ("rnea", e.rnea), ("crba", e.crba)] {
-            assert!(err <= 1e-12, "{path}: f64 {what} off the double-double answer by {err:e}");
+            assert!(
+                err <= 1e-12,
+                "{path}: f64 {what} off the double-double answer by {err:e}"
+            );
         }
     }
 }
@@ -74,7 +87,10 @@ fn f32_matches_f64_to_1e_4() {
     for (path, floating) in MODELS {
         let e = compare::<f32, f64>(path, floating, 20);
         for (what, err) in [("aba", e.aba), ("rnea", e.rnea), ("crba", e.crba)] {
-            assert!(err <= 1e-4, "{path}: f32 {what} off the f64 answer by {err:e}");
+            assert!(
+                err <= 1e-4,
+                "{path}: f32 {what} off the f64 answer by {err:e}"
+            );
         }
     }
 }
@@ -89,12 +105,22 @@ fn double_double_model_is_more_precise_than_f64() {
     let mut ws = Workspace::new(&m_dd);
     let mut rng = Rng(2);
     let q = rng.configuration(&load_model::<f64>(path, false));
-    let (q, v, tau) = (cast::<DoubleDouble>(&q), cast::<DoubleDouble>(&rng.vec(6, -1.0, 1.0)), cast::<DoubleDouble>(&rng.vec(6, -5.0, 5.0)));
+    let (q, v, tau) = (
+        cast::<DoubleDouble>(&q),
+        cast::<DoubleDouble>(&rng.vec(6, -1.0, 1.0)),
+        cast::<DoubleDouble>(&rng.vec(6, -5.0, 5.0)),
+    );
     let qdd = aba(&m_dd, &mut ws, &q, &v, &tau).unwrap().to_vec();
-    let nle = rnea(&m_dd, &mut ws, &q, &v, &[DoubleDouble::from_f64(0.0); 6]).unwrap().to_vec();
+    let nle = rnea(&m_dd, &mut ws, &q, &v, &[DoubleDouble::from_f64(0.0); 6])
+        .unwrap()
+        .to_vec();
     let m = crba(&m_dd, &mut ws, &q).unwrap().clone();
     let rhs: Vec<DoubleDouble> = tau.iter().zip(&nle).map(|(t, n)| *t - *n).collect();
     let qdd_chol = solve_spd(&m, &rhs).unwrap();
-    let diff = qdd.iter().zip(&qdd_chol).map(|(a, b)| (*a - *b).abs().to_f64()).fold(0.0, f64::max);
+    let diff = qdd
+        .iter()
+        .zip(&qdd_chol)
+        .map(|(a, b)| (*a - *b).abs().to_f64())
+        .fold(0.0, f64::max);
     assert!(diff < 1e-25, "double-double ABA vs CRBA+Cholesky: {diff:e}");
 }

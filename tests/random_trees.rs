@@ -24,22 +24,36 @@ fn check(seed: u64, n: usize, floating: bool) -> Result<(), TestCaseError> {
     let v = rng.vec(nv, -2.0, 2.0);
     let tau = rng.vec(nv, -10.0, 10.0);
     let qdd = aba(&model, &mut ws, &q, &v, &tau).unwrap().to_vec();
-    let nle = rnea(&model, &mut ws, &q, &v, &vec![0.0; nv]).unwrap().to_vec();
+    let nle = rnea(&model, &mut ws, &q, &v, &vec![0.0; nv])
+        .unwrap()
+        .to_vec();
     let m = crba(&model, &mut ws, &q).unwrap().clone();
     let cond = condition_number(&m);
     let tol = tolerance(nv, cond);
     let rhs: Vec<f64> = tau.iter().zip(&nle).map(|(t, n)| t - n).collect();
     let qdd_chol = solve_spd(&m, &rhs).expect("M positive definite");
     let e_aba = relative_error(&qdd, &qdd_chol);
-    prop_assert!(e_aba <= tol, "ABA vs CRBA+Cholesky: {e_aba:e} > {tol:e} (cond {cond:e}, n {n}, seed {seed})");
+    prop_assert!(
+        e_aba <= tol,
+        "ABA vs CRBA+Cholesky: {e_aba:e} > {tol:e} (cond {cond:e}, n {n}, seed {seed})"
+    );
     let back = rnea(&model, &mut ws, &q, &v, &qdd).unwrap().to_vec();
     let e_rnea = relative_error(&back, &tau);
     // τ = M qdd + nle: an error δ in qdd shows up as M δ, so the bound carries |M| as well.
     let m_norm = m.iter().fold(1.0f64, |a, x| a.max(x.abs()));
-    prop_assert!(e_rnea <= tol * m_norm, "RNEA(ABA) vs tau: {e_rnea:e} (cond {cond:e}, seed {seed})");
+    prop_assert!(
+        e_rnea <= tol * m_norm,
+        "RNEA(ABA) vs tau: {e_rnea:e} (cond {cond:e}, seed {seed})"
+    );
     let minv = mass_matrix_inverse(&model, &mut ws, &q).unwrap().clone();
-    let e_inv = relative_error((&m * &minv).as_slice(), DMatrix::<f64>::identity(nv, nv).as_slice());
-    prop_assert!(e_inv <= tol, "M·Minv vs I: {e_inv:e} > {tol:e} (cond {cond:e}, seed {seed})");
+    let e_inv = relative_error(
+        (&m * &minv).as_slice(),
+        DMatrix::<f64>::identity(nv, nv).as_slice(),
+    );
+    prop_assert!(
+        e_inv <= tol,
+        "M·Minv vs I: {e_inv:e} > {tol:e} (cond {cond:e}, seed {seed})"
+    );
     Ok(())
 }
 
@@ -66,9 +80,26 @@ fn long_chain_of_200_bodies() {
         use embedyn::{JointType, Model, SpatialInertia, Transform};
         let mut b = Model::<f64>::builder("chain200");
         for i in 0usize..200 {
-            let axis = if i % 2 == 0 { Vector3::z() } else { Vector3::y() };
-            let inertia = SpatialInertia::from_com(0.5, Vector3::new(0.0, 0.0, 0.05), Matrix3::identity() * 1e-3);
-            b.add_body(i.checked_sub(1), format!("j{i}"), JointType::Revolute, axis, Transform::from_xyz_rpy([0.0, 0.0, 0.1], [0.0; 3]), format!("b{i}"), inertia).unwrap();
+            let axis = if i % 2 == 0 {
+                Vector3::z()
+            } else {
+                Vector3::y()
+            };
+            let inertia = SpatialInertia::from_com(
+                0.5,
+                Vector3::new(0.0, 0.0, 0.05),
+                Matrix3::identity() * 1e-3,
+            );
+            b.add_body(
+                i.checked_sub(1),
+                format!("j{i}"),
+                JointType::Revolute,
+                axis,
+                Transform::from_xyz_rpy([0.0, 0.0, 0.1], [0.0; 3]),
+                format!("b{i}"),
+                inertia,
+            )
+            .unwrap();
         }
         b.build().unwrap()
     };

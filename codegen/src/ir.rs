@@ -75,7 +75,16 @@ pub struct Joint {
     pub line: Option<u32>,
 }
 
-/// A robot as read from URDF: links, joints, the root link; loops and couplings come with URDF+.
+/// A URDF+ `<loop>` or `<coupling>` as far as this version reads it: its name and place. Their semantics
+/// (CONTRACT §1) arrive with constraint embedding; until then a model that has any is refused, never
+/// silently simulated as the bare tree.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Closure {
+    pub name: String,
+    pub line: Option<u32>,
+}
+
+/// A robot as read from URDF: links, joints, the root link, and URDF+ loops and couplings.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Robot {
     pub name: String,
@@ -84,4 +93,8 @@ pub struct Robot {
     pub joints: Vec<Joint>,
     /// Index of the root link (the one that is no joint's child).
     pub root: usize,
+    /// URDF+ `<loop>` elements.
+    pub loops: Vec<Closure>,
+    /// URDF+ `<coupling>` elements.
+    pub couplings: Vec<Closure>,
 }

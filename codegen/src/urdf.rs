@@ -4,7 +4,7 @@
 //! `<mimic>` children (a differential).
 
 use crate::error::{LoadError, Location, Warning};
-use crate::ir::{Inertial, Joint, JointKind, Link, Mimic, Origin, Robot};
+use crate::ir::{Closure, Inertial, Joint, JointKind, Link, Mimic, Origin, Robot};
 use roxmltree::{Document, Node};
 use std::collections::HashMap;
 use std::path::Path;
@@ -19,7 +19,10 @@ pub struct Loaded {
 /// Reads and checks a URDF file.
 pub fn load_urdf(path: &Path) -> Result<Loaded, LoadError> {
     let text = std::fs::read_to_string(path).map_err(|e| {
-        LoadError::new(Location::new(path, None, ""), format!("cannot read the model file: {e}"))
+        LoadError::new(
+            Location::new(path, None, ""),
+            format!("cannot read the model file: {e}"),
+        )
     })?;
     parse_urdf(&text, path)
 }
@@ -28,11 +31,21 @@ pub fn load_urdf(path: &Path) -> Result<Loaded, LoadError> {
 pub fn parse_urdf(text: &str, path: &Path) -> Result<Loaded, LoadError> {
     let doc = Document::parse(text).map_err(|e| {
         let pos = e.pos();
-        LoadError::new(Location::new(path, Some(pos.row), "XML"), format!("malformed XML: {e}"))
+        LoadError::new(
+            Location::new(path, Some(pos.row), "XML"),
+            format!("malformed XML: {e}"),
+        )
     })?;
-    let mut p = Parser { doc: &doc, path, warnings: Vec::new() };
+    let mut p = Parser {
+        doc: &doc,
+        path,
+        warnings: Vec::new(),
+    };
     let robot = p.robot()?;
-    Ok(Loaded { robot, warnings: p.warnings })
+    Ok(Loaded {
+        robot,
+        warnings: p.warnings,
+    })
 }
 
 struct Parser<'a, 'input> {
@@ -50,19 +63,31 @@ impl<'a, 'input> Parser<'a, 'input> {
         Location::new(self.path, self.line(node), element)
     }
 
-    fn err<T>(&self, node: Node, element: impl Into<String>, msg: impl Into<String>) -> Result<T, LoadError> {
+    fn err<T>(
+        &self,
+        node: Node,
+        element: impl Into<String>,
+        msg: impl Into<String>,
+    ) -> Result<T, LoadError> {
         Err(LoadError::new(self.loc(node, element), msg))
     }
 
     fn warn(&mut self, node: Node, element: impl Into<String>, msg: impl Into<String>) {
-        let w = Warning { location: self.loc(node, element), message: msg.into() };
+        let w = Warning {
+            location: self.loc(node, element),
+            message: msg.into(),
+        };
         self.warnings.push(w);
     }
 
     fn robot(&mut self) -> Result<Robot, LoadError> {
         let root = self.doc.root_element();
         if root.tag_name().name() != "robot" {
-            return self.err(root, format!("<{}>", root.tag_name().name()), "the root element must be <robot>");
+            return self.err(
+                root,
+                format!("<{}>", root.tag_name().name()),
+                "the root element must be <robot>",
+            );
         }
         let name = root.attribute("name").unwrap_or("robot").to_string();
         let mut links = Vec::new();
@@ -70,7 +95,11 @@ impl<'a, 'input> Parser<'a, 'input> {
         for node in root.children().filter(|n| n.has_tag_name("link")) {
             let link = self.link(node)?;
             if link_index.insert(link.name.clone(), links.len()).is_some() {
-                return self.err(node, format!("link \"{}\"", link.name), "a link of this name is already defined");
+                return self.err(
+                    node,
+                    format!("link \"{}\"", link.name),
+                    "a link of this name is already defined",
+                );
             }
             links.push(link);
         }
@@ -80,7 +109,10 @@ impl<'a, 'input> Parser<'a, 'input> {
         for node in root.children().filter(|n| n.has_tag_name("joint")) {
             let joint = self.joint(node, &link_index)?;
             let what = format!("joint \"{}\"", joint.name);
-            if joint_names.insert(joint.name.clone(), joints.len()).is_some() {
+            if joint_names
+                .insert(joint.name.clone(), joints.len())
+                .is_some()
+            {
                 return self.err(node, what, "a joint of this name is already defined");
             }
             if let Some(other) = parent_joint[joint.child] {
@@ -103,7 +135,9 @@ impl<'a, 'input> Parser<'a, 'input> {
             return self.err(root, format!("robot \"{name}\""), "the model has no <link>");
         }
         // Exactly one root; every link reachable from it (otherwise the joints form a cycle).
-        let roots: Vec<usize> = (0..links.len()).filter(|&l| parent_joint[l].is_none()).collect();
+        let roots: Vec<usize> = (0..links.len())
+            .filter(|&l| parent_joint[l].is_none())
+            .collect();
         let root_link = match roots.as_slice() {
             [r] => *r,
             [] => {
@@ -151,13 +185,36 @@ impl<'a, 'input> Parser<'a, 'input> {
             for m in &joint.mimics {
                 if !joint_names.contains_key(&m.joint) {
                     return Err(LoadError::new(
-                        Location::new(self.path, m.line, format!("joint \"{}\" <mimic>", joint.name)),
+                        Location::new(
+                            self.path,
+                            m.line,
+                            format!("joint \"{}\" <mimic>", joint.name),
+                        ),
                         format!("<mimic> names joint \"{}\", which does not exist", m.joint),
                     ));
                 }
             }
         }
-        Ok(Robot { name, source: self.path.to_path_buf(), links, joints, root: root_link })
+        let closure = |tag: &str| -> Vec<Closure> {
+            root.children()
+                .filter(|n| n.has_tag_name(tag))
+                .map(|n| Closure {
+                    name: n.attribute("name").unwrap_or("").to_string(),
+                    line: self.line(n),
+                })
+                .collect()
+        };
+        let loops = closure("loop");
+        let couplings = closure("coupling");
+        Ok(Robot {
+            name,
+            source: self.path.to_path_buf(),
+            links,
+            joints,
+            root: root_link,
+            loops,
+            couplings,
+        })
     }
 
     fn link(&mut self, node: Node) -> Result<Link, LoadError> {
@@ -169,7 +226,11 @@ impl<'a, 'input> Parser<'a, 'input> {
             None => None,
             Some(inode) => Some(self.inertial(inode, &what)?),
         };
-        Ok(Link { name: name.to_string(), inertial, line: self.line(node) })
+        Ok(Link {
+            name: name.to_string(),
+            inertial,
+            line: self.line(node),
+        })
     }
 
     fn inertial(&mut self, node: Node, link: &str) -> Result<Inertial, LoadError> {
@@ -180,14 +241,21 @@ impl<'a, 'input> Parser<'a, 'input> {
         };
         let mass = self.number(mnode, "value", None, &format!("{what} <mass>"))?;
         if mass < 0.0 {
-            return self.err(mnode, format!("{what} <mass>"), format!("negative mass {mass}"));
+            return self.err(
+                mnode,
+                format!("{what} <mass>"),
+                format!("negative mass {mass}"),
+            );
         }
         let Some(inode) = node.children().find(|n| n.has_tag_name("inertia")) else {
             return self.err(node, what, "missing <inertia>");
         };
         let iw = format!("{what} <inertia>");
         let mut inertia = [0.0; 6];
-        for (k, a) in ["ixx", "ixy", "ixz", "iyy", "iyz", "izz"].iter().enumerate() {
+        for (k, a) in ["ixx", "ixy", "ixz", "iyy", "iyz", "izz"]
+            .iter()
+            .enumerate()
+        {
             inertia[k] = self.number(inode, a, None, &iw)?;
         }
         let [ixx, ixy, ixz, iyy, iyz, izz] = inertia;
@@ -204,14 +272,26 @@ impl<'a, 'input> Parser<'a, 'input> {
         // The principal moments of a physical body satisfy the triangle inequality, equivalently
         // ½ tr(I) 1 − I (the body's second moment of mass) is positive semi-definite.
         let h = 0.5 * (ixx + iyy + izz);
-        let sigma = [[h - ixx, -ixy, -ixz], [-ixy, h - iyy, -iyz], [-ixz, -iyz, h - izz]];
+        let sigma = [
+            [h - ixx, -ixy, -ixz],
+            [-ixy, h - iyy, -iyz],
+            [-ixz, -iyz, h - izz],
+        ];
         if !is_psd(&sigma) {
             self.warn(inode, iw.clone(), "the principal moments of inertia violate the triangle inequality (no rigid body has them); loaded as given");
         }
         if mass == 0.0 && m.iter().flatten().any(|&x| x != 0.0) {
-            self.warn(mnode, iw, "zero mass with a non-zero rotational inertia (a massless rotor); loaded as given");
+            self.warn(
+                mnode,
+                iw,
+                "zero mass with a non-zero rotational inertia (a massless rotor); loaded as given",
+            );
         }
-        Ok(Inertial { origin, mass, inertia })
+        Ok(Inertial {
+            origin,
+            mass,
+            inertia,
+        })
     }
 
     fn joint(&mut self, node: Node, links: &HashMap<String, usize>) -> Result<Joint, LoadError> {
@@ -242,7 +322,11 @@ impl<'a, 'input> Parser<'a, 'input> {
             };
             match links.get(l) {
                 Some(&i) => Ok(i),
-                None => self.err(n, format!("{what} <{tag}>"), format!("names link \"{l}\", which does not exist")),
+                None => self.err(
+                    n,
+                    format!("{what} <{tag}>"),
+                    format!("names link \"{l}\", which does not exist"),
+                ),
             }
         };
         let parent = link_of("parent")?;
@@ -252,10 +336,15 @@ impl<'a, 'input> Parser<'a, 'input> {
             None => [1.0, 0.0, 0.0],
             Some(a) => self.vec3(a, "xyz", Some([1.0, 0.0, 0.0]), &format!("{what} <axis>"))?,
         };
-        if matches!(kind, JointKind::Revolute | JointKind::Continuous | JointKind::Prismatic)
-            && axis.iter().all(|&x| x == 0.0)
+        if matches!(
+            kind,
+            JointKind::Revolute | JointKind::Continuous | JointKind::Prismatic
+        ) && axis.iter().all(|&x| x == 0.0)
         {
-            let a = node.children().find(|n| n.has_tag_name("axis")).unwrap_or(node);
+            let a = node
+                .children()
+                .find(|n| n.has_tag_name("axis"))
+                .unwrap_or(node);
             return self.err(a, format!("{what} <axis>"), "the joint axis is zero");
         }
         let mut mimics = Vec::new();
@@ -275,7 +364,13 @@ impl<'a, 'input> Parser<'a, 'input> {
             None => None,
             Some("true") => Some(true),
             Some("false") => Some(false),
-            Some(x) => return self.err(node, what, format!("attribute `independent` must be \"true\" or \"false\", not \"{x}\"")),
+            Some(x) => {
+                return self.err(
+                    node,
+                    what,
+                    format!("attribute `independent` must be \"true\" or \"false\", not \"{x}\""),
+                )
+            }
         };
         Ok(Joint {
             name: name.to_string(),
@@ -303,7 +398,13 @@ impl<'a, 'input> Parser<'a, 'input> {
         }
     }
 
-    fn number(&self, node: Node, attr: &str, default: Option<f64>, what: &str) -> Result<f64, LoadError> {
+    fn number(
+        &self,
+        node: Node,
+        attr: &str,
+        default: Option<f64>,
+        what: &str,
+    ) -> Result<f64, LoadError> {
         match node.attribute(attr) {
             None => match default {
                 Some(d) => Ok(d),
@@ -311,13 +412,23 @@ impl<'a, 'input> Parser<'a, 'input> {
             },
             Some(s) => match s.trim().parse::<f64>() {
                 Ok(x) if x.is_finite() => Ok(x),
-                Ok(_) => self.err(node, what, format!("`{attr}=\"{s}\"` is not a finite number")),
+                Ok(_) => self.err(
+                    node,
+                    what,
+                    format!("`{attr}=\"{s}\"` is not a finite number"),
+                ),
                 Err(_) => self.err(node, what, format!("`{attr}=\"{s}\"` is not a number")),
             },
         }
     }
 
-    fn vec3(&self, node: Node, attr: &str, default: Option<[f64; 3]>, what: &str) -> Result<[f64; 3], LoadError> {
+    fn vec3(
+        &self,
+        node: Node,
+        attr: &str,
+        default: Option<[f64; 3]>,
+        what: &str,
+    ) -> Result<[f64; 3], LoadError> {
         let Some(s) = node.attribute(attr) else {
             return match default {
                 Some(d) => Ok(d),
@@ -326,14 +437,30 @@ impl<'a, 'input> Parser<'a, 'input> {
         };
         let parts: Vec<&str> = s.split_whitespace().collect();
         if parts.len() != 3 {
-            return self.err(node, what, format!("`{attr}=\"{s}\"` must be three numbers"));
+            return self.err(
+                node,
+                what,
+                format!("`{attr}=\"{s}\"` must be three numbers"),
+            );
         }
         let mut out = [0.0; 3];
         for (k, p) in parts.iter().enumerate() {
             out[k] = match p.parse::<f64>() {
                 Ok(x) if x.is_finite() => x,
-                Ok(_) => return self.err(node, what, format!("`{attr}=\"{s}\"` contains a number that is not finite")),
-                Err(_) => return self.err(node, what, format!("`{attr}=\"{s}\"`: \"{p}\" is not a number")),
+                Ok(_) => {
+                    return self.err(
+                        node,
+                        what,
+                        format!("`{attr}=\"{s}\"` contains a number that is not finite"),
+                    )
+                }
+                Err(_) => {
+                    return self.err(
+                        node,
+                        what,
+                        format!("`{attr}=\"{s}\"`: \"{p}\" is not a number"),
+                    )
+                }
             };
         }
         Ok(out)
@@ -354,7 +481,10 @@ fn is_psd(m: &[[f64; 3]; 3]) -> bool {
         m[0][0] * m[2][2] - m[0][2] * m[2][0],
         m[1][1] * m[2][2] - m[1][2] * m[2][1],
     ];
-    let d3 = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
+    let d3 = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
+        - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
         + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
-    d1.iter().all(|&x| x >= -tol * s) && d2.iter().all(|&x| x >= -tol * s * s) && d3 >= -tol * s * s * s
+    d1.iter().all(|&x| x >= -tol * s)
+        && d2.iter().all(|&x| x >= -tol * s * s)
+        && d3 >= -tol * s * s * s
 }

@@ -6,7 +6,11 @@ use std::path::PathBuf;
 use std::process::{Command, Stdio};
 
 fn repo(rel: &str) -> String {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..").join(rel).to_string_lossy().into_owned()
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("..")
+        .join(rel)
+        .to_string_lossy()
+        .into_owned()
 }
 
 /// Runs `embedyn args` with `stdin`; returns (success, stdout, stderr).
@@ -18,9 +22,18 @@ fn embedyn(args: &[&str], stdin: &str) -> (bool, String, String) {
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
-    child.stdin.take().unwrap().write_all(stdin.as_bytes()).unwrap();
+    child
+        .stdin
+        .take()
+        .unwrap()
+        .write_all(stdin.as_bytes())
+        .unwrap();
     let out = child.wait_with_output().unwrap();
-    (out.status.success(), String::from_utf8(out.stdout).unwrap(), String::from_utf8(out.stderr).unwrap())
+    (
+        out.status.success(),
+        String::from_utf8(out.stdout).unwrap(),
+        String::from_utf8(out.stderr).unwrap(),
+    )
 }
 
 fn json_of(args: &[&str], stdin: &str) -> Value {
@@ -35,8 +48,16 @@ fn info_reports_joint_order_and_sizes() {
     assert_eq!(info["nq"], 7);
     assert_eq!(info["nv"], 7);
     assert_eq!(info["independent_nv"], 7);
-    let names: Vec<&str> = info["joints"].as_array().unwrap().iter().map(|j| j["name"].as_str().unwrap()).collect();
-    assert_eq!(names, ["joint1", "joint2", "joint3", "joint4", "joint5", "joint6", "joint7"]);
+    let names: Vec<&str> = info["joints"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|j| j["name"].as_str().unwrap())
+        .collect();
+    assert_eq!(
+        names,
+        ["joint1", "joint2", "joint3", "joint4", "joint5", "joint6", "joint7"]
+    );
     assert_eq!(info["joints"][3]["q_index"], 3);
     assert_eq!(info["joints"][3]["type"], "revolute");
     assert_eq!(info["loops"], json!([]));
@@ -46,11 +67,26 @@ fn info_reports_joint_order_and_sizes() {
 
 #[test]
 fn info_floating_adds_root_joint_first() {
-    let info = json_of(&["info", &repo("tests/data/pinocchio/solo12.urdf"), "--floating"], "");
+    let info = json_of(
+        &[
+            "info",
+            &repo("tests/data/pinocchio/solo12.urdf"),
+            "--floating",
+        ],
+        "",
+    );
     assert_eq!(info["nq"], 19);
     assert_eq!(info["nv"], 18);
     let j0 = &info["joints"][0];
-    assert_eq!((j0["name"].as_str(), j0["type"].as_str(), &j0["nq"], &j0["nv"]), (Some("root_joint"), Some("floating"), &json!(7), &json!(6)));
+    assert_eq!(
+        (
+            j0["name"].as_str(),
+            j0["type"].as_str(),
+            &j0["nq"],
+            &j0["nv"]
+        ),
+        (Some("root_joint"), Some("floating"), &json!(7), &json!(6))
+    );
     assert_eq!(info["joints"][1]["q_index"], 7);
     assert_eq!(info["joints"][1]["v_index"], 6);
 }
@@ -58,12 +94,25 @@ fn info_floating_adds_root_joint_first() {
 /// Pinocchio's answers (tests/data/pinocchio) through the command line, mapped by joint name.
 #[test]
 fn eval_reproduces_pinocchio_through_the_cli() {
-    let reference: Value = serde_json::from_str(&std::fs::read_to_string(repo("tests/data/pinocchio/solo12_floating.json")).unwrap()).unwrap();
+    let reference: Value = serde_json::from_str(
+        &std::fs::read_to_string(repo("tests/data/pinocchio/solo12_floating.json")).unwrap(),
+    )
+    .unwrap();
     let model = repo("tests/data/pinocchio/solo12_floating.urdf");
     // Joint order: ours equals Pinocchio's for this file (checked), so vectors pass through unchanged.
     let info = json_of(&["info", &model, "--floating"], "");
-    let ours: Vec<&Value> = info["joints"].as_array().unwrap().iter().map(|j| &j["name"]).collect();
-    let theirs: Vec<&Value> = reference["joints"].as_array().unwrap().iter().map(|j| &j["name"]).collect();
+    let ours: Vec<&Value> = info["joints"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|j| &j["name"])
+        .collect();
+    let theirs: Vec<&Value> = reference["joints"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|j| &j["name"])
+        .collect();
     assert_eq!(ours, theirs);
     let samples: Vec<Value> = reference["samples"].as_array().unwrap()[..5]
         .iter()
@@ -74,15 +123,37 @@ fn eval_reproduces_pinocchio_through_the_cli() {
     let rnea = json_of(&["eval", &model, "--floating", "--algo", "rnea"], &input);
     let crba = json_of(&["eval", &model, "--floating", "--algo", "crba"], &input);
     let rel = |a: &Value, b: &Value| -> f64 {
-        let a: Vec<f64> = a.as_array().unwrap().iter().flat_map(|x| x.as_array().cloned().unwrap_or_else(|| vec![x.clone()])).map(|x| x.as_f64().unwrap()).collect();
-        let b: Vec<f64> = b.as_array().unwrap().iter().flat_map(|x| x.as_array().cloned().unwrap_or_else(|| vec![x.clone()])).map(|x| x.as_f64().unwrap()).collect();
+        let a: Vec<f64> = a
+            .as_array()
+            .unwrap()
+            .iter()
+            .flat_map(|x| x.as_array().cloned().unwrap_or_else(|| vec![x.clone()]))
+            .map(|x| x.as_f64().unwrap())
+            .collect();
+        let b: Vec<f64> = b
+            .as_array()
+            .unwrap()
+            .iter()
+            .flat_map(|x| x.as_array().cloned().unwrap_or_else(|| vec![x.clone()]))
+            .map(|x| x.as_f64().unwrap())
+            .collect();
         assert_eq!(a.len(), b.len());
         let scale = b.iter().fold(1.0f64, |m, x| m.max(x.abs()));
-        a.iter().zip(&b).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max) / scale
+        a.iter()
+            .zip(&b)
+            .map(|(x, y)| (x - y).abs())
+            .fold(0.0, f64::max)
+            / scale
     };
-    for (k, s) in reference["samples"].as_array().unwrap()[..5].iter().enumerate() {
+    for (k, s) in reference["samples"].as_array().unwrap()[..5]
+        .iter()
+        .enumerate()
+    {
         assert!(rel(&aba["samples"][k]["qdd"], &s["qdd"]) < 1e-9);
-        assert_eq!(aba["samples"][k]["qdd"], aba["samples"][k]["qdd_independent"]);
+        assert_eq!(
+            aba["samples"][k]["qdd"],
+            aba["samples"][k]["qdd_independent"]
+        );
         assert!(rel(&rnea["samples"][k]["tau"], &s["tau_rnea"]) < 1e-9);
         assert!(rel(&crba["samples"][k]["M"], &s["M"]) < 1e-9);
     }
@@ -94,11 +165,29 @@ fn eval_in_f32_is_close_to_f64() {
     let model = repo("models/arm7.urdf");
     let input = json!({"samples": [{"q": [0.1, -0.4, 0.3, -1.2, 0.5, 0.9, -0.2], "v": vec![0.5; 7], "tau": vec![1.0; 7]}]}).to_string();
     let a64 = json_of(&["eval", &model, "--algo", "aba"], &input);
-    let a32 = json_of(&["eval", &model, "--algo", "aba", "--scalar", "f32"], &input);
-    let x: Vec<f64> = a64["samples"][0]["qdd"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
-    let y: Vec<f64> = a32["samples"][0]["qdd"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
+    let a32 = json_of(
+        &["eval", &model, "--algo", "aba", "--scalar", "f32"],
+        &input,
+    );
+    let x: Vec<f64> = a64["samples"][0]["qdd"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    let y: Vec<f64> = a32["samples"][0]["qdd"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
     let scale = x.iter().fold(1.0f64, |m, v| m.max(v.abs()));
-    let err = x.iter().zip(&y).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max) / scale;
+    let err = x
+        .iter()
+        .zip(&y)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max)
+        / scale;
     assert!(err < 1e-4 && err > 0.0, "f32 vs f64: {err:e}");
 }
 
@@ -118,14 +207,26 @@ fn bad_input_names_the_sample_and_the_field() {
     assert!(e.contains("no field `samples`"), "{e}");
     let ok = json!({"q": vec![0.0; 7], "v": vec![0.0; 7], "tau": vec![0.0; 7]});
     let short = json!({"q": vec![0.0; 7], "v": vec![0.0; 6], "tau": vec![0.0; 7]});
-    let e = error_of(&["eval", &model, "--algo", "aba"], &json!({"samples": [ok, short]}).to_string());
-    assert!(e.contains("sample 1: field `v` has 6 entries, the model needs 7"), "{e}");
+    let e = error_of(
+        &["eval", &model, "--algo", "aba"],
+        &json!({"samples": [ok, short]}).to_string(),
+    );
+    assert!(
+        e.contains("sample 1: field `v` has 6 entries, the model needs 7"),
+        "{e}"
+    );
     let missing = json!({"q": vec![0.0; 7], "v": vec![0.0; 7]});
-    let e = error_of(&["eval", &model, "--algo", "aba"], &json!({"samples": [missing]}).to_string());
+    let e = error_of(
+        &["eval", &model, "--algo", "aba"],
+        &json!({"samples": [missing]}).to_string(),
+    );
     assert!(e.contains("sample 0: missing field `tau`"), "{e}");
     let text = json!({"samples": [{"q": [0.0, 0.0, "x", 0.0, 0.0, 0.0, 0.0], "v": vec![0.0; 7], "qdd": vec![0.0; 7]}]}).to_string();
     let e = error_of(&["eval", &model, "--algo", "rnea"], &text);
-    assert!(e.contains("sample 0: field `q`[2] is not a finite number"), "{e}");
+    assert!(
+        e.contains("sample 0: field `q`[2] is not a finite number"),
+        "{e}"
+    );
 }
 
 #[test]
@@ -133,16 +234,31 @@ fn non_unit_quaternion_is_rejected() {
     let model = repo("models/quadruped.urdf");
     let mut q = vec![0.0; 19];
     q[6] = 2.0;
-    let e = error_of(&["eval", &model, "--algo", "crba"], &json!({"samples": [{"q": q}]}).to_string());
-    assert!(e.contains("sample 0") && e.contains("unit quaternion") && e.contains("floating_base"), "{e}");
+    let e = error_of(
+        &["eval", &model, "--algo", "crba"],
+        &json!({"samples": [{"q": q}]}).to_string(),
+    );
+    assert!(
+        e.contains("sample 0") && e.contains("unit quaternion") && e.contains("floating_base"),
+        "{e}"
+    );
 }
 
 #[test]
 fn model_errors_reach_stderr() {
     let e = error_of(&["info", &repo("tests/data/bad/zero_axis.urdf")], "");
-    assert!(e.contains("zero_axis.urdf:37") && e.contains("joint \"joint2\""), "{e}");
+    assert!(
+        e.contains("zero_axis.urdf:37") && e.contains("joint \"joint2\""),
+        "{e}"
+    );
     let e = error_of(&["info", &repo("models/does_not_exist.urdf")], "");
     assert!(e.contains("cannot read"), "{e}");
-    let (ok, _, err) = embedyn(&["info", &repo("tests/data/bad/triangle_violation.urdf")], "");
-    assert!(ok && err.contains("warning") && err.contains("triangle inequality"), "{err}");
+    let (ok, _, err) = embedyn(
+        &["info", &repo("tests/data/bad/triangle_violation.urdf")],
+        "",
+    );
+    assert!(
+        ok && err.contains("warning") && err.contains("triangle inequality"),
+        "{err}"
+    );
 }

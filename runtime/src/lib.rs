@@ -30,7 +30,11 @@ pub use nalgebra;
 
 /// "Relative error" as CONTRACT §2 defines it: `max|a − b| / max(1, max|b|)`.
 pub fn relative_error<T: Real>(a: &[T], b: &[T]) -> f64 {
-    assert_eq!(a.len(), b.len(), "relative_error of vectors of different lengths");
+    assert_eq!(
+        a.len(),
+        b.len(),
+        "relative_error of vectors of different lengths"
+    );
     let mut diff = 0.0f64;
     let mut scale = 1.0f64;
     for (x, y) in a.iter().zip(b) {

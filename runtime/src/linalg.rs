@@ -8,7 +8,9 @@ use nalgebra::{DMatrix, Dim, Matrix, RawStorageMut};
 /// In-place Cholesky `A = L Lᵀ` of a symmetric positive-definite matrix, reading the lower triangle.
 /// Returns the smallest pivot `L_kk²` seen, or the first non-positive one (then `A` is not SPD and the
 /// factor is unusable).
-pub fn cholesky_in_place<T: Real, R: Dim, S: RawStorageMut<T, R, R>>(a: &mut Matrix<T, R, R, S>) -> T {
+pub fn cholesky_in_place<T: Real, R: Dim, S: RawStorageMut<T, R, R>>(
+    a: &mut Matrix<T, R, R, S>,
+) -> T {
     let n = a.nrows();
     let mut min_pivot: Option<T> = None;
     for j in 0..n {
@@ -17,7 +19,7 @@ pub fn cholesky_in_place<T: Real, R: Dim, S: RawStorageMut<T, R, R>>(a: &mut Mat
             d -= a[(j, k)] * a[(j, k)];
         }
         min_pivot = Some(min_pivot.map_or(d, |m| m.min(d)));
-        if !(d > T::zero()) {
+        if !d.is_positive_finite() {
             return d;
         }
         let l = d.sqrt();
@@ -58,7 +60,7 @@ pub fn cholesky_solve_in_place<T: Real, R: Dim, S: RawStorageMut<T, R, R>>(
 /// Solves `A x = b` for a symmetric positive-definite `A` (copied, not modified). `None` if not SPD.
 pub fn solve_spd<T: Real>(a: &DMatrix<T>, b: &[T]) -> Option<Vec<T>> {
     let mut l = a.clone();
-    if !(cholesky_in_place(&mut l) > T::zero()) {
+    if !cholesky_in_place(&mut l).is_positive_finite() {
         return None;
     }
     let mut x = b.to_vec();

@@ -321,7 +321,10 @@ impl<T: Real> ModelBuilder<T> {
         let joint_name = joint_name.into();
         if let Some(p) = parent {
             if p >= self.bodies.len() {
-                return Err(ModelError::ParentNotYetAdded { joint: joint_name, parent: p });
+                return Err(ModelError::ParentNotYetAdded {
+                    joint: joint_name,
+                    parent: p,
+                });
             }
         }
         let axis = match joint_type {

@@ -49,6 +49,12 @@ pub trait Real:
     fn epsilon() -> Self;
     fn is_finite(self) -> bool;
 
+    /// `self > 0` and finite: false for zero, negatives, infinities and NaN (a usable pivot).
+    #[inline(always)]
+    fn is_positive_finite(self) -> bool {
+        self > Self::zero() && self.is_finite()
+    }
+
     #[inline(always)]
     fn max(self, other: Self) -> Self {
         if self >= other {

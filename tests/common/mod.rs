@@ -11,7 +11,10 @@ pub fn repo_path(rel: &str) -> PathBuf {
 pub fn load_model<T: Real>(rel: &str, floating: bool) -> Model<T> {
     let loaded = load(&repo_path(rel)).unwrap_or_else(|e| panic!("{e}"));
     loaded
-        .model::<T>(&ModelOptions { floating, ..Default::default() })
+        .model::<T>(&ModelOptions {
+            floating,
+            ..Default::default()
+        })
         .unwrap_or_else(|e| panic!("{e}"))
 }
 
@@ -93,20 +96,65 @@ pub fn random_tree(rng: &mut Rng, n: usize, floating: bool) -> Model<f64> {
             2 => Vector3::z(),
             3 => -Vector3::z(),
             _ => {
-                let a = Vector3::new(rng.uniform(-1.0, 1.0), rng.uniform(-1.0, 1.0), rng.uniform(-1.0, 1.0));
+                let a = Vector3::new(
+                    rng.uniform(-1.0, 1.0),
+                    rng.uniform(-1.0, 1.0),
+                    rng.uniform(-1.0, 1.0),
+                );
                 a / a.norm()
             }
         };
-        let rpy = if rng.uniform(0.0, 1.0) < 0.3 { [0.0; 3] } else { [rng.uniform(-3.0, 3.0), rng.uniform(-1.5, 1.5), rng.uniform(-3.0, 3.0)] };
-        let placement = Transform::from_xyz_rpy([rng.uniform(-0.4, 0.4), rng.uniform(-0.4, 0.4), rng.uniform(-0.4, 0.4)], rpy);
+        let rpy = if rng.uniform(0.0, 1.0) < 0.3 {
+            [0.0; 3]
+        } else {
+            [
+                rng.uniform(-3.0, 3.0),
+                rng.uniform(-1.5, 1.5),
+                rng.uniform(-3.0, 3.0),
+            ]
+        };
+        let placement = Transform::from_xyz_rpy(
+            [
+                rng.uniform(-0.4, 0.4),
+                rng.uniform(-0.4, 0.4),
+                rng.uniform(-0.4, 0.4),
+            ],
+            rpy,
+        );
         let mass = rng.uniform(0.1, 5.0);
-        let com = Vector3::new(rng.uniform(-0.2, 0.2), rng.uniform(-0.2, 0.2), rng.uniform(-0.2, 0.2));
+        let com = Vector3::new(
+            rng.uniform(-0.2, 0.2),
+            rng.uniform(-0.2, 0.2),
+            rng.uniform(-0.2, 0.2),
+        );
         // Principal moments from a random box: they satisfy the triangle inequality.
-        let (x, y, z) = (rng.uniform(0.02, 0.4), rng.uniform(0.02, 0.4), rng.uniform(0.02, 0.4));
-        let d = Matrix3::from_diagonal(&Vector3::new(y * y + z * z, x * x + z * z, x * x + y * y)) * (mass / 12.0);
-        let r = Transform::<f64>::from_xyz_rpy([0.0; 3], [rng.uniform(-3.0, 3.0), rng.uniform(-1.5, 1.5), rng.uniform(-3.0, 3.0)]).rotation;
+        let (x, y, z) = (
+            rng.uniform(0.02, 0.4),
+            rng.uniform(0.02, 0.4),
+            rng.uniform(0.02, 0.4),
+        );
+        let d = Matrix3::from_diagonal(&Vector3::new(y * y + z * z, x * x + z * z, x * x + y * y))
+            * (mass / 12.0);
+        let r = Transform::<f64>::from_xyz_rpy(
+            [0.0; 3],
+            [
+                rng.uniform(-3.0, 3.0),
+                rng.uniform(-1.5, 1.5),
+                rng.uniform(-3.0, 3.0),
+            ],
+        )
+        .rotation;
         let inertia = SpatialInertia::from_com(mass, com, r * d * r.transpose());
-        b.add_body(parent, format!("j{i}"), jtype, axis, placement, format!("b{i}"), inertia).unwrap();
+        b.add_body(
+            parent,
+            format!("j{i}"),
+            jtype,
+            axis,
+            placement,
+            format!("b{i}"),
+            inertia,
+        )
+        .unwrap();
     }
     b.build().unwrap()
 }

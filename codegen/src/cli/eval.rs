@@ -6,7 +6,13 @@ use crate::{Loaded, ModelOptions};
 use embedyn_runtime::{aba, crba, rnea, JointType, Model, Real, Workspace};
 use serde_json::{json, Value};
 
-pub fn eval(loaded: &Loaded, options: &ModelOptions, algo: Algo, scalar: Scalar, input: &str) -> Result<Value, CliError> {
+pub fn eval(
+    loaded: &Loaded,
+    options: &ModelOptions,
+    algo: Algo,
+    scalar: Scalar,
+    input: &str,
+) -> Result<Value, CliError> {
     let samples = Samples::parse(input)?;
     match scalar {
         Scalar::F64 => eval_in::<f64>(&loaded.model(options)?, algo, &samples),
@@ -26,19 +32,40 @@ fn eval_in<T: Real>(model: &Model<T>, algo: Algo, samples: &Samples) -> Result<V
             Algo::Aba => {
                 let v = cast::<T>(&vector(s, i, "v", nv)?);
                 let tau = cast::<T>(&vector(s, i, "tau", nv)?);
-                let qdd = finite(aba(model, &mut ws, &q, &v, &tau).map_err(|e| CliError(format!("sample {i}: {e}")))?, i, "qdd")?;
+                let qdd = finite(
+                    aba(model, &mut ws, &q, &v, &tau)
+                        .map_err(|e| CliError(format!("sample {i}: {e}")))?,
+                    i,
+                    "qdd",
+                )?;
                 json!({ "qdd": qdd, "qdd_independent": qdd })
             }
             Algo::Rnea => {
                 let v = cast::<T>(&vector(s, i, "v", nv)?);
                 let qdd = cast::<T>(&vector(s, i, "qdd", nv)?);
-                let tau = finite(rnea(model, &mut ws, &q, &v, &qdd).map_err(|e| CliError(format!("sample {i}: {e}")))?, i, "tau")?;
+                let tau = finite(
+                    rnea(model, &mut ws, &q, &v, &qdd)
+                        .map_err(|e| CliError(format!("sample {i}: {e}")))?,
+                    i,
+                    "tau",
+                )?;
                 json!({ "tau": tau, "tau_independent": tau })
             }
             Algo::Crba => {
-                let m = crba(model, &mut ws, &q).map_err(|e| CliError(format!("sample {i}: {e}")))?;
-                let rows: Vec<Vec<f64>> = (0..nv).map(|r| (0..nv).map(|c| m[(r, c)].to_f64()).collect()).collect();
-                finite(&rows.concat().iter().map(|&x| T::from_f64(x)).collect::<Vec<T>>(), i, "M")?;
+                let m =
+                    crba(model, &mut ws, &q).map_err(|e| CliError(format!("sample {i}: {e}")))?;
+                let rows: Vec<Vec<f64>> = (0..nv)
+                    .map(|r| (0..nv).map(|c| m[(r, c)].to_f64()).collect())
+                    .collect();
+                finite(
+                    &rows
+                        .concat()
+                        .iter()
+                        .map(|&x| T::from_f64(x))
+                        .collect::<Vec<T>>(),
+                    i,
+                    "M",
+                )?;
                 json!({ "M": rows })
             }
         };
@@ -63,7 +90,11 @@ fn finite<T: Real>(x: &[T], sample: usize, name: &str) -> Result<Vec<f64>, CliEr
 
 /// A floating joint's quaternion must have unit norm (to 1e-6; it is normalized before use).
 fn check_quaternions<T: Real>(model: &Model<T>, q: &[f64], sample: usize) -> Result<(), CliError> {
-    for j in model.joints.iter().filter(|j| j.joint_type == JointType::Floating) {
+    for j in model
+        .joints
+        .iter()
+        .filter(|j| j.joint_type == JointType::Floating)
+    {
         let s = &q[j.q_index + 3..j.q_index + 7];
         let n = s.iter().map(|x| x * x).sum::<f64>().sqrt();
         if (n - 1.0).abs() > 1e-6 {

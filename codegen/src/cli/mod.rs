@@ -9,7 +9,11 @@ use clap::{Parser, Subcommand, ValueEnum};
 use std::path::{Path, PathBuf};
 
 #[derive(Parser, Debug)]
-#[command(name = "embedyn", version, about = "Exact, fast rigid-body dynamics from URDF and URDF+")]
+#[command(
+    name = "embedyn",
+    version,
+    about = "Exact, fast rigid-body dynamics from URDF and URDF+"
+)]
 pub struct Cli {
     #[command(subcommand)]
     pub command: Command,
@@ -83,7 +87,14 @@ pub fn run(cli: Cli) -> Result<serde_json::Value, CliError> {
             let loaded = load_reporting(&model)?;
             info::info(&loaded, &options(floating))
         }
-        Command::Eval { model, algo, engine, scalar, floating, input } => {
+        Command::Eval {
+            model,
+            algo,
+            engine,
+            scalar,
+            floating,
+            input,
+        } => {
             if engine == Engine::Generated {
                 return Err(CliError(
                     "--engine generated is not available yet in this version: code generation is under construction; use --engine interpreted".into(),
@@ -97,7 +108,10 @@ pub fn run(cli: Cli) -> Result<serde_json::Value, CliError> {
 }
 
 fn options(floating: bool) -> ModelOptions {
-    ModelOptions { floating, ..Default::default() }
+    ModelOptions {
+        floating,
+        ..Default::default()
+    }
 }
 
 /// Loads the model and prints its warnings to stderr.
@@ -111,7 +125,8 @@ fn load_reporting(path: &Path) -> Result<Loaded, CliError> {
 
 fn read_input(path: Option<&Path>) -> Result<String, CliError> {
     match path {
-        Some(p) => std::fs::read_to_string(p).map_err(|e| CliError(format!("{}: cannot read the input: {e}", p.display()))),
+        Some(p) => std::fs::read_to_string(p)
+            .map_err(|e| CliError(format!("{}: cannot read the input: {e}", p.display()))),
         None => {
             let mut s = String::new();
             std::io::Read::read_to_string(&mut std::io::stdin(), &mut s)

@@ -12,12 +12,18 @@ impl Samples {
         let root: Value = serde_json::from_str(text)
             .map_err(|e| CliError(format!("the input is not valid JSON: {e}")))?;
         let Some(samples) = root.get("samples") else {
-            return Err(CliError("the input has no field `samples` (expected {\"samples\": [...]})".into()));
+            return Err(CliError(
+                "the input has no field `samples` (expected {\"samples\": [...]})".into(),
+            ));
         };
         let Some(samples) = samples.as_array() else {
-            return Err(CliError("the input's field `samples` must be an array".into()));
+            return Err(CliError(
+                "the input's field `samples` must be an array".into(),
+            ));
         };
-        Ok(Samples { samples: samples.clone() })
+        Ok(Samples {
+            samples: samples.clone(),
+        })
     }
 }
 
@@ -27,7 +33,9 @@ pub fn vector(sample: &Value, index: usize, name: &str, len: usize) -> Result<Ve
         return Err(CliError(format!("sample {index}: missing field `{name}`")));
     };
     let Some(items) = field.as_array() else {
-        return Err(CliError(format!("sample {index}: field `{name}` must be an array of numbers")));
+        return Err(CliError(format!(
+            "sample {index}: field `{name}` must be an array of numbers"
+        )));
     };
     if items.len() != len {
         return Err(CliError(format!(
@@ -39,9 +47,11 @@ pub fn vector(sample: &Value, index: usize, name: &str, len: usize) -> Result<Ve
         .iter()
         .enumerate()
         .map(|(k, x)| {
-            x.as_f64()
-                .filter(|v| v.is_finite())
-                .ok_or_else(|| CliError(format!("sample {index}: field `{name}`[{k}] is not a finite number: {x}")))
+            x.as_f64().filter(|v| v.is_finite()).ok_or_else(|| {
+                CliError(format!(
+                    "sample {index}: field `{name}`[{k}] is not a finite number: {x}"
+                ))
+            })
         })
         .collect()
 }

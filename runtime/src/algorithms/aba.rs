@@ -57,11 +57,15 @@ pub fn aba<'w, T: Real>(
                 check_floating(joint, ws)?;
                 cholesky_solve_in_place(&ws.floating_d, &mut rhs);
                 ws.qdd[joint.v_index..joint.v_index + 6].copy_from_slice(&rhs);
-                a_prime + Motion::new(Vector3::new(rhs[3], rhs[4], rhs[5]), Vector3::new(rhs[0], rhs[1], rhs[2]))
+                a_prime
+                    + Motion::new(
+                        Vector3::new(rhs[3], rhs[4], rhs[5]),
+                        Vector3::new(rhs[0], rhs[1], rhs[2]),
+                    )
             }
             _ => {
                 let d_inv = ws.d_inv[i];
-                if !(d_inv > T::zero()) || !d_inv.is_finite() {
+                if !d_inv.is_positive_finite() {
                     return Err(DynamicsError::SingularJoint {
                         joint: joint.name.clone(),
                         d: (T::one() / d_inv).to_f64(),
@@ -77,17 +81,29 @@ pub fn aba<'w, T: Real>(
     Ok(&ws.qdd)
 }
 
-fn check_floating<T: Real>(joint: &crate::Joint<T>, ws: &Workspace<T>) -> Result<(), DynamicsError> {
+fn check_floating<T: Real>(
+    joint: &crate::Joint<T>,
+    ws: &Workspace<T>,
+) -> Result<(), DynamicsError> {
     let d = floating_min_pivot(ws);
-    if d > T::zero() && d.is_finite() {
+    if d.is_positive_finite() {
         Ok(())
     } else {
-        Err(DynamicsError::SingularJoint { joint: joint.name.clone(), d: d.to_f64() })
+        Err(DynamicsError::SingularJoint {
+            joint: joint.name.clone(),
+            d: d.to_f64(),
+        })
     }
 }
 
 /// The velocity sweep and the backward sweep of Eq. 9: `P(k)`, `D(k)`, `𝔷(k)`, `ε(k)` for every joint.
-pub(crate) fn articulate<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, q: &[T], v: &[T], tau: &[T]) {
+pub(crate) fn articulate<T: Real>(
+    model: &Model<T>,
+    ws: &mut Workspace<T>,
+    q: &[T],
+    v: &[T],
+    tau: &[T],
+) {
     velocity_sweep(model, ws, q, v);
     for (i, body) in model.bodies.iter().enumerate() {
         let inertia = &body.inertia;
@@ -133,8 +149,7 @@ pub(crate) fn articulate<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, q: &[
                 // P⁺ = τ̄ P = P − U D⁻¹ Uᵀ;  𝔷⁺ = 𝔷 + P⁺ a(k) + G ε.
                 let mut p_plus = p;
                 p_plus.sub_rank_one(&u, d_inv);
-                let z_plus =
-                    ws.force[i] + p_plus.mul_motion(&ws.coriolis[i]) + u * (eps * d_inv);
+                let z_plus = ws.force[i] + p_plus.mul_motion(&ws.coriolis[i]) + u * (eps * d_inv);
                 (p_plus, z_plus)
             }
         };
@@ -156,5 +171,12 @@ pub(crate) fn floating_min_pivot<T: Real>(ws: &Workspace<T>) -> T {
 /// A force `[n; f]` in the order of `v` for a floating joint: `Hᵀ f = [f; n]`.
 #[inline(always)]
 fn to_v_order<T: Real>(f: &Force<T>) -> [T; 6] {
-    [f.linear.x, f.linear.y, f.linear.z, f.angular.x, f.angular.y, f.angular.z]
+    [
+        f.linear.x,
+        f.linear.y,
+        f.linear.z,
+        f.angular.x,
+        f.angular.y,
+        f.angular.z,
+    ]
 }

@@ -43,13 +43,23 @@ pub fn mass_matrix_inverse<'w, T: Real>(
                     }
                 }
                 let pivot = cholesky_in_place(&mut d6);
-                if !(pivot > T::zero()) {
-                    return Err(DynamicsError::SingularJoint { joint: joint.name.clone(), d: pivot.to_f64() });
+                if !pivot.is_positive_finite() {
+                    return Err(DynamicsError::SingularJoint {
+                        joint: joint.name.clone(),
+                        d: pivot.to_f64(),
+                    });
                 }
                 for col in cols {
                     let f = Force::from_array(ws.minv_force[i * nv + col]);
                     // e_k − Sᵀ F (identity block on the joint's own columns).
-                    let mut rhs = [-f.linear.x, -f.linear.y, -f.linear.z, -f.angular.x, -f.angular.y, -f.angular.z];
+                    let mut rhs = [
+                        -f.linear.x,
+                        -f.linear.y,
+                        -f.linear.z,
+                        -f.angular.x,
+                        -f.angular.y,
+                        -f.angular.z,
+                    ];
                     if (joint.v_index..joint.v_index + 6).contains(&col) {
                         rhs[col - joint.v_index] += T::one();
                     }
@@ -64,8 +74,11 @@ pub fn mass_matrix_inverse<'w, T: Real>(
                 let h = joint.subspace_column(0);
                 let u = p.mul_motion(&h);
                 let d_inv = T::one() / h.dot(&u);
-                if !(d_inv > T::zero()) || !d_inv.is_finite() {
-                    return Err(DynamicsError::SingularJoint { joint: joint.name.clone(), d: (T::one() / d_inv).to_f64() });
+                if !d_inv.is_positive_finite() {
+                    return Err(DynamicsError::SingularJoint {
+                        joint: joint.name.clone(),
+                        d: (T::one() / d_inv).to_f64(),
+                    });
                 }
                 let row = joint.v_index;
                 ws.inverse_mass_matrix[(row, row)] = d_inv;
@@ -76,8 +89,10 @@ pub fn mass_matrix_inverse<'w, T: Real>(
                 if let Some(parent) = joint.parent {
                     let x = ws.parent_placement[i];
                     for col in cols {
-                        let f = Force::from_array(ws.minv_force[i * nv + col]) + u * ws.inverse_mass_matrix[(row, col)];
-                        let fp = Force::from_array(ws.minv_force[parent * nv + col]) + x.act_force(&f);
+                        let f = Force::from_array(ws.minv_force[i * nv + col])
+                            + u * ws.inverse_mass_matrix[(row, col)];
+                        let fp =
+                            Force::from_array(ws.minv_force[parent * nv + col]) + x.act_force(&f);
                         ws.minv_force[parent * nv + col] = fp.to_array();
                     }
                     let mut p_plus = p;
@@ -108,7 +123,8 @@ pub fn mass_matrix_inverse<'w, T: Real>(
                 }
                 _ => {
                     if joint.parent.is_some() {
-                        ws.inverse_mass_matrix[(start, col)] -= ws.d_inv[i] * a_parent.dot(&ws.u[i]);
+                        ws.inverse_mass_matrix[(start, col)] -=
+                            ws.d_inv[i] * a_parent.dot(&ws.u[i]);
                     }
                     a += joint.subspace_column(0) * ws.inverse_mass_matrix[(start, col)];
                 }

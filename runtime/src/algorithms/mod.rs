@@ -32,11 +32,19 @@ pub enum DynamicsError {
     SingularJoint { joint: String, d: f64 },
 }
 
-pub(crate) fn check_len(name: &'static str, got: usize, expected: usize) -> Result<(), DynamicsError> {
+pub(crate) fn check_len(
+    name: &'static str,
+    got: usize,
+    expected: usize,
+) -> Result<(), DynamicsError> {
     if got == expected {
         Ok(())
     } else {
-        Err(DynamicsError::WrongLength { name, got, expected })
+        Err(DynamicsError::WrongLength {
+            name,
+            got,
+            expected,
+        })
     }
 }
 
@@ -68,10 +76,9 @@ pub(crate) fn check_articulated_inertia<T: Real>(model: &Model<T>) -> Result<(),
     if model.nbodies() == 0 {
         return Ok(());
     }
-    let scale = model
-        .bodies
-        .iter()
-        .fold(T::zero(), |s, b| s + b.inertia.mass + b.inertia.rotational.trace());
+    let scale = model.bodies.iter().fold(T::zero(), |s, b| {
+        s + b.inertia.mass + b.inertia.rotational.trace()
+    });
     let tol = (T::one().max(scale)) * T::from_f64(1e-12);
     let mut ws = Workspace::new(model);
     let q0 = model.neutral_configuration();

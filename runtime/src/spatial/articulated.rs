@@ -71,7 +71,8 @@ impl<T: Real> ArticulatedInertia<T> {
         let mut m = Matrix6::zeros();
         m.fixed_view_mut::<3, 3>(0, 0).copy_from(&self.a);
         m.fixed_view_mut::<3, 3>(0, 3).copy_from(&self.b);
-        m.fixed_view_mut::<3, 3>(3, 0).copy_from(&self.b.transpose());
+        m.fixed_view_mut::<3, 3>(3, 0)
+            .copy_from(&self.b.transpose());
         m.fixed_view_mut::<3, 3>(3, 3).copy_from(&self.c);
         m
     }

@@ -19,7 +19,10 @@ impl<T: Real> Force<T> {
         Self::new(Vector3::zeros(), Vector3::zeros())
     }
     pub fn from_array(a: [T; 6]) -> Self {
-        Self::new(Vector3::new(a[0], a[1], a[2]), Vector3::new(a[3], a[4], a[5]))
+        Self::new(
+            Vector3::new(a[0], a[1], a[2]),
+            Vector3::new(a[3], a[4], a[5]),
+        )
     }
     pub fn to_array(&self) -> [T; 6] {
         let (n, f) = (&self.angular, &self.linear);

@@ -75,7 +75,17 @@ impl<T: Real> SpatialInertia<T> {
         let diag = (p.dot(h) + p.dot(h)) + m * p.dot(p);
         let s = |i: usize, j: usize| -(h[i] * p[j] + p[i] * h[j] + m * p[i] * p[j]);
         let (xy, xz, yz) = (s(0, 1), s(0, 2), s(1, 2));
-        let shift = Matrix3::new(diag + s(0, 0), xy, xz, xy, diag + s(1, 1), yz, xz, yz, diag + s(2, 2));
+        let shift = Matrix3::new(
+            diag + s(0, 0),
+            xy,
+            xz,
+            xy,
+            diag + s(1, 1),
+            yz,
+            xz,
+            yz,
+            diag + s(2, 2),
+        );
         let rot = rotate_tensor(r, &self.rotational) + shift;
         SpatialInertia {
             mass: self.mass,

@@ -32,7 +32,8 @@ pub fn skew<T: Real>(x: &Vector3<T>) -> Matrix3<T> {
 pub(crate) fn rotate_tensor<T: Real>(r: &Matrix3<T>, a: &Matrix3<T>) -> Matrix3<T> {
     // B = R A (27 products), then (B Rᵀ)_ij = row_i(B) · row_j(R) for i ≤ j (18 products).
     let b = r * a;
-    let e = |i: usize, j: usize| b[(i, 0)] * r[(j, 0)] + b[(i, 1)] * r[(j, 1)] + b[(i, 2)] * r[(j, 2)];
+    let e =
+        |i: usize, j: usize| b[(i, 0)] * r[(j, 0)] + b[(i, 1)] * r[(j, 1)] + b[(i, 2)] * r[(j, 2)];
     let (xx, xy, xz, yy, yz, zz) = (e(0, 0), e(0, 1), e(0, 2), e(1, 1), e(1, 2), e(2, 2));
     Matrix3::new(xx, xy, xz, xy, yy, yz, xz, yz, zz)
 }

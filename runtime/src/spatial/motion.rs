@@ -21,7 +21,10 @@ impl<T: Real> Motion<T> {
     }
     /// From `[ω; v]` as a 6-array.
     pub fn from_array(a: [T; 6]) -> Self {
-        Self::new(Vector3::new(a[0], a[1], a[2]), Vector3::new(a[3], a[4], a[5]))
+        Self::new(
+            Vector3::new(a[0], a[1], a[2]),
+            Vector3::new(a[3], a[4], a[5]),
+        )
     }
     pub fn to_array(&self) -> [T; 6] {
         let (w, v) = (&self.angular, &self.linear);

@@ -16,7 +16,10 @@ pub struct Transform<T: Real> {
 impl<T: Real> Transform<T> {
     #[inline(always)]
     pub fn new(rotation: Matrix3<T>, translation: Vector3<T>) -> Self {
-        Self { rotation, translation }
+        Self {
+            rotation,
+            translation,
+        }
     }
 
     pub fn identity() -> Self {
@@ -41,7 +44,11 @@ impl<T: Real> Transform<T> {
             cp * sr,
             cp * cr,
         );
-        let t = Vector3::new(T::from_f64(xyz[0]), T::from_f64(xyz[1]), T::from_f64(xyz[2]));
+        let t = Vector3::new(
+            T::from_f64(xyz[0]),
+            T::from_f64(xyz[1]),
+            T::from_f64(xyz[2]),
+        );
         Self::new(rotation, t)
     }
 
@@ -90,10 +97,7 @@ impl<T: Real> Transform<T> {
     #[inline(always)]
     pub fn inv_act_motion(&self, m: &Motion<T>) -> Motion<T> {
         let v = m.linear - self.translation.cross(&m.angular);
-        Motion::new(
-            self.rotation.tr_mul(&m.angular),
-            self.rotation.tr_mul(&v),
-        )
+        Motion::new(self.rotation.tr_mul(&m.angular), self.rotation.tr_mul(&v))
     }
 
     /// A force in child coordinates expressed in parent coordinates (Featherstone's `Xᵀ f`).
