@@ -5,12 +5,12 @@
 //! the table in BENCHMARKS.md. Every call cycles through 64 pre-generated random states.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
-use embedyn::nalgebra::{Matrix3, Vector3};
-use embedyn::{
-    aba, crba, load, mass_matrix_inverse, rnea, JointType, Model, ModelOptions, Real,
-    SpatialInertia, Transform, Workspace,
-};
+use embedyn::{aba, crba, load, mass_matrix_inverse, rnea, Model, ModelOptions, Real, Workspace};
 use std::hint::black_box;
+
+#[path = "../tests/common/mod.rs"]
+mod common;
+use common::{chain, Rng};
 use std::time::Duration;
 
 /// Models benchmarked (name, path from the repo root, --floating).
@@ -31,29 +31,34 @@ struct States<T> {
     x: Vec<Vec<T>>,
 }
 
-/// Deterministic pseudo-random states (SplitMix64), quaternions normalized.
+/// 64 deterministic pseudo-random states (angles in ±3 rad, quaternions normalized).
 fn states<T: Real>(model: &Model<T>) -> States<T> {
-    let mut s: u64 = 42;
-    let mut next = move || {
-        s = s.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = s;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
-    };
+    let mut rng = Rng(42);
     let mut out = States {
         q: vec![],
         v: vec![],
         x: vec![],
     };
     for _ in 0..64 {
-        let mut q: Vec<T> = (0..model.nq()).map(|_| T::from_f64(3.0 * next())).collect();
+        let mut q: Vec<T> = rng
+            .vec(model.nq(), -3.0, 3.0)
+            .into_iter()
+            .map(T::from_f64)
+            .collect();
         model.normalize_configuration(&mut q);
         out.q.push(q);
-        out.v
-            .push((0..model.nv()).map(|_| T::from_f64(next())).collect());
-        out.x
-            .push((0..model.nv()).map(|_| T::from_f64(next())).collect());
+        out.v.push(
+            rng.vec(model.nv(), -1.0, 1.0)
+                .into_iter()
+                .map(T::from_f64)
+                .collect(),
+        );
+        out.x.push(
+            rng.vec(model.nv(), -1.0, 1.0)
+                .into_iter()
+                .map(T::from_f64)
+                .collect(),
+        );
     }
     out
 }
@@ -105,35 +110,6 @@ fn bench_algorithms<T: Real>(c: &mut Criterion, suffix: &str) {
             })
         });
     }
-}
-
-/// A chain of `n` revolute bodies alternating z and y axes, realistic link inertias.
-fn chain(n: usize) -> Model<f64> {
-    let mut b = Model::<f64>::builder(format!("chain{n}"));
-    for i in 0..n {
-        let axis = if i % 2 == 0 {
-            Vector3::z()
-        } else {
-            Vector3::y()
-        };
-        let inertia = SpatialInertia::from_com(
-            1.0,
-            Vector3::new(0.0, 0.0, 0.1),
-            Matrix3::from_diagonal(&Vector3::new(4e-3, 4e-3, 1e-3)),
-        );
-        let placement = Transform::from_xyz_rpy([0.0, 0.0, 0.2], [0.0; 3]);
-        b.add_body(
-            i.checked_sub(1),
-            format!("j{i}"),
-            JointType::Revolute,
-            axis,
-            placement,
-            format!("b{i}"),
-            inertia,
-        )
-        .unwrap();
-    }
-    b.build().unwrap()
 }
 
 fn bench_scaling(c: &mut Criterion) {

@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::{condition_number, random_tree, Rng};
+use common::{chain, condition_number, random_tree, Rng};
 use embedyn::linalg::solve_spd;
 use embedyn::nalgebra::DMatrix;
 use embedyn::{aba, crba, mass_matrix_inverse, relative_error, rnea, Workspace};
@@ -75,34 +75,7 @@ proptest! {
 fn long_chain_of_200_bodies() {
     // Deep recursion depth, no branching: the O(N) sweeps must stay accurate down a long chain.
     let mut rng = Rng(5);
-    let model = {
-        use embedyn::nalgebra::{Matrix3, Vector3};
-        use embedyn::{JointType, Model, SpatialInertia, Transform};
-        let mut b = Model::<f64>::builder("chain200");
-        for i in 0usize..200 {
-            let axis = if i % 2 == 0 {
-                Vector3::z()
-            } else {
-                Vector3::y()
-            };
-            let inertia = SpatialInertia::from_com(
-                0.5,
-                Vector3::new(0.0, 0.0, 0.05),
-                Matrix3::identity() * 1e-3,
-            );
-            b.add_body(
-                i.checked_sub(1),
-                format!("j{i}"),
-                JointType::Revolute,
-                axis,
-                Transform::from_xyz_rpy([0.0, 0.0, 0.1], [0.0; 3]),
-                format!("b{i}"),
-                inertia,
-            )
-            .unwrap();
-        }
-        b.build().unwrap()
-    };
+    let model = chain(200);
     check_chain(&model, &mut rng);
 }
 

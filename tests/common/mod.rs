@@ -164,3 +164,34 @@ pub fn condition_number(m: &embedyn::nalgebra::DMatrix<f64>) -> f64 {
     let e = m.clone().symmetric_eigen().eigenvalues;
     e.max() / e.min()
 }
+
+/// A chain of `n` revolute bodies, axes alternating z and y, 0.2 m links of 1 kg with realistic inertia.
+pub fn chain(n: usize) -> Model<f64> {
+    use embedyn::nalgebra::{Matrix3, Vector3};
+    use embedyn::{JointType, SpatialInertia, Transform};
+    let mut b = Model::<f64>::builder(format!("chain{n}"));
+    for i in 0..n {
+        let axis = if i % 2 == 0 {
+            Vector3::z()
+        } else {
+            Vector3::y()
+        };
+        let inertia = SpatialInertia::from_com(
+            1.0,
+            Vector3::new(0.0, 0.0, 0.1),
+            Matrix3::from_diagonal(&Vector3::new(4e-3, 4e-3, 1e-3)),
+        );
+        let placement = Transform::from_xyz_rpy([0.0, 0.0, 0.2], [0.0; 3]);
+        b.add_body(
+            i.checked_sub(1),
+            format!("j{i}"),
+            JointType::Revolute,
+            axis,
+            placement,
+            format!("b{i}"),
+            inertia,
+        )
+        .unwrap();
+    }
+    b.build().unwrap()
+}

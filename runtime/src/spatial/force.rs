@@ -1,5 +1,4 @@
 use crate::Real;
-use core::ops::{Add, AddAssign, Mul, Neg, Sub, SubAssign};
 use nalgebra::Vector3;
 
 /// A spatial force vector `[n; f]`: moment about the frame origin, then force.
@@ -30,45 +29,4 @@ impl<T: Real> Force<T> {
     }
 }
 
-impl<T: Real> Add for Force<T> {
-    type Output = Self;
-    #[inline(always)]
-    fn add(self, o: Self) -> Self {
-        Self::new(self.angular + o.angular, self.linear + o.linear)
-    }
-}
-impl<T: Real> Sub for Force<T> {
-    type Output = Self;
-    #[inline(always)]
-    fn sub(self, o: Self) -> Self {
-        Self::new(self.angular - o.angular, self.linear - o.linear)
-    }
-}
-impl<T: Real> AddAssign for Force<T> {
-    #[inline(always)]
-    fn add_assign(&mut self, o: Self) {
-        self.angular += o.angular;
-        self.linear += o.linear;
-    }
-}
-impl<T: Real> SubAssign for Force<T> {
-    #[inline(always)]
-    fn sub_assign(&mut self, o: Self) {
-        self.angular -= o.angular;
-        self.linear -= o.linear;
-    }
-}
-impl<T: Real> Neg for Force<T> {
-    type Output = Self;
-    #[inline(always)]
-    fn neg(self) -> Self {
-        Self::new(-self.angular, -self.linear)
-    }
-}
-impl<T: Real> Mul<T> for Force<T> {
-    type Output = Self;
-    #[inline(always)]
-    fn mul(self, s: T) -> Self {
-        Self::new(self.angular * s, self.linear * s)
-    }
-}
+impl_spatial_vector_ops!(Force);

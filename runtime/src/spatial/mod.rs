@@ -4,6 +4,54 @@
 //! inertia), never as dense 6×6 matrices: the algorithms apply them through the block formulas, which costs
 //! a fraction of a 6×6 product and keeps the zero structure visible to the code generator later.
 
+/// The vector-space operations shared by [`Motion`] and [`Force`] (both are a pair of 3-vectors).
+macro_rules! impl_spatial_vector_ops {
+    ($ty:ident) => {
+        impl<T: Real> core::ops::Add for $ty<T> {
+            type Output = Self;
+            #[inline(always)]
+            fn add(self, o: Self) -> Self {
+                Self::new(self.angular + o.angular, self.linear + o.linear)
+            }
+        }
+        impl<T: Real> core::ops::Sub for $ty<T> {
+            type Output = Self;
+            #[inline(always)]
+            fn sub(self, o: Self) -> Self {
+                Self::new(self.angular - o.angular, self.linear - o.linear)
+            }
+        }
+        impl<T: Real> core::ops::AddAssign for $ty<T> {
+            #[inline(always)]
+            fn add_assign(&mut self, o: Self) {
+                self.angular += o.angular;
+                self.linear += o.linear;
+            }
+        }
+        impl<T: Real> core::ops::SubAssign for $ty<T> {
+            #[inline(always)]
+            fn sub_assign(&mut self, o: Self) {
+                self.angular -= o.angular;
+                self.linear -= o.linear;
+            }
+        }
+        impl<T: Real> core::ops::Neg for $ty<T> {
+            type Output = Self;
+            #[inline(always)]
+            fn neg(self) -> Self {
+                Self::new(-self.angular, -self.linear)
+            }
+        }
+        impl<T: Real> core::ops::Mul<T> for $ty<T> {
+            type Output = Self;
+            #[inline(always)]
+            fn mul(self, s: T) -> Self {
+                Self::new(self.angular * s, self.linear * s)
+            }
+        }
+    };
+}
+
 mod articulated;
 mod force;
 mod inertia;

@@ -1,6 +1,5 @@
 use crate::spatial::Force;
 use crate::Real;
-use core::ops::{Add, AddAssign, Mul, Neg, Sub, SubAssign};
 use nalgebra::Vector3;
 
 /// A spatial motion vector (velocity or acceleration) `[ω; v]`, the linear part taken at the frame origin.
@@ -53,45 +52,4 @@ impl<T: Real> Motion<T> {
     }
 }
 
-impl<T: Real> Add for Motion<T> {
-    type Output = Self;
-    #[inline(always)]
-    fn add(self, o: Self) -> Self {
-        Self::new(self.angular + o.angular, self.linear + o.linear)
-    }
-}
-impl<T: Real> Sub for Motion<T> {
-    type Output = Self;
-    #[inline(always)]
-    fn sub(self, o: Self) -> Self {
-        Self::new(self.angular - o.angular, self.linear - o.linear)
-    }
-}
-impl<T: Real> AddAssign for Motion<T> {
-    #[inline(always)]
-    fn add_assign(&mut self, o: Self) {
-        self.angular += o.angular;
-        self.linear += o.linear;
-    }
-}
-impl<T: Real> SubAssign for Motion<T> {
-    #[inline(always)]
-    fn sub_assign(&mut self, o: Self) {
-        self.angular -= o.angular;
-        self.linear -= o.linear;
-    }
-}
-impl<T: Real> Neg for Motion<T> {
-    type Output = Self;
-    #[inline(always)]
-    fn neg(self) -> Self {
-        Self::new(-self.angular, -self.linear)
-    }
-}
-impl<T: Real> Mul<T> for Motion<T> {
-    type Output = Self;
-    #[inline(always)]
-    fn mul(self, s: T) -> Self {
-        Self::new(self.angular * s, self.linear * s)
-    }
-}
+impl_spatial_vector_ops!(Motion);
