@@ -2,7 +2,7 @@
 //! body (inertias combined exactly, in the target scalar), the optional free-flyer root.
 
 use crate::error::{LoadError, Location};
-use crate::ir::{Inertial, JointKind, Origin, Robot};
+use crate::ir::{Inertial, JointKind, LoopKind, Origin, Robot};
 use embedyn_runtime::nalgebra::{Matrix3, Vector3};
 use embedyn_runtime::{JointType, Model, ModelError, Real, SpatialInertia, Transform};
 
@@ -58,7 +58,6 @@ pub fn build_model<T: Real>(robot: &Robot, options: &ModelOptions) -> Result<Mod
         let joint = &robot.joints[j];
         Location::new(path, joint.line, format!("joint \"{}\"", joint.name))
     };
-    refuse_constraints(robot)?;
     let has_floating = robot
         .joints
         .iter()
@@ -192,15 +191,165 @@ pub fn build_model<T: Real>(robot: &Robot, options: &ModelOptions) -> Result<Mod
     fn bodies_joint<T: Real>(bodies: &[Pending<T>], b: usize) -> Option<usize> {
         bodies[b].joint
     }
+    let mut joint_body = vec![None; robot.joints.len()];
+    let mut body_parent = Vec::with_capacity(bodies.len());
+    for (b, p) in bodies.iter().enumerate() {
+        if let Some(j) = p.joint {
+            joint_body[j] = Some(b);
+        }
+        body_parent.push(p.parent);
+    }
+    let link_frames: Vec<(Option<usize>, Transform<T>)> = link_body.iter().map(|x| x.expect("reachable")).collect();
+    add_constraints(robot, &link_frames, &joint_body, &body_parent, &mut builder)?;
     builder.build().map_err(|e| {
         let joint = match &e {
             ModelError::NoInertiaAboutAxis { joint, .. } => {
                 robot.joints.iter().position(|j| &j.name == joint)
             }
+            ModelError::DependentMismatch { group, .. } | ModelError::SingularDependentChoice { group, .. } => {
+                return LoadError::new(constraint_location(robot, group), e.to_string());
+            }
+            ModelError::EmptyConstraint { constraint } => {
+                return LoadError::new(constraint_location(robot, constraint), e.to_string());
+            }
+            ModelError::FloatingInGroup { joint } => robot.joints.iter().position(|j| &j.name == joint),
             _ => None,
         };
         model_error(robot, &joint, e)
     })
+}
+
+/// Where the first constraint named in `names` (a comma-separated list) is written.
+fn constraint_location(robot: &Robot, names: &str) -> Location {
+    let first = names.split(", ").next().unwrap_or("");
+    if let Some(l) = robot.loops.iter().find(|l| l.name == first) {
+        return Location::new(&robot.source, l.line, format!("loop \"{}\"", l.name));
+    }
+    if let Some(c) = robot.couplings.iter().find(|c| c.name == first) {
+        return Location::new(&robot.source, c.line, format!("coupling \"{}\"", c.name));
+    }
+    if let Some(j) = robot.joints.iter().find(|j| j.name == first) {
+        return Location::new(&robot.source, j.line, format!("joint \"{}\" <mimic>", j.name));
+    }
+    Location::new(&robot.source, None, format!("constraints {names}"))
+}
+
+/// The bodies from `b` up to, not including, `top`.
+fn path(body_parent: &[Option<usize>], b: Option<usize>, top: Option<usize>) -> Vec<usize> {
+    let mut out = Vec::new();
+    let mut cur = b;
+    while cur != top {
+        let Some(c) = cur else { break };
+        out.push(c);
+        cur = body_parent[c];
+    }
+    out
+}
+
+fn common_ancestor(body_parent: &[Option<usize>], a: Option<usize>, b: Option<usize>) -> Option<usize> {
+    let mut ancestors = Vec::new();
+    let mut cur = a;
+    while let Some(c) = cur {
+        ancestors.push(c);
+        cur = body_parent[c];
+    }
+    let mut cur = b;
+    while let Some(c) = cur {
+        if ancestors.contains(&c) {
+            return Some(c);
+        }
+        cur = body_parent[c];
+    }
+    None
+}
+
+/// URDF+ loops and couplings and URDF mimic joints, as runtime constraints (CONTRACT §1).
+fn add_constraints<T: Real>(
+    robot: &Robot,
+    link_frames: &[(Option<usize>, Transform<T>)],
+    joint_body: &[Option<usize>],
+    body_parent: &[Option<usize>],
+    builder: &mut embedyn_runtime::ModelBuilder<T>,
+) -> Result<(), LoadError> {
+    use embedyn_runtime::constraints::{Constraint, ConstraintKind, LoopClosure, LoopType};
+    let path_of = &robot.source;
+    for l in &robot.loops {
+        let (pb, ppose) = link_frames[l.predecessor.link];
+        let (sb, spose) = link_frames[l.successor.link];
+        if pb == sb {
+            return Err(LoadError::new(
+                Location::new(path_of, l.line, format!("loop \"{}\"", l.name)),
+                "both frames are on the same rigid body (the links are joined by fixed joints): the loop constrains nothing or can never close",
+            ));
+        }
+        let kind = match l.kind {
+            LoopKind::Revolute => LoopType::Revolute,
+            LoopKind::Prismatic => LoopType::Prismatic,
+            LoopKind::Spherical => LoopType::Spherical,
+            LoopKind::Fixed => LoopType::Fixed,
+        };
+        let axis = Vector3::new(T::from_f64(l.axis[0]), T::from_f64(l.axis[1]), T::from_f64(l.axis[2]));
+        let closure = LoopClosure::new(
+            kind,
+            pb,
+            ppose.compose(&origin_transform(&l.predecessor.origin)),
+            sb,
+            spose.compose(&origin_transform(&l.successor.origin)),
+            axis,
+        );
+        builder.add_constraint(Constraint { name: l.name.clone(), kind: ConstraintKind::Loop(closure) });
+    }
+    for c in &robot.couplings {
+        let pb = link_frames[c.predecessor].0;
+        let sb = link_frames[c.successor].0;
+        let top = common_ancestor(body_parent, pb, sb);
+        let mut terms: Vec<(usize, T)> = Vec::new();
+        for b in path(body_parent, pb, top) {
+            terms.push((b, T::from_f64(c.ratio)));
+        }
+        for b in path(body_parent, sb, top) {
+            terms.push((b, -T::one()));
+        }
+        if terms.is_empty() {
+            return Err(LoadError::new(
+                Location::new(path_of, c.line, format!("coupling \"{}\"", c.name)),
+                "no moving joint lies between the two links: the coupling relates nothing",
+            ));
+        }
+        builder.add_constraint(Constraint { name: c.name.clone(), kind: ConstraintKind::Linear { terms, offset: T::zero() } });
+    }
+    for (j, joint) in robot.joints.iter().enumerate() {
+        if joint.mimics.is_empty() {
+            continue;
+        }
+        let loc = |line| Location::new(path_of, line, format!("joint \"{}\" <mimic>", joint.name));
+        let Some(body) = joint_body[j] else {
+            return Err(LoadError::new(loc(joint.line), "a fixed joint cannot mimic another joint"));
+        };
+        let mut terms = vec![(body, T::one())];
+        let mut offset = T::zero();
+        for m in &joint.mimics {
+            let driver = robot.joints.iter().position(|d| d.name == m.joint).expect("checked at parse time");
+            let Some(db) = joint_body[driver] else {
+                return Err(LoadError::new(loc(m.line), format!("the driving joint \"{}\" is fixed", m.joint)));
+            };
+            if db == body {
+                return Err(LoadError::new(loc(m.line), "a joint cannot mimic itself"));
+            }
+            terms.push((db, -T::from_f64(m.multiplier)));
+            offset -= T::from_f64(m.offset);
+        }
+        builder.add_constraint(Constraint { name: joint.name.clone(), kind: ConstraintKind::Linear { terms, offset } });
+        builder.declare_dependent(body);
+    }
+    for (j, joint) in robot.joints.iter().enumerate() {
+        if joint.independent == Some(false) {
+            if let Some(b) = joint_body[j] {
+                builder.declare_dependent(b);
+            }
+        }
+    }
+    Ok(())
 }
 
 fn model_error(robot: &Robot, joint: &Option<usize>, e: ModelError) -> LoadError {
@@ -224,36 +373,3 @@ fn model_error(robot: &Robot, joint: &Option<usize>, e: ModelError) -> LoadError
     LoadError::new(location, message)
 }
 
-/// Loops, couplings and mimic joints need constraint embedding, which this version does not have yet.
-/// Simulating the spanning tree instead would be silently wrong, so such a model is refused.
-fn refuse_constraints(robot: &Robot) -> Result<(), LoadError> {
-    const LATER: &str = "is not supported by this version of embedyn yet (constraint embedding of loops, couplings and mimic joints is under construction)";
-    let path = &robot.source;
-    if let Some(l) = robot.loops.first() {
-        return Err(LoadError::new(
-            Location::new(path, l.line, format!("loop \"{}\"", l.name)),
-            format!("a closed loop (URDF+ <loop>) {LATER}"),
-        ));
-    }
-    if let Some(c) = robot.couplings.first() {
-        return Err(LoadError::new(
-            Location::new(path, c.line, format!("coupling \"{}\"", c.name)),
-            format!("a coupling (URDF+ <coupling>) {LATER}"),
-        ));
-    }
-    if let Some(j) = robot
-        .joints
-        .iter()
-        .find(|j| !j.mimics.is_empty() && j.kind.is_moving())
-    {
-        let m = &j.mimics[0];
-        return Err(LoadError::new(
-            Location::new(path, m.line, format!("joint \"{}\" <mimic>", j.name)),
-            format!(
-                "a mimic joint (a coupling to joint \"{}\") {LATER}",
-                m.joint
-            ),
-        ));
-    }
-    Ok(())
-}

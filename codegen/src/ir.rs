@@ -75,12 +75,48 @@ pub struct Joint {
     pub line: Option<u32>,
 }
 
-/// A URDF+ `<loop>` or `<coupling>` as far as this version reads it: its name and place. Their semantics
-/// (CONTRACT §1) arrive with constraint embedding; until then a model that has any is refused, never
-/// silently simulated as the bare tree.
+/// URDF+ `<loop type>`: what the cut joint keeps (CONTRACT §1).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum LoopKind {
+    /// Origins coincide, axes stay aligned (`revolute` and `continuous`).
+    Revolute,
+    /// Frames stay aligned, origins differ only along the axis.
+    Prismatic,
+    /// Origins coincide (an embedyn addition).
+    Spherical,
+    /// Frames coincide.
+    Fixed,
+}
+
+/// One side of a loop: a frame fixed to a link.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LoopFrame {
+    /// Index into [`Robot::links`].
+    pub link: usize,
+    pub origin: Origin,
+}
+
+/// URDF+ `<loop>`: a cut joint between two link frames.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Closure {
+pub struct Loop {
     pub name: String,
+    pub kind: LoopKind,
+    pub predecessor: LoopFrame,
+    pub successor: LoopFrame,
+    /// In the predecessor frame; `[1, 0, 0]` when absent.
+    pub axis: [f64; 3],
+    pub line: Option<u32>,
+}
+
+/// URDF+ `<coupling>`: ratio × (coordinates from the common ancestor to `predecessor`) = (coordinates
+/// from the common ancestor to `successor`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Coupling {
+    pub name: String,
+    /// Link indices.
+    pub predecessor: usize,
+    pub successor: usize,
+    pub ratio: f64,
     pub line: Option<u32>,
 }
 
@@ -94,7 +130,7 @@ pub struct Robot {
     /// Index of the root link (the one that is no joint's child).
     pub root: usize,
     /// URDF+ `<loop>` elements.
-    pub loops: Vec<Closure>,
+    pub loops: Vec<Loop>,
     /// URDF+ `<coupling>` elements.
-    pub couplings: Vec<Closure>,
+    pub couplings: Vec<Coupling>,
 }

@@ -4,7 +4,7 @@
 //! `<mimic>` children (a differential).
 
 use crate::error::{LoadError, Location, Warning};
-use crate::ir::{Closure, Inertial, Joint, JointKind, Link, Mimic, Origin, Robot};
+use crate::ir::{Coupling, Inertial, Joint, JointKind, Link, Loop, LoopFrame, LoopKind, Mimic, Origin, Robot};
 use roxmltree::{Document, Node};
 use std::collections::HashMap;
 use std::path::Path;
@@ -195,17 +195,14 @@ impl<'a, 'input> Parser<'a, 'input> {
                 }
             }
         }
-        let closure = |tag: &str| -> Vec<Closure> {
-            root.children()
-                .filter(|n| n.has_tag_name(tag))
-                .map(|n| Closure {
-                    name: n.attribute("name").unwrap_or("").to_string(),
-                    line: self.line(n),
-                })
-                .collect()
-        };
-        let loops = closure("loop");
-        let couplings = closure("coupling");
+        let mut loops = Vec::new();
+        for node in root.children().filter(|n| n.has_tag_name("loop")) {
+            loops.push(self.loop_element(node, &link_index)?);
+        }
+        let mut couplings = Vec::new();
+        for node in root.children().filter(|n| n.has_tag_name("coupling")) {
+            couplings.push(self.coupling(node, &link_index)?);
+        }
         Ok(Robot {
             name,
             source: self.path.to_path_buf(),
@@ -383,6 +380,67 @@ impl<'a, 'input> Parser<'a, 'input> {
             independent,
             line: self.line(node),
         })
+    }
+
+    /// `<predecessor link>` or `<successor link>` of a loop or coupling.
+    fn named_link(&self, node: Node<'a, 'input>, tag: &str, what: &str, links: &HashMap<String, usize>) -> Result<(usize, Node<'a, 'input>), LoadError> {
+        let Some(n) = node.children().find(|n| n.has_tag_name(tag)) else {
+            return self.err(node, what, format!("missing <{tag}>"));
+        };
+        let Some(l) = n.attribute("link") else {
+            return self.err(n, format!("{what} <{tag}>"), "missing attribute `link`");
+        };
+        match links.get(l) {
+            Some(&i) => Ok((i, n)),
+            None => self.err(n, format!("{what} <{tag}>"), format!("names link \"{l}\", which does not exist")),
+        }
+    }
+
+    fn loop_element(&self, node: Node, links: &HashMap<String, usize>) -> Result<Loop, LoadError> {
+        let name = node.attribute("name").unwrap_or("").to_string();
+        let what = format!("loop \"{name}\"");
+        let kind = match node.attribute("type") {
+            Some("revolute") | Some("continuous") => LoopKind::Revolute,
+            Some("prismatic") => LoopKind::Prismatic,
+            Some("spherical") => LoopKind::Spherical,
+            Some("fixed") => LoopKind::Fixed,
+            Some("planar") => return self.err(node, what, "loop type \"planar\" is not supported"),
+            Some(t) => return self.err(node, what, format!("unknown loop type \"{t}\" (expected revolute, continuous, prismatic, spherical or fixed)")),
+            None => return self.err(node, what, "missing attribute `type`"),
+        };
+        let (pl, pn) = self.named_link(node, "predecessor", &what, links)?;
+        let (sl, sn) = self.named_link(node, "successor", &what, links)?;
+        let predecessor = LoopFrame { link: pl, origin: self.origin(pn, &format!("{what} <predecessor>"))? };
+        let successor = LoopFrame { link: sl, origin: self.origin(sn, &format!("{what} <successor>"))? };
+        let axis = match node.children().find(|n| n.has_tag_name("axis")) {
+            None => [1.0, 0.0, 0.0],
+            Some(a) => {
+                let axis = self.vec3(a, "xyz", Some([1.0, 0.0, 0.0]), &format!("{what} <axis>"))?;
+                if matches!(kind, LoopKind::Revolute | LoopKind::Prismatic) && axis.iter().all(|&x| x == 0.0) {
+                    return self.err(a, format!("{what} <axis>"), "the loop axis is zero");
+                }
+                axis
+            }
+        };
+        if pl == sl {
+            return self.err(node, what, "predecessor and successor are the same link");
+        }
+        Ok(Loop { name, kind, predecessor, successor, axis, line: self.line(node) })
+    }
+
+    fn coupling(&self, node: Node, links: &HashMap<String, usize>) -> Result<Coupling, LoadError> {
+        let name = node.attribute("name").unwrap_or("").to_string();
+        let what = format!("coupling \"{name}\"");
+        let (predecessor, _) = self.named_link(node, "predecessor", &what, links)?;
+        let (successor, _) = self.named_link(node, "successor", &what, links)?;
+        let ratio = match node.children().find(|n| n.has_tag_name("ratio")) {
+            None => 1.0,
+            Some(r) => self.number(r, "value", Some(1.0), &format!("{what} <ratio>"))?,
+        };
+        if predecessor == successor {
+            return self.err(node, what, "predecessor and successor are the same link");
+        }
+        Ok(Coupling { name, predecessor, successor, ratio, line: self.line(node) })
     }
 
     fn origin(&self, parent: Node, what: &str) -> Result<Origin, LoadError> {

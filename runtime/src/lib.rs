@@ -11,6 +11,7 @@
 //! (0, 0, −9.81) m/s² by default; a floating base uses Pinocchio's free-flyer layout.
 
 mod algorithms;
+pub mod constraints;
 mod double_double;
 pub mod linalg;
 mod model;
@@ -18,8 +19,9 @@ mod scalar;
 pub mod spatial;
 
 pub use algorithms::{
-    aba, crba, forward_kinematics, kinetic_energy, mass_matrix_inverse, potential_energy, rnea,
-    rnea_with_gravity, DynamicsError, Workspace,
+    aba, constraint_kinematics, crba, forward_kinematics, kinetic_energy, kkt_forward_dynamics,
+    mass_matrix_inverse, potential_energy, reduced_mass_matrix, rnea, rnea_with_gravity,
+    DynamicsError, Workspace,
 };
 pub use model::{Body, Joint, JointType, Model, ModelBuilder, ModelError};
 pub use scalar::{DoubleDouble, Real};

@@ -9,6 +9,7 @@
 //! joint map; that enters as a new node kind with its own forward and backward step, not as a change to
 //! the recursions.
 
+use crate::constraints::{Constraint, ConstraintKind, Group};
 use crate::spatial::{Motion, SpatialInertia, Transform};
 use crate::Real;
 use nalgebra::Vector3;
@@ -147,6 +148,12 @@ pub struct Model<T: Real> {
     nv: usize,
     /// `subtree_end[i]`: one past the last body of the subtree rooted at body `i`.
     subtree_end: Vec<usize>,
+    /// Loops, couplings and mimic joints, in the order they were added.
+    pub constraints: Vec<Constraint<T>>,
+    /// The aggregate links (empty for a tree).
+    pub groups: Vec<Group>,
+    /// For each body, the group it belongs to.
+    group_of: Vec<Option<usize>>,
 }
 
 /// Errors in the structure of a model given to [`ModelBuilder`].
@@ -160,6 +167,14 @@ pub enum ModelError {
     FloatingNotRoot { joint: String },
     #[error("joint `{joint}`: the bodies of the subtree it moves have no inertia about its axis (D = {d:e}), so its acceleration is undetermined")]
     NoInertiaAboutAxis { joint: String, d: f64 },
+    #[error("constraint `{constraint}` involves no moving joint")]
+    EmptyConstraint { constraint: String },
+    #[error("joint `{joint}`: a floating joint cannot be part of a loop or coupling")]
+    FloatingInGroup { joint: String },
+    #[error("{group}: {declared} joint(s) are declared dependent (independent=\"false\" or <mimic>), but the constraints remove {needed} degree(s) of freedom")]
+    DependentMismatch { group: String, declared: usize, needed: usize },
+    #[error("{group}: the dependent joints cannot be solved from the independent ones (cond(Y1) = {condition:e} at a generic assembled configuration); declare other joints independent=\"false\"")]
+    SingularDependentChoice { group: String, condition: f64 },
 }
 
 /// Adds bodies one at a time, each after its parent; [`ModelBuilder::build`] renumbers them depth-first.
@@ -171,6 +186,8 @@ pub struct ModelBuilder<T: Real> {
     gravity: Vector3<T>,
     nq: usize,
     nv: usize,
+    constraints: Vec<Constraint<T>>,
+    declared_dependent: Vec<bool>,
 }
 
 impl<T: Real> Model<T> {
@@ -182,6 +199,8 @@ impl<T: Real> Model<T> {
             gravity: Vector3::new(T::zero(), T::zero(), T::from_f64(-9.81)),
             nq: 0,
             nv: 0,
+            constraints: Vec::new(),
+            declared_dependent: Vec::new(),
         }
     }
 
@@ -294,7 +313,54 @@ impl<T: Real> Model<T> {
             nq: self.nq,
             nv: self.nv,
             subtree_end: self.subtree_end.clone(),
+            constraints: self.constraints.iter().map(|c| c.cast()).collect(),
+            groups: self.groups.clone(),
+            group_of: self.group_of.clone(),
         }
+    }
+
+    /// Whether the model has loops, couplings or mimic joints.
+    pub fn has_constraints(&self) -> bool {
+        !self.constraints.is_empty()
+    }
+
+    /// The group (aggregate link) body `b` belongs to.
+    pub fn group_of(&self, b: usize) -> Option<usize> {
+        self.group_of[b]
+    }
+
+    /// Total number of constraint equations before redundant ones are removed.
+    pub fn constraint_raw_rows(&self) -> usize {
+        self.constraints.iter().map(|c| c.raw_rows()).sum()
+    }
+
+    /// First raw row of each constraint.
+    pub fn constraint_row_offsets(&self) -> Vec<usize> {
+        let mut off = Vec::with_capacity(self.constraints.len());
+        let mut row = 0;
+        for c in &self.constraints {
+            off.push(row);
+            row += c.raw_rows();
+        }
+        off
+    }
+
+    /// Whether the coordinate of joint `j` is independent (joints outside every group are).
+    pub fn is_independent(&self, j: usize) -> bool {
+        match self.group_of[j] {
+            None => true,
+            Some(g) => !self.groups[g].dependent.contains(&j),
+        }
+    }
+
+    /// The independent joints in joint order (the order of `qdd_independent` and of the reduced `M`).
+    pub fn independent_joints(&self) -> Vec<usize> {
+        (0..self.joints.len()).filter(|&j| self.is_independent(j)).collect()
+    }
+
+    /// Number of independent velocity coordinates.
+    pub fn independent_nv(&self) -> usize {
+        self.independent_joints().iter().map(|&j| self.joints[j].nv()).sum()
     }
 }
 
@@ -362,6 +428,21 @@ impl<T: Real> ModelBuilder<T> {
         Ok(self.bodies.len() - 1)
     }
 
+    /// Adds a loop, coupling or mimic relation. Body and joint indices are those returned by
+    /// [`ModelBuilder::add_body`].
+    pub fn add_constraint(&mut self, constraint: Constraint<T>) {
+        self.constraints.push(constraint);
+    }
+
+    /// Declares the coordinate of body `body`'s joint dependent inside its group (URDF+
+    /// `independent="false"`; mimic joints). Ignored for joints outside every group.
+    pub fn declare_dependent(&mut self, body: usize) {
+        if self.declared_dependent.len() <= body {
+            self.declared_dependent.resize(body + 1, false);
+        }
+        self.declared_dependent[body] = true;
+    }
+
     /// Records the URDF links merged into a body (for reports).
     pub fn set_merged_links(&mut self, body: usize, links: Vec<String>) {
         self.bodies[body].links = links;
@@ -410,7 +491,32 @@ impl<T: Real> ModelBuilder<T> {
                 subtree_end[p] = subtree_end[p].max(subtree_end[i]);
             }
         }
-        let model = Model {
+        let remap = |b: Option<usize>| b.map(|b| new_index[b]);
+        let constraints: Vec<Constraint<T>> = self
+            .constraints
+            .into_iter()
+            .map(|mut c| {
+                match &mut c.kind {
+                    ConstraintKind::Linear { terms, .. } => {
+                        for t in terms.iter_mut() {
+                            t.0 = new_index[t.0];
+                        }
+                    }
+                    ConstraintKind::Loop(l) => {
+                        l.predecessor = remap(l.predecessor);
+                        l.successor = remap(l.successor);
+                    }
+                }
+                c
+            })
+            .collect();
+        let mut declared = vec![false; n];
+        for (b, &d) in self.declared_dependent.iter().enumerate() {
+            if d && b < n {
+                declared[new_index[b]] = true;
+            }
+        }
+        let mut model = Model {
             name: self.name,
             joints,
             bodies,
@@ -418,8 +524,19 @@ impl<T: Real> ModelBuilder<T> {
             nq,
             nv,
             subtree_end,
+            constraints,
+            groups: Vec::new(),
+            group_of: vec![None; n],
         };
         crate::algorithms::check_articulated_inertia(&model)?;
+        if !model.constraints.is_empty() {
+            model.groups = crate::constraints::build_groups(&model, &declared)?;
+            for (g, group) in model.groups.iter().enumerate() {
+                for &b in &group.bodies {
+                    model.group_of[b] = Some(g);
+                }
+            }
+        }
         Ok(model)
     }
 }

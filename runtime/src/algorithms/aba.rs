@@ -38,47 +38,50 @@ pub fn aba<'w, T: Real>(
     check_len("q", q.len(), model.nq())?;
     check_len("v", v.len(), model.nv())?;
     check_len("tau", tau.len(), model.nv())?;
+    if model.has_constraints() {
+        return super::embedded::aba(model, ws, q, v, tau);
+    }
     articulate(model, ws, q, v, tau);
-    // Forward sweep: ν(k) − K*(k+1,k) α(k+1) in the paper, i.e. θ̈ = D⁻¹(ε − Uᵀ a′), a = a′ + H* θ̈.
-    for (i, joint) in model.joints.iter().enumerate() {
-        let x = &ws.parent_placement[i];
-        let a_prime = match joint.parent {
-            Some(p) => x.inv_act_motion(&ws.acceleration[p]),
-            None => gravity_in(&model.gravity, x),
-        } + ws.coriolis[i];
-        let a = match joint.joint_type {
-            JointType::Floating => {
-                let pa = ws.inertia[i].mul_motion(&a_prime);
-                let mut rhs = ws.floating_eps;
-                let spa = to_v_order(&pa);
-                for k in 0..6 {
-                    rhs[k] -= spa[k];
-                }
-                check_floating(joint, ws)?;
-                cholesky_solve_in_place(&ws.floating_d, &mut rhs);
-                ws.qdd[joint.v_index..joint.v_index + 6].copy_from_slice(&rhs);
-                a_prime
-                    + Motion::new(
-                        Vector3::new(rhs[3], rhs[4], rhs[5]),
-                        Vector3::new(rhs[0], rhs[1], rhs[2]),
-                    )
-            }
-            _ => {
-                let d_inv = ws.d_inv[i];
-                if !d_inv.is_positive_finite() {
-                    return Err(DynamicsError::SingularJoint {
-                        joint: joint.name.clone(),
-                        d: (T::one() / d_inv).to_f64(),
-                    });
-                }
-                let qdd = (ws.epsilon[i] - a_prime.dot(&ws.u[i])) * d_inv;
-                ws.qdd[joint.v_index] = qdd;
-                a_prime + joint.subspace_column(0) * qdd
-            }
-        };
-        ws.acceleration[i] = a;
+    for i in 0..model.nbodies() {
+        forward_step(model, ws, i)?;
     }
     Ok(&ws.qdd)
+}
+
+/// The forward step of Eq. 9 for joint `i`: `θ̈ = D⁻¹(ε − Uᵀ a′)`, `a = a′ + H* θ̈`
+/// (the paper's `ν(k) − K*(k+1,k) α(k+1)`).
+pub(crate) fn forward_step<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, i: usize) -> Result<(), DynamicsError> {
+    let joint = &model.joints[i];
+    let x = &ws.parent_placement[i];
+    let a_prime = match joint.parent {
+        Some(p) => x.inv_act_motion(&ws.acceleration[p]),
+        None => gravity_in(&model.gravity, x),
+    } + ws.coriolis[i];
+    let a = match joint.joint_type {
+        JointType::Floating => {
+            let pa = ws.inertia[i].mul_motion(&a_prime);
+            let mut rhs = ws.floating_eps;
+            let spa = to_v_order(&pa);
+            for k in 0..6 {
+                rhs[k] -= spa[k];
+            }
+            check_floating(joint, ws)?;
+            cholesky_solve_in_place(&ws.floating_d, &mut rhs);
+            ws.qdd[joint.v_index..joint.v_index + 6].copy_from_slice(&rhs);
+            a_prime + Motion::new(Vector3::new(rhs[3], rhs[4], rhs[5]), Vector3::new(rhs[0], rhs[1], rhs[2]))
+        }
+        _ => {
+            let d_inv = ws.d_inv[i];
+            if !d_inv.is_positive_finite() {
+                return Err(DynamicsError::SingularJoint { joint: joint.name.clone(), d: (T::one() / d_inv).to_f64() });
+            }
+            let qdd = (ws.epsilon[i] - a_prime.dot(&ws.u[i])) * d_inv;
+            ws.qdd[joint.v_index] = qdd;
+            a_prime + joint.subspace_column(0) * qdd
+        }
+    };
+    ws.acceleration[i] = a;
+    Ok(())
 }
 
 fn check_floating<T: Real>(
@@ -105,61 +108,60 @@ pub(crate) fn articulate<T: Real>(
     tau: &[T],
 ) {
     velocity_sweep(model, ws, q, v);
+    init_articulated(model, ws);
+    for i in (0..model.nbodies()).rev() {
+        backward_step(model, ws, i, tau);
+    }
+}
+
+/// `P(k) = M(k)` and `𝔷(k) = b(k) = V ×* M V` for every body, before the backward sweep adds children.
+pub(crate) fn init_articulated<T: Real>(model: &Model<T>, ws: &mut Workspace<T>) {
     for (i, body) in model.bodies.iter().enumerate() {
         let inertia = &body.inertia;
         let vel = &ws.velocity[i];
-        // b(k): the gyroscopic force V ×* M V.
         ws.force[i] = vel.cross_force(&inertia.mul_motion(vel));
         ws.inertia[i] = ArticulatedInertia::from(*inertia);
     }
-    for i in (0..model.nbodies()).rev() {
-        let joint = &model.joints[i];
-        let p = ws.inertia[i];
-        let (p_plus, z_plus) = match joint.joint_type {
-            JointType::Floating => {
-                // The floating joint is always a root (checked at build): nothing to pass on.
-                let m = p.to_matrix();
-                // Reorder [ω; v] rows and columns to the order of v = [v_lin; ω].
-                let d = &mut ws.floating_d;
-                for r in 0..6 {
-                    for c in 0..6 {
-                        d[(r, c)] = m[((r + 3) % 6, (c + 3) % 6)];
-                    }
-                }
-                let z = to_v_order(&ws.force[i]);
-                for k in 0..6 {
-                    ws.floating_eps[k] = tau[joint.v_index + k] - z[k];
-                }
-                let pivot = cholesky_in_place(d);
-                ws.floating_pivot = pivot;
-                continue;
+}
+
+/// The backward step of Eq. 9 for joint `i`: `D(k)`, `ε(k)`, and what passes to the parent,
+/// `P(k+1) += φ τ̄ P φ*`, `𝔷(k+1) += φ (𝔷 + P⁺ a(k) + G ε)`.
+pub(crate) fn backward_step<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, i: usize, tau: &[T]) {
+    let joint = &model.joints[i];
+    let p = ws.inertia[i];
+    if joint.joint_type == JointType::Floating {
+        // The floating joint is always a root (checked at build): nothing to pass on.
+        let m = p.to_matrix();
+        // Reorder [ω; v] rows and columns to the order of v = [v_lin; ω].
+        let d = &mut ws.floating_d;
+        for r in 0..6 {
+            for c in 0..6 {
+                d[(r, c)] = m[((r + 3) % 6, (c + 3) % 6)];
             }
-            _ => {
-                let h = joint.subspace_column(0);
-                let u = p.mul_motion(&h);
-                let d = h.dot(&u);
-                let d_inv = T::one() / d;
-                let eps = tau[joint.v_index] - h.dot(&ws.force[i]);
-                ws.u[i] = u;
-                ws.d_inv[i] = d_inv;
-                ws.epsilon[i] = eps;
-                if joint.parent.is_none() {
-                    continue;
-                }
-                // P⁺ = τ̄ P = P − U D⁻¹ Uᵀ;  𝔷⁺ = 𝔷 + P⁺ a(k) + G ε.
-                let mut p_plus = p;
-                p_plus.sub_rank_one(&u, d_inv);
-                let z_plus = ws.force[i] + p_plus.mul_motion(&ws.coriolis[i]) + u * (eps * d_inv);
-                (p_plus, z_plus)
-            }
-        };
-        if let Some(parent) = joint.parent {
-            let x = ws.parent_placement[i];
-            // ψ(k+1,k) applied: P(k+1) += φ τ̄ P φ*, 𝔷(k+1) += φ 𝔷⁺.
-            ws.inertia[parent] += p_plus.act(&x);
-            let zf = x.act_force(&z_plus);
-            ws.force[parent] += zf;
         }
+        let z = to_v_order(&ws.force[i]);
+        for k in 0..6 {
+            ws.floating_eps[k] = tau[joint.v_index + k] - z[k];
+        }
+        ws.floating_pivot = cholesky_in_place(d);
+        return;
+    }
+    let h = joint.subspace_column(0);
+    let u = p.mul_motion(&h);
+    let d_inv = T::one() / h.dot(&u);
+    let eps = tau[joint.v_index] - h.dot(&ws.force[i]);
+    ws.u[i] = u;
+    ws.d_inv[i] = d_inv;
+    ws.epsilon[i] = eps;
+    if let Some(parent) = joint.parent {
+        // P⁺ = τ̄ P = P − U D⁻¹ Uᵀ;  𝔷⁺ = 𝔷 + P⁺ a(k) + G ε.
+        let mut p_plus = p;
+        p_plus.sub_rank_one(&u, d_inv);
+        let z_plus = ws.force[i] + p_plus.mul_motion(&ws.coriolis[i]) + u * (eps * d_inv);
+        let x = ws.parent_placement[i];
+        ws.inertia[parent] += p_plus.act(&x);
+        let zf = x.act_force(&z_plus);
+        ws.force[parent] += zf;
     }
 }
 

@@ -3,6 +3,7 @@
 
 mod aba;
 mod crba;
+mod embedded;
 mod kinematics;
 mod minv;
 mod rnea;
@@ -10,6 +11,7 @@ mod workspace;
 
 pub use aba::aba;
 pub use crba::crba;
+pub use embedded::{constraint_kinematics, kkt_forward_dynamics, reduced_mass_matrix};
 pub use kinematics::{forward_kinematics, kinetic_energy, potential_energy};
 pub use minv::mass_matrix_inverse;
 pub use rnea::{rnea, rnea_with_gravity};
@@ -30,6 +32,10 @@ pub enum DynamicsError {
     },
     #[error("joint `{joint}`: the articulated inertia about its axis is not positive (D = {d:e})")]
     SingularJoint { joint: String, d: f64 },
+    #[error("{group}: the loop is at or too near a singular configuration: cond(Y1) = {condition:e} ≥ 1e10 (the dependent joints are not determined by the independent ones here)")]
+    SingularConstraint { group: String, condition: f64 },
+    #[error("{group}: the reduced inertia of the aggregate link is not positive definite")]
+    SingularGroup { group: String },
 }
 
 pub(crate) fn check_len(

@@ -48,6 +48,8 @@ pub struct Workspace<T: Real> {
     pub inverse_mass_matrix: DMatrix<T>,
     /// Per body, `6 × nv` force columns and acceleration columns for the operator inverse of Eq. 6.
     pub(crate) minv_force: Vec<[T; 6]>,
+    /// Per aggregate link: the embedding maps and its articulated-body scratch.
+    pub(crate) groups: Vec<crate::constraints::GroupWorkspace<T>>,
     pub(crate) minv_accel: Vec<[T; 6]>,
 }
 
@@ -80,6 +82,7 @@ impl<T: Real> Workspace<T> {
             mass_matrix: DMatrix::zeros(nv, nv),
             inverse_mass_matrix: DMatrix::zeros(0, 0),
             minv_force: Vec::new(),
+            groups: model.groups.iter().map(|g| crate::constraints::GroupWorkspace::new(model, g)).collect(),
             minv_accel: Vec::new(),
         }
     }

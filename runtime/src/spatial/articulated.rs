@@ -44,6 +44,15 @@ impl<T: Real> ArticulatedInertia<T> {
         self.c -= sl * ul.transpose();
     }
 
+    /// `P − a bᵀ` (one term of a symmetric low-rank update `Σ a_k b_kᵀ`; only the upper-right block of
+    /// the pair is stored, so the caller must complete a symmetric sum).
+    #[inline(always)]
+    pub fn sub_outer(&mut self, a: &Force<T>, b: &Force<T>) {
+        self.a -= a.angular * b.angular.transpose();
+        self.b -= a.angular * b.linear.transpose();
+        self.c -= a.linear * b.linear.transpose();
+    }
+
     /// The same inertia expressed in the parent frame of `x` (`Xᵀ P X` in Featherstone's notation).
     ///
     /// Rotate each block, then shift the reference point with `[p]×`; written in blocks so the cost is a few

@@ -23,6 +23,11 @@ impl<T: Real> Force<T> {
             Vector3::new(a[3], a[4], a[5]),
         )
     }
+    /// The pairing `fᵀ m` (power), as [`crate::Motion::dot`] from the force side.
+    #[inline(always)]
+    pub fn dot_motion(&self, m: &crate::Motion<T>) -> T {
+        self.angular.dot(&m.angular) + self.linear.dot(&m.linear)
+    }
     pub fn to_array(&self) -> [T; 6] {
         let (n, f) = (&self.angular, &self.linear);
         [n.x, n.y, n.z, f.x, f.y, f.z]

@@ -1,0 +1,271 @@
+//! Dynamics of models with aggregate links (constraint embedding), and the Lagrange-multiplier oracle.
+//!
+//! The O(N) forward dynamics is Eq. 9 with the aggregate-link steps of Eqs. 19–24, in the arrangement of
+//! the alternative form (Eqs. 26–34): every member of a group is expressed in the frame of the one body
+//! the group hangs from, so the group's `E_G` is the identity per member, its `φ_G H*_G X_G` is one 6-vector
+//! per member and independent coordinate (`J_b`), and what the group passes to its parent is
+//! `Σ_b P_b − Ū D⁻¹ Ūᵀ` with `Ū = Σ_b P_b J_b` — no 6k×6k matrix is ever formed.
+
+use super::aba::{backward_step, forward_step, init_articulated};
+use super::{check_len, crba, rnea, velocity_sweep, DynamicsError, Workspace};
+use crate::constraints::{embed, Group, GroupWorkspace};
+use crate::linalg::{cholesky_in_place, cholesky_solve_in_place, lu_in_place, lu_solve_in_place};
+use crate::model::Model;
+use crate::spatial::{Force, Motion};
+use crate::Real;
+use nalgebra::{DMatrix, Vector3};
+
+/// Kinematics the constraint equations need: parent and world placements, body velocities, and the
+/// velocity-product accelerations (q̈ = 0, no gravity) in `ws.acceleration`.
+pub fn constraint_kinematics<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, q: &[T], v: &[T]) -> Result<(), DynamicsError> {
+    check_len("q", q.len(), model.nq())?;
+    check_len("v", v.len(), model.nv())?;
+    velocity_sweep(model, ws, q, v);
+    for (i, joint) in model.joints.iter().enumerate() {
+        let (world, acc) = match joint.parent {
+            Some(p) => (
+                ws.world_placement[p].compose(&ws.parent_placement[i]),
+                ws.parent_placement[i].inv_act_motion(&ws.acceleration[p]) + ws.coriolis[i],
+            ),
+            None => (ws.parent_placement[i], ws.coriolis[i]),
+        };
+        ws.world_placement[i] = world;
+        ws.acceleration[i] = acc;
+    }
+    Ok(())
+}
+
+fn group_name<T: Real>(model: &Model<T>, g: &Group) -> String {
+    g.constraints.iter().map(|&c| model.constraints[c].name.as_str()).collect::<Vec<_>>().join(", ")
+}
+
+/// Forward dynamics with aggregate links: `qdd` over all spanning joints (consistent with the constraints
+/// at acceleration level); only `Xᵀ τ` of `tau` acts.
+pub(crate) fn aba<'w, T: Real>(model: &Model<T>, ws: &'w mut Workspace<T>, q: &[T], v: &[T], tau: &[T]) -> Result<&'w [T], DynamicsError> {
+    constraint_kinematics(model, ws, q, v)?;
+    let mut groups = core::mem::take(&mut ws.groups);
+    let result = aba_with(model, ws, &mut groups, v, tau);
+    ws.groups = groups;
+    result?;
+    Ok(&ws.qdd)
+}
+
+fn aba_with<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, groups: &mut [GroupWorkspace<T>], v: &[T], tau: &[T]) -> Result<(), DynamicsError> {
+    for (g, gw) in groups.iter_mut().enumerate() {
+        embed(model, ws, g, gw, true)?;
+    }
+    init_articulated(model, ws);
+    for i in (0..model.nbodies()).rev() {
+        match model.group_of(i) {
+            None => backward_step(model, ws, i, tau),
+            Some(g) if model.groups[g].bodies[0] == i => group_backward(model, ws, g, &mut groups[g], v, tau)?,
+            Some(_) => {}
+        }
+    }
+    for i in 0..model.nbodies() {
+        match model.group_of(i) {
+            None => forward_step(model, ws, i)?,
+            Some(g) if model.groups[g].bodies[0] == i => group_forward(model, ws, g, &mut groups[g]),
+            Some(_) => {}
+        }
+    }
+    Ok(())
+}
+
+/// Eqs. 19–22 for one aggregate link: its members' articulated inertias and bias forces in the parent
+/// body's frame, `J_b`, `D_G`, `ε_G`, and the articulated inertia and bias force it passes on.
+fn group_backward<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, gi: usize, gw: &mut GroupWorkspace<T>, v: &[T], tau: &[T]) -> Result<(), DynamicsError> {
+    let g = &model.groups[gi];
+    let ni = g.independent.len();
+    for (m, &b) in g.bodies.iter().enumerate() {
+        let joint = &model.joints[b];
+        let parent_member = joint.parent.filter(|&p| Some(p) != g.parent).map(|p| g.bodies.binary_search(&p).expect("members hang from the group's parent or another member"));
+        let to_parent = match parent_member {
+            None => ws.parent_placement[b],
+            Some(pm) => gw.to_parent[pm].compose(&ws.parent_placement[b]),
+        };
+        let s = to_parent.act_motion(&joint.subspace_column(0));
+        let vel = to_parent.act_motion(&ws.velocity[b]);
+        let mut c = vel.cross_motion(&(s * v[joint.v_index])) + s * gw.kappa[m];
+        for k in 0..ni {
+            let mut j = s * gw.x[(m, k)];
+            if let Some(pm) = parent_member {
+                j += gw.jac[pm * ni + k];
+            }
+            gw.jac[m * ni + k] = j;
+        }
+        if let Some(pm) = parent_member {
+            c += gw.c[pm];
+        }
+        gw.c[m] = c;
+        gw.to_parent[m] = to_parent;
+        gw.inertia[m] = ws.inertia[b].act(&to_parent);
+        gw.bias_force[m] = to_parent.act_force(&ws.force[b]);
+    }
+    // D_G = Σ_b J_bᵀ P_b J_b,  ε_G = X_Gᵀ τ_G − Σ_b J_bᵀ (𝔷_b + P_b c_b).
+    for k in 0..ni {
+        let mut eps = T::zero();
+        for (m, &b) in g.bodies.iter().enumerate() {
+            eps += gw.x[(m, k)] * tau[model.joints[b].v_index];
+        }
+        let mut usum = Force::zero();
+        for m in 0..g.bodies.len() {
+            let u = gw.inertia[m].mul_motion(&gw.jac[m * ni + k]);
+            eps -= gw.jac[m * ni + k].dot(&gw.bias_force[m]) + gw.c[m].dot(&u);
+            gw.u[m * ni + k] = u;
+            usum += u;
+        }
+        gw.u_sum[k] = usum;
+        gw.eps[k] = eps;
+    }
+    for k in 0..ni {
+        for l in k..ni {
+            let mut d = T::zero();
+            for m in 0..g.bodies.len() {
+                d += gw.jac[m * ni + k].dot(&gw.u[m * ni + l]);
+            }
+            gw.d[(k, l)] = d;
+            gw.d[(l, k)] = d;
+        }
+    }
+    if !cholesky_in_place(&mut gw.d).is_positive_finite() {
+        return Err(DynamicsError::SingularGroup { group: group_name(model, g) });
+    }
+    if let Some(p) = g.parent {
+        // What the parent sees: Σ_b P_b − Ū D⁻¹ Ūᵀ and Σ_b (𝔷_b + P_b c_b) + Ū D⁻¹ ε.
+        let mut p_plus = gw.inertia[0];
+        let mut z = gw.bias_force[0] + gw.inertia[0].mul_motion(&gw.c[0]);
+        for m in 1..g.bodies.len() {
+            p_plus += gw.inertia[m];
+            z += gw.bias_force[m] + gw.inertia[m].mul_motion(&gw.c[m]);
+        }
+        // ν = D⁻¹ ε; W_k = Σ_l (D⁻¹)_kl Ū_l, one unit vector at a time through the factor.
+        gw.ydd.copy_from_slice(&gw.eps);
+        cholesky_solve_in_place(&gw.d, &mut gw.ydd);
+        for k in 0..ni {
+            z += gw.u_sum[k] * gw.ydd[k];
+        }
+        for k in 0..ni {
+            gw.col_unit(k);
+            cholesky_solve_in_place(&gw.d, &mut gw.unit);
+            let mut w = Force::zero();
+            for l in 0..ni {
+                w += gw.u_sum[l] * gw.unit[l];
+            }
+            let uk = gw.u_sum[k];
+            p_plus.sub_outer(&uk, &w);
+        }
+        ws.inertia[p] += p_plus;
+        ws.force[p] += z;
+    }
+    Ok(())
+}
+
+/// Eqs. 23–24: `θ̈_R = D⁻¹(ε − Ūᵀ α_parent)`, the members' accelerations, and `θ̈_G = X_G θ̈_R + κ_G`.
+fn group_forward<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, gi: usize, gw: &mut GroupWorkspace<T>) {
+    let g = &model.groups[gi];
+    let ni = g.independent.len();
+    let a_parent = match g.parent {
+        Some(p) => ws.acceleration[p],
+        None => Motion::new(Vector3::zeros(), -model.gravity),
+    };
+    for k in 0..ni {
+        gw.ydd[k] = gw.eps[k] - gw.u_sum[k].dot_motion(&a_parent);
+    }
+    cholesky_solve_in_place(&gw.d, &mut gw.ydd);
+    for (m, &b) in g.bodies.iter().enumerate() {
+        let mut a = a_parent + gw.c[m];
+        let mut qdd = gw.kappa[m];
+        for k in 0..ni {
+            a += gw.jac[m * ni + k] * gw.ydd[k];
+            qdd += gw.x[(m, k)] * gw.ydd[k];
+        }
+        ws.acceleration[b] = gw.to_parent[m].inv_act_motion(&a);
+        ws.qdd[model.joints[b].v_index] = qdd;
+    }
+}
+
+/// The embedding map of the whole model, `θ̇ = X θ̇_R` (nv × independent nv), at `q`.
+fn fill_embedding<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, q: &[T], out: &mut DMatrix<T>) -> Result<(), DynamicsError> {
+    let zeros = vec![T::zero(); model.nv()];
+    constraint_kinematics(model, ws, q, &zeros)?;
+    let mut groups = core::mem::take(&mut ws.groups);
+    let mut result = Ok(());
+    for (g, gw) in groups.iter_mut().enumerate() {
+        result = embed(model, ws, g, gw, false);
+        if result.is_err() {
+            break;
+        }
+    }
+    out.fill(T::zero());
+    if result.is_ok() {
+        let independent = model.independent_joints();
+        for (col, &j) in independent.iter().enumerate() {
+            let joint = &model.joints[j];
+            match model.group_of(j) {
+                None => {
+                    for k in 0..joint.nv() {
+                        out[(joint.v_index + k, col + k)] = T::one();
+                    }
+                }
+                Some(g) => {
+                    let group = &model.groups[g];
+                    let k = group.independent.iter().position(|&b| b == j).expect("independent member");
+                    for (m, &b) in group.bodies.iter().enumerate() {
+                        out[(model.joints[b].v_index, col)] = groups[g].x[(m, k)];
+                    }
+                }
+            }
+        }
+    }
+    ws.groups = groups;
+    result
+}
+
+/// The reduced mass matrix `Xᵀ M X` over the independent coordinates (CONTRACT §3 `crba` for models with
+/// loops); allocates its result (it is O(nv²) anyway).
+pub fn reduced_mass_matrix<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, q: &[T]) -> Result<DMatrix<T>, DynamicsError> {
+    let mut x = DMatrix::zeros(model.nv(), model.independent_nv());
+    fill_embedding(model, ws, q, &mut x)?;
+    let m = crba(model, ws, q)?.clone();
+    Ok(x.transpose() * m * x)
+}
+
+/// The Lagrange-multiplier oracle: `[M Jᵀ; J 0] [qdd; −λ] = [τ − C − g; −J̇ v]` over the spanning tree,
+/// with the kept (non-redundant) constraint rows. A separate, plain implementation: the test oracle and
+/// the baseline the benchmarks compare against. Allocates.
+pub fn kkt_forward_dynamics<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, q: &[T], v: &[T], tau: &[T]) -> Result<Vec<T>, DynamicsError> {
+    check_len("tau", tau.len(), model.nv())?;
+    let nv = model.nv();
+    let zeros = vec![T::zero(); nv];
+    let nle = rnea(model, ws, q, v, &zeros)?.to_vec();
+    let m = crba(model, ws, q)?.clone();
+    constraint_kinematics(model, ws, q, v)?;
+    let raw = model.constraint_raw_rows();
+    let mut jac = DMatrix::zeros(raw, nv);
+    crate::constraints::jacobian(model, ws, &mut jac);
+    let mut bias = vec![T::zero(); raw];
+    crate::constraints::bias(model, ws, &mut bias);
+    let rows: Vec<usize> = model.groups.iter().flat_map(|g| g.rows.iter().copied()).collect();
+    let n = nv + rows.len();
+    let mut kkt = DMatrix::zeros(n, n);
+    let mut rhs = vec![T::zero(); n];
+    for r in 0..nv {
+        for c in 0..nv {
+            kkt[(r, c)] = m[(r, c)];
+        }
+        rhs[r] = tau[r] - nle[r];
+    }
+    for (k, &row) in rows.iter().enumerate() {
+        for c in 0..nv {
+            kkt[(nv + k, c)] = jac[(row, c)];
+            kkt[(c, nv + k)] = jac[(row, c)];
+        }
+        rhs[nv + k] = -bias[row];
+    }
+    let mut perm = vec![0; n];
+    lu_in_place(&mut kkt, &mut perm).map_err(|_| DynamicsError::SingularConstraint { group: "KKT system".into(), condition: f64::INFINITY })?;
+    lu_solve_in_place(&kkt, &perm, &mut rhs);
+    rhs.truncate(nv);
+    Ok(rhs)
+}

@@ -1,0 +1,99 @@
+//! Completing a state: the dependent coordinates from the independent ones, at position level (Newton's
+//! method from the given guess, so it stays on that assembly branch) and at velocity level (`X_G`).
+
+use super::{embed, residuals};
+use crate::algorithms::{constraint_kinematics, DynamicsError, Workspace};
+use crate::linalg::lu_solve_in_place;
+use crate::model::Model;
+use crate::Real;
+
+/// Largest absolute constraint residual at position level (all equations, redundant ones included) and
+/// at velocity level (`|J v|∞`), for checking that a state is consistent (CONTRACT §2: 1e-9).
+pub fn constraint_violation<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, q: &[T], v: &[T]) -> Result<(f64, f64), DynamicsError> {
+    if !model.has_constraints() {
+        return Ok((0.0, 0.0));
+    }
+    constraint_kinematics(model, ws, q, v)?;
+    let mut r = vec![T::zero(); model.constraint_raw_rows()];
+    residuals(model, ws, q, &mut r);
+    let pos = r.iter().fold(0.0f64, |m, x| m.max(x.to_f64().abs()));
+    let mut jac = nalgebra::DMatrix::zeros(model.constraint_raw_rows(), model.nv());
+    super::jacobian(model, ws, &mut jac);
+    let mut vel = 0.0f64;
+    for row in 0..jac.nrows() {
+        let s = (0..model.nv()).fold(T::zero(), |s, c| s + jac[(row, c)] * v[c]);
+        vel = vel.max(s.to_f64().abs());
+    }
+    Ok((pos, vel))
+}
+
+/// Solves the dependent entries of `q` from its independent entries (the dependent entries are the
+/// starting guess: Newton's method converges to the assembly branch nearest it). Returns the largest
+/// remaining residual of the kept equations.
+pub fn complete_configuration<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, q: &mut [T]) -> Result<f64, DynamicsError> {
+    let zeros = vec![T::zero(); model.nv()];
+    let mut groups = core::mem::take(&mut ws.groups);
+    let mut r = vec![T::zero(); model.constraint_raw_rows()];
+    let mut result = Ok(0.0f64);
+    'groups: for (gi, gw) in groups.iter_mut().enumerate() {
+        let g = &model.groups[gi];
+        let mut worst = 0.0;
+        for _ in 0..50 {
+            if let Err(e) = constraint_kinematics(model, ws, q, &zeros) {
+                result = Err(e);
+                break 'groups;
+            }
+            residuals(model, ws, q, &mut r);
+            worst = g.rows.iter().fold(0.0f64, |m, &i| m.max(r[i].to_f64().abs()));
+            if worst <= 1e-14 {
+                break;
+            }
+            // Newton step on the dependent coordinates: Y1 Δ = −r (Y1 factored by `embed`).
+            if let Err(e) = embed(model, ws, gi, gw, false) {
+                result = Err(e);
+                break 'groups;
+            }
+            for (k, &row) in g.rows.iter().enumerate() {
+                gw.col[k] = -r[row];
+            }
+            lu_solve_in_place(&gw.y1_lu, &gw.perm, &mut gw.col);
+            // Limit the step: Newton stays near the branch it starts on.
+            let big = gw.col.iter().fold(T::zero(), |m, x| m.max(x.abs()));
+            let scale = if big.to_f64() > 0.5 { T::from_f64(0.5) / big } else { T::one() };
+            for (d, &b) in g.dependent.iter().enumerate() {
+                q[model.joints[b].q_index] += gw.col[d] * scale;
+            }
+        }
+        if let Ok(w) = &mut result {
+            *w = w.max(worst);
+        }
+    }
+    ws.groups = groups;
+    result
+}
+
+/// Replaces the dependent entries of `v` by `X_G` times the independent ones (the velocity projection).
+pub fn complete_velocity<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, q: &[T], v: &mut [T]) -> Result<(), DynamicsError> {
+    let zeros = vec![T::zero(); model.nv()];
+    constraint_kinematics(model, ws, q, &zeros)?;
+    let mut groups = core::mem::take(&mut ws.groups);
+    let mut result = Ok(());
+    for (gi, gw) in groups.iter_mut().enumerate() {
+        if let Err(e) = embed(model, ws, gi, gw, false) {
+            result = Err(e);
+            break;
+        }
+        let g = &model.groups[gi];
+        for (m, &b) in g.bodies.iter().enumerate() {
+            if g.dependent.contains(&b) {
+                let mut s = T::zero();
+                for (k, &ib) in g.independent.iter().enumerate() {
+                    s += gw.x[(m, k)] * v[model.joints[ib].v_index];
+                }
+                v[model.joints[b].v_index] = s;
+            }
+        }
+    }
+    ws.groups = groups;
+    result
+}

@@ -1,0 +1,225 @@
+//! Aggregate links: the smallest groups of bodies such that, with each group contracted to one node, the
+//! system is a tree again; and, once per model, which equations are redundant and which coordinates are
+//! independent.
+
+use super::{jacobian, residuals, ConstraintKind};
+use crate::algorithms::{forward_kinematics, Workspace};
+use crate::linalg::{independent_columns, independent_rows, solve_least_squares};
+use crate::model::{JointType, Model, ModelError};
+use crate::Real;
+use nalgebra::DMatrix;
+
+/// An aggregate link: bodies tied together by loops, couplings or mimic joints.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Group {
+    /// Member bodies (= their joints), ascending (parents before children).
+    pub bodies: Vec<usize>,
+    /// The one body every member hangs from (`None`: the world).
+    pub parent: Option<usize>,
+    /// Indices into `model.constraints`.
+    pub constraints: Vec<usize>,
+    /// Kept (independent) equations, as global raw-row indices; the others are redundant.
+    pub rows: Vec<usize>,
+    /// Member joints whose coordinates are independent (`θ_R`), ascending.
+    pub independent: Vec<usize>,
+    /// Member joints whose coordinates are solved from the others, ascending.
+    pub dependent: Vec<usize>,
+    /// Whether embedyn chose `dependent` (the file declared no `independent="false"` in this group).
+    pub chosen: bool,
+    /// cond₁(Y1) at the configuration used to make these choices.
+    pub condition_at_load: f64,
+}
+
+/// Relative tolerance of the rank decisions (on the pivots of a column-pivoted QR).
+const RANK_TOLERANCE: f64 = 1e-9;
+
+fn lca<T: Real>(model: &Model<T>, a: Option<usize>, b: Option<usize>) -> Option<usize> {
+    let (mut a, mut b) = (a?, b?);
+    loop {
+        if a == b {
+            return Some(a);
+        }
+        if a > b {
+            a = model.joints[a].parent?;
+        } else {
+            b = model.joints[b].parent?;
+        }
+    }
+}
+
+/// Bodies from `b` up to (excluding) `top`.
+fn path_to<T: Real>(model: &Model<T>, b: Option<usize>, top: Option<usize>, out: &mut Vec<usize>) {
+    let mut cur = b;
+    while cur != top {
+        let Some(c) = cur else { break };
+        out.push(c);
+        cur = model.joints[c].parent;
+    }
+}
+
+/// Closes a set of bodies under "all members hang from one common body": adds every body between each
+/// member and the members' common ancestor. Returns that ancestor.
+fn close<T: Real>(model: &Model<T>, bodies: &mut Vec<usize>) -> Option<usize> {
+    let mut top = model.joints[bodies[0]].parent;
+    for &b in bodies.iter() {
+        top = lca(model, top, model.joints[b].parent);
+    }
+    let mut all = Vec::new();
+    for &b in bodies.iter() {
+        path_to(model, Some(b), top, &mut all);
+    }
+    all.sort_unstable();
+    all.dedup();
+    *bodies = all;
+    top
+}
+
+/// Builds the groups of a model whose constraints are set. `declared_dependent[j]`: joint `j` was declared
+/// dependent (`independent="false"`, or a mimic joint).
+pub(crate) fn build_groups<T: Real>(model: &Model<T>, declared_dependent: &[bool]) -> Result<Vec<Group>, ModelError> {
+    let n = model.nbodies();
+    // Bodies of each constraint, closed under the common-ancestor rule.
+    let mut sets: Vec<(Vec<usize>, Vec<usize>)> = Vec::new(); // (bodies, constraints)
+    for (ci, c) in model.constraints.iter().enumerate() {
+        let mut bodies = match &c.kind {
+            ConstraintKind::Linear { terms, .. } => terms.iter().map(|&(j, _)| j).collect(),
+            ConstraintKind::Loop(l) => {
+                let top = lca(model, l.predecessor, l.successor);
+                let mut v = Vec::new();
+                path_to(model, l.predecessor, top, &mut v);
+                path_to(model, l.successor, top, &mut v);
+                v
+            }
+        };
+        if bodies.is_empty() {
+            return Err(ModelError::EmptyConstraint { constraint: c.name.clone() });
+        }
+        close(model, &mut bodies);
+        sets.push((bodies, vec![ci]));
+    }
+    // Merge sets sharing a body until none do (overlapping or touching loops become one group).
+    let mut merged = true;
+    while merged {
+        merged = false;
+        'outer: for a in 0..sets.len() {
+            for b in a + 1..sets.len() {
+                if sets[a].0.iter().any(|x| sets[b].0.contains(x)) {
+                    let (bb, cb) = sets.remove(b);
+                    sets[a].0.extend(bb);
+                    sets[a].1.extend(cb);
+                    close(model, &mut sets[a].0);
+                    merged = true;
+                    break 'outer;
+                }
+            }
+        }
+    }
+    sets.sort_by_key(|s| s.0[0]);
+
+    let row_offset = model.constraint_row_offsets();
+    let mut ws = Workspace::new(model);
+    let mut groups = Vec::with_capacity(sets.len());
+    for (bodies, mut constraints) in sets {
+        constraints.sort_unstable();
+        let parent = {
+            let mut b = bodies.clone();
+            close(model, &mut b)
+        };
+        for &b in &bodies {
+            if model.joints[b].joint_type == JointType::Floating {
+                return Err(ModelError::FloatingInGroup { joint: model.joints[b].name.clone() });
+            }
+        }
+        let raw_rows: Vec<usize> = constraints
+            .iter()
+            .flat_map(|&c| row_offset[c]..row_offset[c] + model.constraints[c].raw_rows())
+            .collect();
+        let name = constraints.iter().map(|&c| model.constraints[c].name.as_str()).collect::<Vec<_>>().join(", ");
+        // An assembled, generic configuration of this group: from the neutral configuration, assemble,
+        // then move the group's coordinates away (off any symmetric, possibly singular pose) and assemble
+        // again. If assembly fails, the rank is still taken where we are: never reject for that.
+        let mut q = model.neutral_configuration();
+        let cols: Vec<usize> = bodies.iter().map(|&b| model.joints[b].v_index).collect();
+        assemble(model, &mut ws, &mut q, &bodies, &raw_rows, 60);
+        for (k, &b) in bodies.iter().enumerate() {
+            q[model.joints[b].q_index] += T::from_f64(0.3 * (1.0 + k as f64 * 0.618_033_988_749).sin());
+        }
+        assemble(model, &mut ws, &mut q, &bodies, &raw_rows, 60);
+        let k_mat = group_jacobian(model, &mut ws, &q, &raw_rows, &cols);
+        let kept_local = independent_rows(&k_mat, RANK_TOLERANCE);
+        let rank = kept_local.len();
+        let rows: Vec<usize> = kept_local.iter().map(|&r| raw_rows[r]).collect();
+        let declared: Vec<usize> = bodies.iter().copied().filter(|&b| declared_dependent[b]).collect();
+        let (dependent, chosen) = if declared.is_empty() {
+            let kept = DMatrix::from_fn(rank, cols.len(), |r, c| k_mat[(kept_local[r], c)]);
+            let dep_local = independent_columns(&kept, RANK_TOLERANCE);
+            (dep_local.iter().map(|&c| bodies[c]).collect::<Vec<_>>(), true)
+        } else {
+            if declared.len() != rank {
+                return Err(ModelError::DependentMismatch { group: name, declared: declared.len(), needed: rank });
+            }
+            (declared, false)
+        };
+        let independent: Vec<usize> = bodies.iter().copied().filter(|b| !dependent.contains(b)).collect();
+        let mut group = Group { bodies, parent, constraints, rows, independent, dependent, chosen, condition_at_load: 0.0 };
+        group.condition_at_load = y1_condition(model, &mut ws, &q, &group);
+        if !(group.condition_at_load < 1e10) && rank > 0 {
+            return Err(ModelError::SingularDependentChoice { group: name, condition: group.condition_at_load });
+        }
+        groups.push(group);
+    }
+    let _ = n;
+    Ok(groups)
+}
+
+/// The Jacobian rows `rows` restricted to the columns `cols`, at `q`.
+fn group_jacobian<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, q: &[T], rows: &[usize], cols: &[usize]) -> DMatrix<T> {
+    let zeros = vec![T::zero(); model.nv()];
+    forward_kinematics(model, ws, q, &zeros).expect("sizes match");
+    let mut full = DMatrix::zeros(model.constraint_raw_rows(), model.nv());
+    jacobian(model, ws, &mut full);
+    DMatrix::from_fn(rows.len(), cols.len(), |r, c| full[(rows[r], cols[c])])
+}
+
+/// Damped Newton (minimum-norm steps) on the coordinates of `bodies`' joints until the `rows` residuals
+/// vanish. Returns whether it converged (|r|∞ ≤ 1e-12).
+pub(crate) fn assemble<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, q: &mut [T], bodies: &[usize], rows: &[usize], iterations: usize) -> bool {
+    let cols: Vec<usize> = bodies.iter().map(|&b| model.joints[b].v_index).collect();
+    let mut r = vec![T::zero(); model.constraint_raw_rows()];
+    let zeros = vec![T::zero(); model.nv()];
+    for _ in 0..iterations {
+        forward_kinematics(model, ws, q, &zeros).expect("sizes match");
+        residuals(model, ws, q, &mut r);
+        let rr: Vec<T> = rows.iter().map(|&i| -r[i]).collect();
+        let worst = rr.iter().fold(T::zero(), |m, x| m.max(x.abs()));
+        if worst.to_f64() <= 1e-12 {
+            return true;
+        }
+        let k = group_jacobian(model, ws, q, rows, &cols);
+        let step = solve_least_squares(&k, &rr);
+        // Limit the step so that Newton stays near the branch it started on.
+        let big = step.iter().fold(T::zero(), |m, x| m.max(x.abs()));
+        let scale = if big.to_f64() > 0.5 { T::from_f64(0.5) / big } else { T::one() };
+        for (k, &b) in bodies.iter().enumerate() {
+            q[model.joints[b].q_index] += step[k] * scale;
+        }
+    }
+    false
+}
+
+/// cond₁ of `Y1` (kept rows × dependent columns) at `q`.
+fn y1_condition<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, q: &[T], g: &Group) -> f64 {
+    use crate::linalg::{condition_number_1, lu_in_place};
+    let cols: Vec<usize> = g.dependent.iter().map(|&b| model.joints[b].v_index).collect();
+    if cols.is_empty() {
+        return 1.0;
+    }
+    let y1 = group_jacobian(model, ws, q, &g.rows, &cols);
+    let mut lu = y1.clone();
+    let mut perm = vec![0; cols.len()];
+    if lu_in_place(&mut lu, &mut perm).is_err() {
+        return f64::INFINITY;
+    }
+    let mut scratch = DMatrix::zeros(cols.len(), cols.len());
+    condition_number_1(&y1, &lu, &perm, &mut scratch).to_f64()
+}

@@ -1,0 +1,119 @@
+//! Closed loops and couplings: their equations, their grouping into aggregate links, and the maps of
+//! constraint embedding (the paper's sections 4–6).
+//!
+//! A [`Constraint`] is either *linear* in the joint coordinates (gears, belts, mimic joints: the paper's
+//! Eq. 42, constant `X_G`) or a *loop closure* between two body frames (Eqs. 35–41: `X_G` from the
+//! partitioned constraint Jacobian `Y = [Y1 Y2]`). Constraints that share bodies form a [`Group`], the
+//! paper's aggregate link.
+
+mod closure;
+mod completion;
+mod embedding;
+mod grouping;
+
+pub use closure::{LoopClosure, LoopType};
+pub use grouping::Group;
+pub(crate) use embedding::{embed, GroupWorkspace};
+pub use embedding::SINGULARITY_THRESHOLD;
+pub(crate) use grouping::build_groups;
+pub use completion::{complete_configuration, complete_velocity, constraint_violation};
+
+use crate::Real;
+
+/// One constraint among spanning-tree coordinates.
+#[derive(Clone, Debug)]
+pub struct Constraint<T: Real> {
+    /// The URDF+ element's name (`<loop name>`, `<coupling name>`, or the mimic joint's name).
+    pub name: String,
+    pub kind: ConstraintKind<T>,
+}
+
+#[derive(Clone, Debug)]
+pub enum ConstraintKind<T: Real> {
+    /// `Σ coefficient · q[joint] + offset = 0` over 1-DoF joints (index into `model.joints`).
+    Linear { terms: Vec<(usize, T)>, offset: T },
+    /// A cut joint between two body frames.
+    Loop(LoopClosure<T>),
+}
+
+impl<T: Real> Constraint<T> {
+    /// Number of scalar equations before redundant ones are removed.
+    pub fn raw_rows(&self) -> usize {
+        match &self.kind {
+            ConstraintKind::Linear { .. } => 1,
+            ConstraintKind::Loop(l) => l.kind.rows(),
+        }
+    }
+
+    /// What kind of element it came from, for reports: `"loop"`, `"coupling"`.
+    pub fn is_loop(&self) -> bool {
+        matches!(self.kind, ConstraintKind::Loop(_))
+    }
+
+    pub fn cast<U: Real>(&self) -> Constraint<U> {
+        let c = |x: T| U::from_f64(x.to_f64());
+        Constraint {
+            name: self.name.clone(),
+            kind: match &self.kind {
+                ConstraintKind::Linear { terms, offset } => ConstraintKind::Linear {
+                    terms: terms.iter().map(|&(j, k)| (j, c(k))).collect(),
+                    offset: c(*offset),
+                },
+                ConstraintKind::Loop(l) => ConstraintKind::Loop(l.cast()),
+            },
+        }
+    }
+}
+
+use crate::algorithms::Workspace;
+use crate::model::Model;
+use nalgebra::DMatrix;
+
+/// Position residuals of every constraint (raw rows, in constraint order), from `ws.world_placement`
+/// (run [`crate::forward_kinematics`] first) and `q` (for the linear ones).
+pub fn residuals<T: Real>(model: &Model<T>, ws: &Workspace<T>, q: &[T], out: &mut [T]) {
+    let mut row = 0;
+    for c in &model.constraints {
+        let n = c.raw_rows();
+        match &c.kind {
+            ConstraintKind::Linear { terms, offset } => {
+                out[row] = terms.iter().fold(*offset, |s, &(j, k)| s + k * q[model.joints[j].q_index]);
+            }
+            ConstraintKind::Loop(l) => l.residual(ws, &mut out[row..row + n]),
+        }
+        row += n;
+    }
+}
+
+/// The constraint Jacobian over all spanning velocities (raw rows × nv), from `ws.world_placement`.
+pub fn jacobian<T: Real>(model: &Model<T>, ws: &Workspace<T>, out: &mut DMatrix<T>) {
+    let mut row = 0;
+    for c in &model.constraints {
+        match &c.kind {
+            ConstraintKind::Linear { terms, .. } => {
+                for col in 0..out.ncols() {
+                    out[(row, col)] = T::zero();
+                }
+                for &(j, k) in terms {
+                    out[(row, model.joints[j].v_index)] += k;
+                }
+            }
+            ConstraintKind::Loop(l) => l.jacobian(model, ws, out, row),
+        }
+        row += c.raw_rows();
+    }
+}
+
+/// `J̇ v` for every constraint (raw rows), from the kinematics and the velocity-product accelerations in
+/// `ws` (see [`crate::algorithms::bias_accelerations`]).
+pub fn bias<T: Real>(model: &Model<T>, ws: &Workspace<T>, out: &mut [T]) {
+    let mut row = 0;
+    for c in &model.constraints {
+        let n = c.raw_rows();
+        match &c.kind {
+            ConstraintKind::Linear { .. } => out[row] = T::zero(),
+            ConstraintKind::Loop(l) => l.bias(ws, &mut out[row..row + n]),
+        }
+        row += n;
+    }
+}
