@@ -206,45 +206,27 @@ fn bundled_models_load_without_warnings() {
     }
 }
 
-/// Until constraint embedding lands, a model with loops, couplings or mimic joints is refused with a
-/// message naming the element, never simulated as its bare spanning tree. GRBDA's files without any
-/// constraint (their `independent` attributes on free joints are ignored, CONTRACT §1) load as trees.
+/// GRBDA's own URDF+ files load unchanged (CONTRACT §1), with the groups and independent coordinates
+/// their authors declared; `independent` on joints outside any loop or coupling is ignored.
 #[test]
-fn grbda_files_load_or_name_the_unsupported_constraint() {
+fn grbda_files_load_unchanged() {
+    // (file, nv, independent nv, groups)
     let expectations = [
-        ("double_pendulum.urdf", None),
-        ("tello_humanoid.urdf", None),
-        ("tello_legs.urdf", None),
-        ("four_bar.urdf", Some("loop \"loop1\"")),
-        ("six_bar.urdf", Some("loop \"")),
-        ("planar_leg_linkage.urdf", Some("loop \"")),
-        (
-            "revolute_rotor_chain.urdf",
-            Some("coupling \"transmission1\""),
-        ),
-        ("mini_cheetah.urdf", Some("coupling \"")),
-        ("mit_humanoid.urdf", Some("coupling \"")),
-        ("mit_humanoid_leg.urdf", Some("coupling \"")),
-        ("jvrc1_humanoid.urdf", Some("")),
+        ("double_pendulum.urdf", 2, 2, 0),
+        ("four_bar.urdf", 3, 1, 1),
+        ("planar_leg_linkage.urdf", 4, 2, 1),
+        ("six_bar.urdf", 5, 3, 1),
+        ("revolute_rotor_chain.urdf", 6, 3, 3),
+        ("mit_humanoid_leg.urdf", 10, 5, 4),
+        ("mit_humanoid.urdf", 42, 24, 16),
+        ("mini_cheetah.urdf", 30, 18, 12),
+        ("jvrc1_humanoid.urdf", 63, 38, 25),
+        ("tello_legs.urdf", 20, 20, 0),
+        ("tello_humanoid.urdf", 42, 42, 0),
     ];
-    for (file, expected) in expectations {
+    for (file, nv, independent_nv, groups) in expectations {
         let path = repo_path(&format!("tests/data/grbda/{file}"));
-        let result = load(&path).and_then(|l| l.model::<f64>(&ModelOptions::default()));
-        match (result, expected) {
-            (Ok(m), None) => assert!(m.nv() > 0, "{file}"),
-            (Err(e), Some(needle)) => {
-                let msg = e.to_string();
-                assert!(
-                    msg.contains(file)
-                        && msg.contains(needle)
-                        && msg.contains("not supported by this version"),
-                    "{file}: {msg}"
-                );
-            }
-            (Ok(_), Some(_)) => {
-                panic!("{file}: loaded, but its constraints cannot be simulated yet")
-            }
-            (Err(e), None) => panic!("{file}: {e}"),
-        }
+        let model = load(&path).and_then(|l| l.model::<f64>(&ModelOptions::default())).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!((model.nv(), model.independent_nv(), model.groups.len()), (nv, independent_nv, groups), "{file}");
     }
 }

@@ -199,20 +199,24 @@ pub fn build_model<T: Real>(robot: &Robot, options: &ModelOptions) -> Result<Mod
         }
         body_parent.push(p.parent);
     }
-    let link_frames: Vec<(Option<usize>, Transform<T>)> = link_body.iter().map(|x| x.expect("reachable")).collect();
+    let link_frames: Vec<(Option<usize>, Transform<T>)> =
+        link_body.iter().map(|x| x.expect("reachable")).collect();
     add_constraints(robot, &link_frames, &joint_body, &body_parent, &mut builder)?;
     builder.build().map_err(|e| {
         let joint = match &e {
             ModelError::NoInertiaAboutAxis { joint, .. } => {
                 robot.joints.iter().position(|j| &j.name == joint)
             }
-            ModelError::DependentMismatch { group, .. } | ModelError::SingularDependentChoice { group, .. } => {
+            ModelError::DependentMismatch { group, .. }
+            | ModelError::SingularDependentChoice { group, .. } => {
                 return LoadError::new(constraint_location(robot, group), e.to_string());
             }
             ModelError::EmptyConstraint { constraint } => {
                 return LoadError::new(constraint_location(robot, constraint), e.to_string());
             }
-            ModelError::FloatingInGroup { joint } => robot.joints.iter().position(|j| &j.name == joint),
+            ModelError::FloatingInGroup { joint } => {
+                robot.joints.iter().position(|j| &j.name == joint)
+            }
             _ => None,
         };
         model_error(robot, &joint, e)
@@ -229,7 +233,11 @@ fn constraint_location(robot: &Robot, names: &str) -> Location {
         return Location::new(&robot.source, c.line, format!("coupling \"{}\"", c.name));
     }
     if let Some(j) = robot.joints.iter().find(|j| j.name == first) {
-        return Location::new(&robot.source, j.line, format!("joint \"{}\" <mimic>", j.name));
+        return Location::new(
+            &robot.source,
+            j.line,
+            format!("joint \"{}\" <mimic>", j.name),
+        );
     }
     Location::new(&robot.source, None, format!("constraints {names}"))
 }
@@ -246,7 +254,11 @@ fn path(body_parent: &[Option<usize>], b: Option<usize>, top: Option<usize>) -> 
     out
 }
 
-fn common_ancestor(body_parent: &[Option<usize>], a: Option<usize>, b: Option<usize>) -> Option<usize> {
+fn common_ancestor(
+    body_parent: &[Option<usize>],
+    a: Option<usize>,
+    b: Option<usize>,
+) -> Option<usize> {
     let mut ancestors = Vec::new();
     let mut cur = a;
     while let Some(c) = cur {
@@ -288,7 +300,11 @@ fn add_constraints<T: Real>(
             LoopKind::Spherical => LoopType::Spherical,
             LoopKind::Fixed => LoopType::Fixed,
         };
-        let axis = Vector3::new(T::from_f64(l.axis[0]), T::from_f64(l.axis[1]), T::from_f64(l.axis[2]));
+        let axis = Vector3::new(
+            T::from_f64(l.axis[0]),
+            T::from_f64(l.axis[1]),
+            T::from_f64(l.axis[2]),
+        );
         let closure = LoopClosure::new(
             kind,
             pb,
@@ -297,7 +313,10 @@ fn add_constraints<T: Real>(
             spose.compose(&origin_transform(&l.successor.origin)),
             axis,
         );
-        builder.add_constraint(Constraint { name: l.name.clone(), kind: ConstraintKind::Loop(closure) });
+        builder.add_constraint(Constraint {
+            name: l.name.clone(),
+            kind: ConstraintKind::Loop(closure),
+        });
     }
     for c in &robot.couplings {
         let pb = link_frames[c.predecessor].0;
@@ -316,7 +335,13 @@ fn add_constraints<T: Real>(
                 "no moving joint lies between the two links: the coupling relates nothing",
             ));
         }
-        builder.add_constraint(Constraint { name: c.name.clone(), kind: ConstraintKind::Linear { terms, offset: T::zero() } });
+        builder.add_constraint(Constraint {
+            name: c.name.clone(),
+            kind: ConstraintKind::Linear {
+                terms,
+                offset: T::zero(),
+            },
+        });
     }
     for (j, joint) in robot.joints.iter().enumerate() {
         if joint.mimics.is_empty() {
@@ -324,14 +349,24 @@ fn add_constraints<T: Real>(
         }
         let loc = |line| Location::new(path_of, line, format!("joint \"{}\" <mimic>", joint.name));
         let Some(body) = joint_body[j] else {
-            return Err(LoadError::new(loc(joint.line), "a fixed joint cannot mimic another joint"));
+            return Err(LoadError::new(
+                loc(joint.line),
+                "a fixed joint cannot mimic another joint",
+            ));
         };
         let mut terms = vec![(body, T::one())];
         let mut offset = T::zero();
         for m in &joint.mimics {
-            let driver = robot.joints.iter().position(|d| d.name == m.joint).expect("checked at parse time");
+            let driver = robot
+                .joints
+                .iter()
+                .position(|d| d.name == m.joint)
+                .expect("checked at parse time");
             let Some(db) = joint_body[driver] else {
-                return Err(LoadError::new(loc(m.line), format!("the driving joint \"{}\" is fixed", m.joint)));
+                return Err(LoadError::new(
+                    loc(m.line),
+                    format!("the driving joint \"{}\" is fixed", m.joint),
+                ));
             };
             if db == body {
                 return Err(LoadError::new(loc(m.line), "a joint cannot mimic itself"));
@@ -339,7 +374,10 @@ fn add_constraints<T: Real>(
             terms.push((db, -T::from_f64(m.multiplier)));
             offset -= T::from_f64(m.offset);
         }
-        builder.add_constraint(Constraint { name: joint.name.clone(), kind: ConstraintKind::Linear { terms, offset } });
+        builder.add_constraint(Constraint {
+            name: joint.name.clone(),
+            kind: ConstraintKind::Linear { terms, offset },
+        });
         builder.declare_dependent(body);
     }
     for (j, joint) in robot.joints.iter().enumerate() {
@@ -372,4 +410,3 @@ fn model_error(robot: &Robot, joint: &Option<usize>, e: ModelError) -> LoadError
     };
     LoadError::new(location, message)
 }
-

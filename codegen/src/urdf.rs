@@ -4,7 +4,9 @@
 //! `<mimic>` children (a differential).
 
 use crate::error::{LoadError, Location, Warning};
-use crate::ir::{Coupling, Inertial, Joint, JointKind, Link, Loop, LoopFrame, LoopKind, Mimic, Origin, Robot};
+use crate::ir::{
+    Coupling, Inertial, Joint, JointKind, Link, Loop, LoopFrame, LoopKind, Mimic, Origin, Robot,
+};
 use roxmltree::{Document, Node};
 use std::collections::HashMap;
 use std::path::Path;
@@ -383,7 +385,13 @@ impl<'a, 'input> Parser<'a, 'input> {
     }
 
     /// `<predecessor link>` or `<successor link>` of a loop or coupling.
-    fn named_link(&self, node: Node<'a, 'input>, tag: &str, what: &str, links: &HashMap<String, usize>) -> Result<(usize, Node<'a, 'input>), LoadError> {
+    fn named_link(
+        &self,
+        node: Node<'a, 'input>,
+        tag: &str,
+        what: &str,
+        links: &HashMap<String, usize>,
+    ) -> Result<(usize, Node<'a, 'input>), LoadError> {
         let Some(n) = node.children().find(|n| n.has_tag_name(tag)) else {
             return self.err(node, what, format!("missing <{tag}>"));
         };
@@ -392,7 +400,11 @@ impl<'a, 'input> Parser<'a, 'input> {
         };
         match links.get(l) {
             Some(&i) => Ok((i, n)),
-            None => self.err(n, format!("{what} <{tag}>"), format!("names link \"{l}\", which does not exist")),
+            None => self.err(
+                n,
+                format!("{what} <{tag}>"),
+                format!("names link \"{l}\", which does not exist"),
+            ),
         }
     }
 
@@ -410,13 +422,21 @@ impl<'a, 'input> Parser<'a, 'input> {
         };
         let (pl, pn) = self.named_link(node, "predecessor", &what, links)?;
         let (sl, sn) = self.named_link(node, "successor", &what, links)?;
-        let predecessor = LoopFrame { link: pl, origin: self.origin(pn, &format!("{what} <predecessor>"))? };
-        let successor = LoopFrame { link: sl, origin: self.origin(sn, &format!("{what} <successor>"))? };
+        let predecessor = LoopFrame {
+            link: pl,
+            origin: self.origin(pn, &format!("{what} <predecessor>"))?,
+        };
+        let successor = LoopFrame {
+            link: sl,
+            origin: self.origin(sn, &format!("{what} <successor>"))?,
+        };
         let axis = match node.children().find(|n| n.has_tag_name("axis")) {
             None => [1.0, 0.0, 0.0],
             Some(a) => {
                 let axis = self.vec3(a, "xyz", Some([1.0, 0.0, 0.0]), &format!("{what} <axis>"))?;
-                if matches!(kind, LoopKind::Revolute | LoopKind::Prismatic) && axis.iter().all(|&x| x == 0.0) {
+                if matches!(kind, LoopKind::Revolute | LoopKind::Prismatic)
+                    && axis.iter().all(|&x| x == 0.0)
+                {
                     return self.err(a, format!("{what} <axis>"), "the loop axis is zero");
                 }
                 axis
@@ -425,7 +445,14 @@ impl<'a, 'input> Parser<'a, 'input> {
         if pl == sl {
             return self.err(node, what, "predecessor and successor are the same link");
         }
-        Ok(Loop { name, kind, predecessor, successor, axis, line: self.line(node) })
+        Ok(Loop {
+            name,
+            kind,
+            predecessor,
+            successor,
+            axis,
+            line: self.line(node),
+        })
     }
 
     fn coupling(&self, node: Node, links: &HashMap<String, usize>) -> Result<Coupling, LoadError> {
@@ -440,7 +467,13 @@ impl<'a, 'input> Parser<'a, 'input> {
         if predecessor == successor {
             return self.err(node, what, "predecessor and successor are the same link");
         }
-        Ok(Coupling { name, predecessor, successor, ratio, line: self.line(node) })
+        Ok(Coupling {
+            name,
+            predecessor,
+            successor,
+            ratio,
+            line: self.line(node),
+        })
     }
 
     fn origin(&self, parent: Node, what: &str) -> Result<Origin, LoadError> {

@@ -367,8 +367,9 @@ def report(path):
     groups = {}
     for c in cons:
         groups.setdefault(find(c[3][0].name), []).append(c)
-    ok = True
+    # long listings (the rotor chains) print the first MAXLINES items and a summary of the rest
     MAXLINES = 4
+    quiet_n, quiet_res = 0, 0.0
     for ci, c in enumerate(cons):
         kind, name, rows, js, res, obj = c
         quiet = len(cons) > 2 * MAXLINES and ci >= MAXLINES
@@ -378,22 +379,39 @@ def report(path):
             dpos = np.linalg.norm(psc - ppc)
             drot = np.max(np.abs(Rpc - Rsc))
             tres = np.max(np.abs(res))
-            if not quiet:
-                print("  loop %-22s %-9s pred %-14s succ %-14s |p_s - p_p| = %.1e, max|R_p - R_s| = %.1e, "
-                  "residual %.1e; Jacobian %d rows x %d, rank %d"
-                  % (name, obj["type"], obj["pred"], obj["succ"], dpos, drot, tres, rows.shape[0], rows.shape[1],
-                     rank(rows)))
+            line = ("  loop %-22s %-9s pred %-14s succ %-14s |p_s - p_p| = %.1e, max|R_p - R_s| = %.1e, "
+                    "residual %.1e; velocity Jacobian %d rows x %d, rank %d"
+                    % (name, obj["type"], obj["pred"], obj["succ"], dpos, drot, tres, rows.shape[0],
+                       rows.shape[1], rank(rows)))
             if tres > TOL_CLOSE or dpos > TOL_CLOSE:
                 fail("loop %s does not close at q = 0" % name)
+            # cross-check the analytic velocity Jacobian against central differences of the position
+            # residual over the 1-dof joints: both must span the same row space
+            fd = np.zeros((len(res), m.nv))
+            for J in js:
+                if J.nv != 1:
+                    continue
+                qp, qm = {J.name: 1e-6}, {J.name: -1e-6}
+                fd[:, J.col] = (m.loop_residual(obj, qp) - m.loop_residual(obj, qm)) / 2e-6
+            if rank(np.vstack([rows, fd]), 1e-7) != rank(rows) or rank(fd, 1e-7) != rank(rows):
+                fail("loop %s: analytic Jacobian disagrees with finite differences" % name)
         else:
             tres = abs(res[0])
-            if not quiet:
-                print("  %-8s %-22s joints {%s}: residual at q = 0 %.1e, rank 1"
-                  % (kind, name, ", ".join(J.name for J in js), tres))
+            line = ("  %-8s %-22s joints {%s}: residual at q = 0 %.1e, rank %d"
+                    % (kind, name, ", ".join(J.name for J in js), tres, rank(rows)))
             if tres > TOL_CLOSE:
                 fail("%s %s violated at q = 0" % (kind, name))
+        if quiet:
+            quiet_n += 1
+            quiet_res = max(quiet_res, tres)
+        else:
+            print(line)
+    if quiet_n:
+        print("  ... %d more constraints of the same kind, max residual at q = 0 %.1e" % (quiet_n, quiet_res))
     sum_rank = 0
-    for gi, (key, cs) in enumerate(sorted(groups.items(), key=lambda kv: min(J.col for c in kv[1] for J in c[3]))):
+    glist = sorted(groups.items(), key=lambda kv: min(J.col for c in kv[1] for J in c[3]))
+    quiet_n = 0
+    for gi, (key, cs) in enumerate(glist):
         js = sorted({J.name: J for c in cs for J in c[3]}.values(), key=lambda J: J.col)
         K = np.vstack([c[2] for c in cs])
         cols = [J.col for J in js]
@@ -405,14 +423,21 @@ def report(path):
         s = np.linalg.svd(Kd, compute_uv=False) if Kd.size else np.array([0.0])
         smin = s[min(len(s), Kd.shape[1]) - 1] if Kd.size else 0.0
         sum_rank += r
-        print("  group %d: bodies {%s}; %d constraints (%s), %d rows, rank %d; dependent {%s}: rank %d, "
-              "sigma_min %.3g, cond %.3g"
-              % (gi + 1, ", ".join(J.child for J in js), len(cs), ", ".join(c[1] for c in cs), K.shape[0], r,
-                 ", ".join(J.name for J in dep), rd, smin, s[0] / smin if smin > 0 else float("inf")))
+        line = ("  group %d: bodies {%s}; %d constraint%s (%s), %d rows, rank %d; dependent {%s}: rank %d, "
+                "sigma_min %.3g, cond %.3g"
+                % (gi + 1, ", ".join(J.child for J in js), len(cs), "" if len(cs) == 1 else "s",
+                   ", ".join(c[1] for c in cs), K.shape[0], r, ", ".join(J.name for J in dep), rd, smin,
+                   s[0] / smin if smin > 0 else float("inf")))
+        if len(glist) > 2 * MAXLINES and gi >= MAXLINES:
+            quiet_n += 1
+        else:
+            print(line)
         assert r == r_group_cols
         if len(dep) != r or rd != r:
             fail("group %d: %d dependent joints, constraint rank %d, rank of dependent columns %d"
                  % (gi + 1, len(dep), r, rd))
+    if quiet_n:
+        print("  ... %d more groups of the same kind (all checked)" % quiet_n)
     n_dep = sum(1 for J in m.moving if m.dependent(J) and any(J in c[3] for c in cons))
     print("  nv (spanning) = %d, constraint rank = %d, declared dependent = %d -> independent DoF = %d"
           % (m.nv, sum_rank, n_dep, m.nv - sum_rank))
@@ -427,14 +452,15 @@ def check_four_bar_map(dirname):
     t = Model(os.path.join(dirname, "four_bar_terminal.urdf"))
     i = Model(os.path.join(dirname, "four_bar_internal.urdf"))
     print("== four_bar_terminal <-> four_bar_internal coordinate map")
-    worst_res, worst_pose = 0.0, 0.0
-    q = {}
-    for qc in (0.0, 0.3, 0.9, 1.7, 2.6, -0.5, -1.4, -2.5):
-        q = dict(q)
-        q.setdefault("coupler_joint", 0.0)
-        q.setdefault("rocker_joint", 0.0)
-        q["crank_joint"], q["tip_joint"] = qc, 0.4
-        q = t.solve(q, ["coupler_joint", "rocker_joint"])
+    worst_res, worst_pose, worst_vel = 0.0, 0.0, 0.0
+    q = {"crank_joint": 0.0, "coupler_joint": 0.0, "tip_joint": 0.4, "rocker_joint": 0.0}
+    for qc in (0.0, 0.3, 0.9, 1.7, 2.6, 3.1, 0.0, -0.5, -1.4, -2.5, -3.1):
+        # continuation in steps of at most 0.05 rad keeps the assembly branch of q = 0
+        steps = max(1, int(math.ceil(abs(qc - q["crank_joint"]) / 0.05)))
+        start = q["crank_joint"]
+        for k in range(1, steps + 1):
+            q["crank_joint"] = start + (qc - start) * k / steps
+            q = t.solve(q, ["coupler_joint", "rocker_joint"])
         rt = np.max(np.abs(t.loop_residual(t.loops[0], q)))
         qi = {"crank_joint": q["crank_joint"], "coupler_joint": q["coupler_joint"], "tip_joint": q["tip_joint"],
               "rocker_joint": q["rocker_joint"] - q["crank_joint"] - q["coupler_joint"]}
@@ -445,12 +471,20 @@ def check_four_bar_map(dirname):
             ct = Tt[link][1] + Tt[link][0] @ floats(t.links[link].find("inertial/origin").get("xyz"))
             ci = Ti[link][1] + Ti[link][0] @ floats(i.links[link].find("inertial/origin").get("xyz"))
             worst_pose = max(worst_pose, np.max(np.abs(ct - ci)), np.max(np.abs(Tt[link][0] - Ti[link][0])))
+        # velocities: v(int) = T v(term) maps the terminal file's admissible velocities onto the
+        # internal file's (K_int T v = 0 for every v with K_term v = 0)
+        Tm = np.array([[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [-1, -1, 0, 1.0]])
+        assert [J.name for J in t.moving] == [J.name for J in i.moving] == \
+            ["crank_joint", "coupler_joint", "tip_joint", "rocker_joint"]
+        Kt, Ki = t.loop_jacobian(t.loops[0], q), i.loop_jacobian(i.loops[0], qi)
+        N = np.linalg.svd(Kt)[2][rank(Kt):].T  # null space of K_term
+        worst_vel = max(worst_vel, np.max(np.abs(Ki @ Tm @ N)))
         worst_res = max(worst_res, rt, ri)
         print("  crank %+.2f: coupler %+.6f, rocker(term) %+.6f -> rocker(int) %+.6f; residuals %.1e / %.1e"
               % (qc, q["coupler_joint"], q["rocker_joint"], qi["rocker_joint"], rt, ri))
-    print("  max loop residual %.1e, max difference of body orientations and centres of mass %.1e"
-          % (worst_res, worst_pose))
-    if worst_res > 1e-12 or worst_pose > 1e-12:
+    print("  max loop residual %.1e, max difference of body orientations and centres of mass %.1e, "
+          "max |K_int T null(K_term)| %.1e" % (worst_res, worst_pose, worst_vel))
+    if worst_res > 1e-12 or worst_pose > 1e-12 or worst_vel > 1e-12:
         fail("four-bar coordinate map")
 
 

@@ -16,7 +16,8 @@ import math
 import os
 import sys
 
-from urdfgen import Model, along, ang, circles, fmt, norm, sub, to_local
+sys.dont_write_bytecode = True  # keep models/loops free of __pycache__
+from urdfgen import Model, along, ang, circles, fmt, norm, sub  # noqa: E402
 
 Y = (0, 1, 0)
 
@@ -278,17 +279,18 @@ def six_bar():
 def parallel_gripper():
     m = Model("parallel_gripper", (
         "  parallel_gripper: a hand on a wrist joint (about x) with two prismatic fingers. The finger axes\n"
-        "  are mirrored (+y and -y), so finger2 mimics finger1 with multiplier 1: both open together.\n"
-        "  Spanning joints in depth-first order: wrist, finger1, finger2 (dependent). 2 DoF.\n"
+        "  are mirrored (+y and -y), so finger2_joint mimics finger1_joint with multiplier 1 (offset 0): both\n"
+        "  fingers open together. Spanning joints in depth-first order: wrist, finger1_joint,\n"
+        "  finger2_joint (dependent). 2 DoF.\n"
     ))
     m.link("base", comment="fixed root, frame only")
     m.link("hand", mass=0.4, com=(0, 0, -0.05), inertia=(6e-4, 3e-4, 4.5e-4, 0, 0, 1e-5))
     m.link("finger1", mass=0.05, com=(0, -0.003, -0.02), inertia=(8.3e-6, 7.1e-6, 2.1e-6, 0, 0, 0))
     m.link("finger2", mass=0.05, com=(0, 0.003, -0.02), inertia=(8.3e-6, 7.1e-6, 2.1e-6, 0, 0, 0))
     m.joint("wrist", "revolute", "base", "hand", (0, 0, 0), (0.2, 0, 0), (1, 0, 0))
-    m.joint("finger1", "prismatic", "hand", "finger1", (0, 0.02, -0.1), (0, 0, 0), (0, 1, 0), independent=True)
-    m.joint("finger2", "prismatic", "hand", "finger2", (0, -0.02, -0.1), (0, 0, 0), (0, -1, 0),
-            independent=False, mimics=[("finger1", 1.0, 0.0)])
+    m.joint("finger1_joint", "prismatic", "hand", "finger1", (0, 0.02, -0.1), (0, 0, 0), (0, 1, 0), independent=True)
+    m.joint("finger2_joint", "prismatic", "hand", "finger2", (0, -0.02, -0.1), (0, 0, 0), (0, -1, 0),
+            independent=False, mimics=[("finger1_joint", 1.0, 0.0)])
     return m
 
 
@@ -318,8 +320,10 @@ def biped_floating():
         "  hip_roll (x), hip_pitch (y) driven by a geared rotor on the hip-roll link (coupling ratio 6),\n"
         "  a knee driven by a four-bar (thigh = ground, knee crank, rod, shank; loop between the rod end and\n"
         "  a lever on the shank), and an ankle pitch (y). Independent per leg: hip_yaw, hip_roll, hip_pitch,\n"
-        "  knee_crank, ankle; dependent: hip_pitch_rotor, knee_rod, knee. nq = 7 + 16, nv = 6 + 16,\n"
-        "  independent nv = 6 + 10. Total mass 19.9 kg.\n"
+        "  knee_crank_joint, ankle; dependent: hip_pitch_rotor_joint, knee_rod_joint, knee.\n"
+        "  Spanning joints in depth-first order: floating_base, then per leg (l_, then r_) hip_yaw,\n"
+        "  hip_roll, hip_pitch_rotor_joint, hip_pitch, knee_crank_joint, knee_rod_joint, knee, ankle.\n"
+        "  nq = 7 + 16, nv = 6 + 16, independent nv = 6 + 10. Total mass 19.9 kg.\n"
     ))
     m.link("world", comment="world frame: no inertial")
     m.link("pelvis", mass=8.0, com=(0, 0, 0.05), inertia=(0.075, 0.042, 0.087, 2e-4, 1e-3, -1e-4))
@@ -349,9 +353,9 @@ def biped_floating():
                 independent=True)
         m.coupling(s + "hip_pitch_gear", s + "thigh", s + "hip_pitch_rotor", 6.0,
                    comment="rotor = 6 * hip_pitch (nearest common ancestor: hip_roll_link)")
-        m.joint(s + "knee_crank", "revolute", s + "thigh", s + "knee_crank", (KN_C0[0], 0, KN_C0[1]),
+        m.joint(s + "knee_crank_joint", "revolute", s + "thigh", s + "knee_crank", (KN_C0[0], 0, KN_C0[1]),
                 (0, KN_PSI_CRANK, 0), Y, independent=True)
-        m.joint(s + "knee_rod", "revolute", s + "knee_crank", s + "knee_rod", (KN_LCRANK, 0, 0),
+        m.joint(s + "knee_rod_joint", "revolute", s + "knee_crank", s + "knee_rod", (KN_LCRANK, 0, 0),
                 (0, psi_rod - KN_PSI_CRANK, 0), Y, independent=False)
         m.joint(s + "knee", "revolute", s + "thigh", s + "shank", (0, 0, -KN_THIGH), (0, 0, 0), Y,
                 independent=False)

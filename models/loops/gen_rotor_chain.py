@@ -17,7 +17,8 @@ order) is rotor_joint_0, joint_0, rotor_joint_1, joint_1, ... ; the rotor joints
 import os
 import sys
 
-from urdfgen import Model
+sys.dont_write_bytecode = True  # keep models/loops free of __pycache__
+from urdfgen import Model  # noqa: E402
 
 LINK = dict(mass=0.5, com=(0.05, 0, 0), inertia=(3.4e-5, 4.4e-4, 4.4e-4, 2e-6, -1e-6, 5e-7))
 ROTOR_Z = dict(mass=0.1, com=(0, 0, 0), inertia=(1.3e-5, 1.3e-5, 2e-5, 0, 0, 0))

@@ -172,7 +172,11 @@ pub enum ModelError {
     #[error("joint `{joint}`: a floating joint cannot be part of a loop or coupling")]
     FloatingInGroup { joint: String },
     #[error("{group}: {declared} joint(s) are declared dependent (independent=\"false\" or <mimic>), but the constraints remove {needed} degree(s) of freedom")]
-    DependentMismatch { group: String, declared: usize, needed: usize },
+    DependentMismatch {
+        group: String,
+        declared: usize,
+        needed: usize,
+    },
     #[error("{group}: the dependent joints cannot be solved from the independent ones (cond(Y1) = {condition:e} at a generic assembled configuration); declare other joints independent=\"false\"")]
     SingularDependentChoice { group: String, condition: f64 },
 }
@@ -355,12 +359,17 @@ impl<T: Real> Model<T> {
 
     /// The independent joints in joint order (the order of `qdd_independent` and of the reduced `M`).
     pub fn independent_joints(&self) -> Vec<usize> {
-        (0..self.joints.len()).filter(|&j| self.is_independent(j)).collect()
+        (0..self.joints.len())
+            .filter(|&j| self.is_independent(j))
+            .collect()
     }
 
     /// Number of independent velocity coordinates.
     pub fn independent_nv(&self) -> usize {
-        self.independent_joints().iter().map(|&j| self.joints[j].nv()).sum()
+        self.independent_joints()
+            .iter()
+            .map(|&j| self.joints[j].nv())
+            .sum()
     }
 }
 

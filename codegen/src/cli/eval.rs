@@ -3,7 +3,11 @@
 use super::samples::{vector, Samples};
 use super::{Algo, CliError, Scalar};
 use crate::{Loaded, ModelOptions};
-use embedyn_runtime::{aba, crba, rnea, JointType, Model, Real, Workspace};
+use embedyn_runtime::constraints::constraint_violation;
+use embedyn_runtime::{
+    aba, crba, embedding_map, reduced_mass_matrix, rnea, DynamicsError, JointType, Model, Real,
+    Workspace,
+};
 use serde_json::{json, Value};
 
 pub fn eval(
@@ -14,8 +18,22 @@ pub fn eval(
     input: &str,
 ) -> Result<Value, CliError> {
     let samples = Samples::parse(input)?;
+    // Consistency with the constraints is judged in f64 whatever the scalar (1e-9 is below f32's
+    // resolution of typical angles).
+    let model64 = loaded.model::<f64>(options)?;
+    if model64.has_constraints() {
+        let mut ws = Workspace::new(&model64);
+        for (i, s) in samples.samples.iter().enumerate() {
+            let q = vector(s, i, "q", model64.nq())?;
+            let v = match algo {
+                Algo::Crba => vec![0.0; model64.nv()],
+                _ => vector(s, i, "v", model64.nv())?,
+            };
+            check_consistent(&model64, &mut ws, &q, &v, i)?;
+        }
+    }
     match scalar {
-        Scalar::F64 => eval_in::<f64>(&loaded.model(options)?, algo, &samples),
+        Scalar::F64 => eval_in::<f64>(&model64, algo, &samples),
         Scalar::F32 => eval_in::<f32>(&loaded.model(options)?, algo, &samples),
     }
 }
@@ -23,49 +41,57 @@ pub fn eval(
 fn eval_in<T: Real>(model: &Model<T>, algo: Algo, samples: &Samples) -> Result<Value, CliError> {
     let mut ws = Workspace::new(model);
     let (nq, nv) = (model.nq(), model.nv());
+    let independent: Vec<usize> = model
+        .independent_joints()
+        .iter()
+        .flat_map(|&j| {
+            let joint = &model.joints[j];
+            joint.v_index..joint.v_index + joint.nv()
+        })
+        .collect();
+    let pick = |x: &[f64]| -> Vec<f64> { independent.iter().map(|&i| x[i]).collect() };
     let mut out = Vec::with_capacity(samples.samples.len());
     for (i, s) in samples.samples.iter().enumerate() {
+        let at = |e: DynamicsError| CliError(format!("sample {i}: {e}"));
         let q = vector(s, i, "q", nq)?;
         check_quaternions(model, &q, i)?;
         let q = cast::<T>(&q);
+        let v = match algo {
+            Algo::Crba => vec![T::zero(); nv],
+            _ => cast::<T>(&vector(s, i, "v", nv)?),
+        };
         let value = match algo {
             Algo::Aba => {
-                let v = cast::<T>(&vector(s, i, "v", nv)?);
                 let tau = cast::<T>(&vector(s, i, "tau", nv)?);
-                let qdd = finite(
-                    aba(model, &mut ws, &q, &v, &tau)
-                        .map_err(|e| CliError(format!("sample {i}: {e}")))?,
-                    i,
-                    "qdd",
-                )?;
-                json!({ "qdd": qdd, "qdd_independent": qdd })
+                let qdd = finite(aba(model, &mut ws, &q, &v, &tau).map_err(at)?, i, "qdd")?;
+                json!({ "qdd": qdd, "qdd_independent": pick(&qdd) })
             }
             Algo::Rnea => {
-                let v = cast::<T>(&vector(s, i, "v", nv)?);
                 let qdd = cast::<T>(&vector(s, i, "qdd", nv)?);
-                let tau = finite(
-                    rnea(model, &mut ws, &q, &v, &qdd)
-                        .map_err(|e| CliError(format!("sample {i}: {e}")))?,
-                    i,
-                    "tau",
-                )?;
-                json!({ "tau": tau, "tau_independent": tau })
+                let tau = finite(rnea(model, &mut ws, &q, &v, &qdd).map_err(at)?, i, "tau")?;
+                let tau_independent = if model.has_constraints() {
+                    // Only Xᵀ τ acts on the independent coordinates.
+                    let x = embedding_map(model, &mut ws, &q).map_err(at)?;
+                    (0..x.ncols())
+                        .map(|c| (0..nv).map(|r| x[(r, c)].to_f64() * tau[r]).sum())
+                        .collect()
+                } else {
+                    tau.clone()
+                };
+                json!({ "tau": tau, "tau_independent": tau_independent })
             }
             Algo::Crba => {
-                let m =
-                    crba(model, &mut ws, &q).map_err(|e| CliError(format!("sample {i}: {e}")))?;
-                let rows: Vec<Vec<f64>> = (0..nv)
-                    .map(|r| (0..nv).map(|c| m[(r, c)].to_f64()).collect())
+                let m = if model.has_constraints() {
+                    reduced_mass_matrix(model, &mut ws, &q).map_err(at)?
+                } else {
+                    crba(model, &mut ws, &q).map_err(at)?.clone()
+                };
+                let n = m.nrows();
+                let flat: Vec<T> = m.iter().copied().collect();
+                finite(&flat, i, "M")?;
+                let rows: Vec<Vec<f64>> = (0..n)
+                    .map(|r| (0..n).map(|c| m[(r, c)].to_f64()).collect())
                     .collect();
-                finite(
-                    &rows
-                        .concat()
-                        .iter()
-                        .map(|&x| T::from_f64(x))
-                        .collect::<Vec<T>>(),
-                    i,
-                    "M",
-                )?;
                 json!({ "M": rows })
             }
         };
@@ -73,6 +99,25 @@ fn eval_in<T: Real>(model: &Model<T>, algo: Algo, samples: &Samples) -> Result<V
     }
     let joints: Vec<&str> = model.joints.iter().map(|j| j.name.as_str()).collect();
     Ok(json!({ "joints": joints, "samples": out }))
+}
+
+/// CONTRACT §2: `q` and `v` must satisfy the constraints to 1e-9 (`embedyn complete` makes them so).
+fn check_consistent(
+    model: &Model<f64>,
+    ws: &mut Workspace<f64>,
+    q: &[f64],
+    v: &[f64],
+    i: usize,
+) -> Result<(), CliError> {
+    let (pos, vel) =
+        constraint_violation(model, ws, q, v).map_err(|e| CliError(format!("sample {i}: {e}")))?;
+    if pos > 1e-9 {
+        return Err(CliError(format!("sample {i}: `q` violates the loop and coupling constraints by {pos:e} (more than 1e-9); `embedyn complete` solves the dependent coordinates")));
+    }
+    if vel > 1e-9 {
+        return Err(CliError(format!("sample {i}: `v` violates the velocity constraints by {vel:e} (more than 1e-9); `embedyn complete` projects it")));
+    }
+    Ok(())
 }
 
 fn cast<T: Real>(x: &[f64]) -> Vec<T> {

@@ -9,7 +9,8 @@ pub fn info(loaded: &Loaded, options: &ModelOptions) -> Result<Value, CliError> 
     let joints: Vec<Value> = model
         .joints
         .iter()
-        .map(|j| {
+        .enumerate()
+        .map(|(i, j)| {
             json!({
                 "name": j.name,
                 "type": j.joint_type.as_str(),
@@ -17,7 +18,7 @@ pub fn info(loaded: &Loaded, options: &ModelOptions) -> Result<Value, CliError> 
                 "nv": j.nv(),
                 "q_index": j.q_index,
                 "v_index": j.v_index,
-                "independent": true,
+                "independent": model.is_independent(i),
             })
         })
         .collect();
@@ -37,14 +38,47 @@ pub fn info(loaded: &Loaded, options: &ModelOptions) -> Result<Value, CliError> 
             })
         })
         .collect();
+    let robot = &loaded.robot;
+    let link = |l: usize| robot.links[l].name.clone();
+    let loops: Vec<Value> = robot
+        .loops
+        .iter()
+        .map(|l| json!({"name": l.name, "type": format!("{:?}", l.kind).to_lowercase(), "predecessor": link(l.predecessor.link), "successor": link(l.successor.link)}))
+        .collect();
+    let couplings: Vec<Value> = robot
+        .couplings
+        .iter()
+        .map(|c| json!({"name": c.name, "predecessor": link(c.predecessor), "successor": link(c.successor), "ratio": c.ratio}))
+        .collect();
+    let joint_names = |js: &[usize]| -> Vec<String> {
+        js.iter().map(|&j| model.joints[j].name.clone()).collect()
+    };
+    let groups: Vec<Value> = model
+        .groups
+        .iter()
+        .map(|g| {
+            json!({
+                "bodies": g.bodies.iter().map(|&b| model.bodies[b].name.clone()).collect::<Vec<_>>(),
+                "parent": g.parent.map(|p| model.bodies[p].name.clone()),
+                "constraints": g.constraints.iter().map(|&c| model.constraints[c].name.clone()).collect::<Vec<_>>(),
+                "spanning": joint_names(&g.bodies),
+                "independent": joint_names(&g.independent),
+                "dependent": joint_names(&g.dependent),
+                "equations": g.rows.len(),
+                "redundant_equations": g.constraints.iter().map(|&c| model.constraints[c].raw_rows()).sum::<usize>() - g.rows.len(),
+                "independent_chosen_by_embedyn": g.chosen,
+            })
+        })
+        .collect();
     Ok(json!({
         "name": model.name,
         "nq": model.nq(),
         "nv": model.nv(),
         "joints": joints,
         "bodies": bodies,
-        "loops": [],
-        "couplings": [],
-        "independent_nv": model.nv(),
+        "loops": loops,
+        "couplings": couplings,
+        "groups": groups,
+        "independent_nv": model.independent_nv(),
     }))
 }

@@ -1,5 +1,6 @@
 //! The `embedyn` command line (CONTRACT §3): JSON on stdout, errors on stderr with a non-zero exit code.
 
+mod complete;
 mod eval;
 mod info;
 mod samples;
@@ -28,6 +29,16 @@ pub enum Command {
         /// Make the URDF root free with a floating joint named `root_joint`.
         #[arg(long)]
         floating: bool,
+    },
+    /// Make states consistent with the loops and couplings: solve the dependent coordinates of `q` from the
+    /// independent ones (the given dependent entries are the starting guess) and project `v`.
+    Complete {
+        model: PathBuf,
+        #[arg(long)]
+        floating: bool,
+        /// JSON input: `{"samples": [{"q": [...], "v": [...]}]}`; stdin when absent.
+        #[arg(long)]
+        input: Option<PathBuf>,
     },
     /// Evaluate an algorithm on the samples of a JSON file (or stdin).
     Eval {
@@ -86,6 +97,15 @@ pub fn run(cli: Cli) -> Result<serde_json::Value, CliError> {
         Command::Info { model, floating } => {
             let loaded = load_reporting(&model)?;
             info::info(&loaded, &options(floating))
+        }
+        Command::Complete {
+            model,
+            floating,
+            input,
+        } => {
+            let loaded = load_reporting(&model)?;
+            let text = read_input(input.as_deref())?;
+            complete::complete(&loaded, &options(floating), &text)
         }
         Command::Eval {
             model,

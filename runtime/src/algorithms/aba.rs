@@ -50,7 +50,11 @@ pub fn aba<'w, T: Real>(
 
 /// The forward step of Eq. 9 for joint `i`: `θ̈ = D⁻¹(ε − Uᵀ a′)`, `a = a′ + H* θ̈`
 /// (the paper's `ν(k) − K*(k+1,k) α(k+1)`).
-pub(crate) fn forward_step<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, i: usize) -> Result<(), DynamicsError> {
+pub(crate) fn forward_step<T: Real>(
+    model: &Model<T>,
+    ws: &mut Workspace<T>,
+    i: usize,
+) -> Result<(), DynamicsError> {
     let joint = &model.joints[i];
     let x = &ws.parent_placement[i];
     let a_prime = match joint.parent {
@@ -68,12 +72,19 @@ pub(crate) fn forward_step<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, i: 
             check_floating(joint, ws)?;
             cholesky_solve_in_place(&ws.floating_d, &mut rhs);
             ws.qdd[joint.v_index..joint.v_index + 6].copy_from_slice(&rhs);
-            a_prime + Motion::new(Vector3::new(rhs[3], rhs[4], rhs[5]), Vector3::new(rhs[0], rhs[1], rhs[2]))
+            a_prime
+                + Motion::new(
+                    Vector3::new(rhs[3], rhs[4], rhs[5]),
+                    Vector3::new(rhs[0], rhs[1], rhs[2]),
+                )
         }
         _ => {
             let d_inv = ws.d_inv[i];
             if !d_inv.is_positive_finite() {
-                return Err(DynamicsError::SingularJoint { joint: joint.name.clone(), d: (T::one() / d_inv).to_f64() });
+                return Err(DynamicsError::SingularJoint {
+                    joint: joint.name.clone(),
+                    d: (T::one() / d_inv).to_f64(),
+                });
             }
             let qdd = (ws.epsilon[i] - a_prime.dot(&ws.u[i])) * d_inv;
             ws.qdd[joint.v_index] = qdd;

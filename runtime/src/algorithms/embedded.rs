@@ -17,7 +17,12 @@ use nalgebra::{DMatrix, Vector3};
 
 /// Kinematics the constraint equations need: parent and world placements, body velocities, and the
 /// velocity-product accelerations (q̈ = 0, no gravity) in `ws.acceleration`.
-pub fn constraint_kinematics<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, q: &[T], v: &[T]) -> Result<(), DynamicsError> {
+pub fn constraint_kinematics<T: Real>(
+    model: &Model<T>,
+    ws: &mut Workspace<T>,
+    q: &[T],
+    v: &[T],
+) -> Result<(), DynamicsError> {
     check_len("q", q.len(), model.nq())?;
     check_len("v", v.len(), model.nv())?;
     velocity_sweep(model, ws, q, v);
@@ -36,12 +41,22 @@ pub fn constraint_kinematics<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, q
 }
 
 fn group_name<T: Real>(model: &Model<T>, g: &Group) -> String {
-    g.constraints.iter().map(|&c| model.constraints[c].name.as_str()).collect::<Vec<_>>().join(", ")
+    g.constraints
+        .iter()
+        .map(|&c| model.constraints[c].name.as_str())
+        .collect::<Vec<_>>()
+        .join(", ")
 }
 
 /// Forward dynamics with aggregate links: `qdd` over all spanning joints (consistent with the constraints
 /// at acceleration level); only `Xᵀ τ` of `tau` acts.
-pub(crate) fn aba<'w, T: Real>(model: &Model<T>, ws: &'w mut Workspace<T>, q: &[T], v: &[T], tau: &[T]) -> Result<&'w [T], DynamicsError> {
+pub(crate) fn aba<'w, T: Real>(
+    model: &Model<T>,
+    ws: &'w mut Workspace<T>,
+    q: &[T],
+    v: &[T],
+    tau: &[T],
+) -> Result<&'w [T], DynamicsError> {
     constraint_kinematics(model, ws, q, v)?;
     let mut groups = core::mem::take(&mut ws.groups);
     let result = aba_with(model, ws, &mut groups, v, tau);
@@ -50,7 +65,13 @@ pub(crate) fn aba<'w, T: Real>(model: &Model<T>, ws: &'w mut Workspace<T>, q: &[
     Ok(&ws.qdd)
 }
 
-fn aba_with<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, groups: &mut [GroupWorkspace<T>], v: &[T], tau: &[T]) -> Result<(), DynamicsError> {
+fn aba_with<T: Real>(
+    model: &Model<T>,
+    ws: &mut Workspace<T>,
+    groups: &mut [GroupWorkspace<T>],
+    v: &[T],
+    tau: &[T],
+) -> Result<(), DynamicsError> {
     for (g, gw) in groups.iter_mut().enumerate() {
         embed(model, ws, g, gw, true)?;
     }
@@ -58,14 +79,18 @@ fn aba_with<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, groups: &mut [Grou
     for i in (0..model.nbodies()).rev() {
         match model.group_of(i) {
             None => backward_step(model, ws, i, tau),
-            Some(g) if model.groups[g].bodies[0] == i => group_backward(model, ws, g, &mut groups[g], v, tau)?,
+            Some(g) if model.groups[g].bodies[0] == i => {
+                group_backward(model, ws, g, &mut groups[g], v, tau)?
+            }
             Some(_) => {}
         }
     }
     for i in 0..model.nbodies() {
         match model.group_of(i) {
             None => forward_step(model, ws, i)?,
-            Some(g) if model.groups[g].bodies[0] == i => group_forward(model, ws, g, &mut groups[g]),
+            Some(g) if model.groups[g].bodies[0] == i => {
+                group_forward(model, ws, g, &mut groups[g])
+            }
             Some(_) => {}
         }
     }
@@ -74,12 +99,23 @@ fn aba_with<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, groups: &mut [Grou
 
 /// Eqs. 19–22 for one aggregate link: its members' articulated inertias and bias forces in the parent
 /// body's frame, `J_b`, `D_G`, `ε_G`, and the articulated inertia and bias force it passes on.
-fn group_backward<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, gi: usize, gw: &mut GroupWorkspace<T>, v: &[T], tau: &[T]) -> Result<(), DynamicsError> {
+fn group_backward<T: Real>(
+    model: &Model<T>,
+    ws: &mut Workspace<T>,
+    gi: usize,
+    gw: &mut GroupWorkspace<T>,
+    v: &[T],
+    tau: &[T],
+) -> Result<(), DynamicsError> {
     let g = &model.groups[gi];
     let ni = g.independent.len();
     for (m, &b) in g.bodies.iter().enumerate() {
         let joint = &model.joints[b];
-        let parent_member = joint.parent.filter(|&p| Some(p) != g.parent).map(|p| g.bodies.binary_search(&p).expect("members hang from the group's parent or another member"));
+        let parent_member = joint.parent.filter(|&p| Some(p) != g.parent).map(|p| {
+            g.bodies
+                .binary_search(&p)
+                .expect("members hang from the group's parent or another member")
+        });
         let to_parent = match parent_member {
             None => ws.parent_placement[b],
             Some(pm) => gw.to_parent[pm].compose(&ws.parent_placement[b]),
@@ -129,7 +165,9 @@ fn group_backward<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, gi: usize, g
         }
     }
     if !cholesky_in_place(&mut gw.d).is_positive_finite() {
-        return Err(DynamicsError::SingularGroup { group: group_name(model, g) });
+        return Err(DynamicsError::SingularGroup {
+            group: group_name(model, g),
+        });
     }
     if let Some(p) = g.parent {
         // What the parent sees: Σ_b P_b − Ū D⁻¹ Ūᵀ and Σ_b (𝔷_b + P_b c_b) + Ū D⁻¹ ε.
@@ -162,7 +200,12 @@ fn group_backward<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, gi: usize, g
 }
 
 /// Eqs. 23–24: `θ̈_R = D⁻¹(ε − Ūᵀ α_parent)`, the members' accelerations, and `θ̈_G = X_G θ̈_R + κ_G`.
-fn group_forward<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, gi: usize, gw: &mut GroupWorkspace<T>) {
+fn group_forward<T: Real>(
+    model: &Model<T>,
+    ws: &mut Workspace<T>,
+    gi: usize,
+    gw: &mut GroupWorkspace<T>,
+) {
     let g = &model.groups[gi];
     let ni = g.independent.len();
     let a_parent = match g.parent {
@@ -185,8 +228,24 @@ fn group_forward<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, gi: usize, gw
     }
 }
 
-/// The embedding map of the whole model, `θ̇ = X θ̇_R` (nv × independent nv), at `q`.
-fn fill_embedding<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, q: &[T], out: &mut DMatrix<T>) -> Result<(), DynamicsError> {
+/// The embedding map of the whole model, `θ̇ = X θ̇_R` (nv × independent nv) at `q`: `Xᵀ τ` is the
+/// generalized force on the independent coordinates. Allocates its result.
+pub fn embedding_map<T: Real>(
+    model: &Model<T>,
+    ws: &mut Workspace<T>,
+    q: &[T],
+) -> Result<DMatrix<T>, DynamicsError> {
+    let mut x = DMatrix::zeros(model.nv(), model.independent_nv());
+    fill_embedding(model, ws, q, &mut x)?;
+    Ok(x)
+}
+
+fn fill_embedding<T: Real>(
+    model: &Model<T>,
+    ws: &mut Workspace<T>,
+    q: &[T],
+    out: &mut DMatrix<T>,
+) -> Result<(), DynamicsError> {
     let zeros = vec![T::zero(); model.nv()];
     constraint_kinematics(model, ws, q, &zeros)?;
     let mut groups = core::mem::take(&mut ws.groups);
@@ -199,8 +258,8 @@ fn fill_embedding<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, q: &[T], out
     }
     out.fill(T::zero());
     if result.is_ok() {
-        let independent = model.independent_joints();
-        for (col, &j) in independent.iter().enumerate() {
+        let mut col = 0;
+        for j in model.independent_joints() {
             let joint = &model.joints[j];
             match model.group_of(j) {
                 None => {
@@ -210,12 +269,17 @@ fn fill_embedding<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, q: &[T], out
                 }
                 Some(g) => {
                     let group = &model.groups[g];
-                    let k = group.independent.iter().position(|&b| b == j).expect("independent member");
+                    let k = group
+                        .independent
+                        .iter()
+                        .position(|&b| b == j)
+                        .expect("independent member");
                     for (m, &b) in group.bodies.iter().enumerate() {
                         out[(model.joints[b].v_index, col)] = groups[g].x[(m, k)];
                     }
                 }
             }
+            col += joint.nv();
         }
     }
     ws.groups = groups;
@@ -224,9 +288,12 @@ fn fill_embedding<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, q: &[T], out
 
 /// The reduced mass matrix `Xᵀ M X` over the independent coordinates (CONTRACT §3 `crba` for models with
 /// loops); allocates its result (it is O(nv²) anyway).
-pub fn reduced_mass_matrix<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, q: &[T]) -> Result<DMatrix<T>, DynamicsError> {
-    let mut x = DMatrix::zeros(model.nv(), model.independent_nv());
-    fill_embedding(model, ws, q, &mut x)?;
+pub fn reduced_mass_matrix<T: Real>(
+    model: &Model<T>,
+    ws: &mut Workspace<T>,
+    q: &[T],
+) -> Result<DMatrix<T>, DynamicsError> {
+    let x = embedding_map(model, ws, q)?;
     let m = crba(model, ws, q)?.clone();
     Ok(x.transpose() * m * x)
 }
@@ -234,7 +301,13 @@ pub fn reduced_mass_matrix<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, q: 
 /// The Lagrange-multiplier oracle: `[M Jᵀ; J 0] [qdd; −λ] = [τ − C − g; −J̇ v]` over the spanning tree,
 /// with the kept (non-redundant) constraint rows. A separate, plain implementation: the test oracle and
 /// the baseline the benchmarks compare against. Allocates.
-pub fn kkt_forward_dynamics<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, q: &[T], v: &[T], tau: &[T]) -> Result<Vec<T>, DynamicsError> {
+pub fn kkt_forward_dynamics<T: Real>(
+    model: &Model<T>,
+    ws: &mut Workspace<T>,
+    q: &[T],
+    v: &[T],
+    tau: &[T],
+) -> Result<Vec<T>, DynamicsError> {
     check_len("tau", tau.len(), model.nv())?;
     let nv = model.nv();
     let zeros = vec![T::zero(); nv];
@@ -246,7 +319,11 @@ pub fn kkt_forward_dynamics<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, q:
     crate::constraints::jacobian(model, ws, &mut jac);
     let mut bias = vec![T::zero(); raw];
     crate::constraints::bias(model, ws, &mut bias);
-    let rows: Vec<usize> = model.groups.iter().flat_map(|g| g.rows.iter().copied()).collect();
+    let rows: Vec<usize> = model
+        .groups
+        .iter()
+        .flat_map(|g| g.rows.iter().copied())
+        .collect();
     let n = nv + rows.len();
     let mut kkt = DMatrix::zeros(n, n);
     let mut rhs = vec![T::zero(); n];
@@ -264,7 +341,10 @@ pub fn kkt_forward_dynamics<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, q:
         rhs[nv + k] = -bias[row];
     }
     let mut perm = vec![0; n];
-    lu_in_place(&mut kkt, &mut perm).map_err(|_| DynamicsError::SingularConstraint { group: "KKT system".into(), condition: f64::INFINITY })?;
+    lu_in_place(&mut kkt, &mut perm).map_err(|_| DynamicsError::SingularConstraint {
+        group: "KKT system".into(),
+        condition: f64::INFINITY,
+    })?;
     lu_solve_in_place(&kkt, &perm, &mut rhs);
     rhs.truncate(nv);
     Ok(rhs)

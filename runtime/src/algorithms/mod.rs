@@ -11,7 +11,9 @@ mod workspace;
 
 pub use aba::aba;
 pub use crba::crba;
-pub use embedded::{constraint_kinematics, kkt_forward_dynamics, reduced_mass_matrix};
+pub use embedded::{
+    constraint_kinematics, embedding_map, kkt_forward_dynamics, reduced_mass_matrix,
+};
 pub use kinematics::{forward_kinematics, kinetic_energy, potential_energy};
 pub use minv::mass_matrix_inverse;
 pub use rnea::{rnea, rnea_with_gravity};

@@ -82,7 +82,11 @@ impl<T: Real> Workspace<T> {
             mass_matrix: DMatrix::zeros(nv, nv),
             inverse_mass_matrix: DMatrix::zeros(0, 0),
             minv_force: Vec::new(),
-            groups: model.groups.iter().map(|g| crate::constraints::GroupWorkspace::new(model, g)).collect(),
+            groups: model
+                .groups
+                .iter()
+                .map(|g| crate::constraints::GroupWorkspace::new(model, g))
+                .collect(),
             minv_accel: Vec::new(),
         }
     }

@@ -79,7 +79,11 @@ impl<T: Real> LoopClosure<T> {
         axis: Vector3<T>,
     ) -> Self {
         let n = axis.dot(&axis).sqrt();
-        let axis = if n > T::zero() { axis / n } else { Vector3::x() };
+        let axis = if n > T::zero() {
+            axis / n
+        } else {
+            Vector3::x()
+        };
         // e1: the unit vector most orthogonal to the axis among x, y, z, projected and normalized.
         let pick = if axis.x.abs() <= axis.y.abs() && axis.x.abs() <= axis.z.abs() {
             Vector3::x()
@@ -91,7 +95,16 @@ impl<T: Real> LoopClosure<T> {
         let e1 = pick - axis * axis.dot(&pick);
         let e1 = e1 / e1.dot(&e1).sqrt();
         let e2 = axis.cross(&e1);
-        LoopClosure { kind, predecessor, predecessor_frame, successor, successor_frame, axis, e1, e2 }
+        LoopClosure {
+            kind,
+            predecessor,
+            predecessor_frame,
+            successor,
+            successor_frame,
+            axis,
+            e1,
+            e2,
+        }
     }
 
     pub fn cast<U: Real>(&self) -> LoopClosure<U> {
@@ -108,10 +121,22 @@ impl<T: Real> LoopClosure<T> {
         }
     }
 
-    fn frame(ws: &Workspace<T>, body: Option<usize>, frame: &Transform<T>, with_motion: bool) -> FrameState<T> {
+    fn frame(
+        ws: &Workspace<T>,
+        body: Option<usize>,
+        frame: &Transform<T>,
+        with_motion: bool,
+    ) -> FrameState<T> {
         let z = Vector3::zeros();
         match body {
-            None => FrameState { rotation: frame.rotation, position: frame.translation, omega: z, velocity: z, omega_dot: z, acceleration: z },
+            None => FrameState {
+                rotation: frame.rotation,
+                position: frame.translation,
+                omega: z,
+                velocity: z,
+                omega_dot: z,
+                acceleration: z,
+            },
             Some(b) => {
                 let x = &ws.world_placement[b];
                 let r = &x.rotation;
@@ -129,7 +154,14 @@ impl<T: Real> LoopClosure<T> {
                 } else {
                     (z, z, z, z)
                 };
-                FrameState { rotation: r * frame.rotation, position: x.act_point(c), omega, velocity, omega_dot, acceleration }
+                FrameState {
+                    rotation: r * frame.rotation,
+                    position: x.act_point(c),
+                    omega,
+                    velocity,
+                    omega_dot,
+                    acceleration,
+                }
             }
         }
     }
@@ -142,7 +174,11 @@ impl<T: Real> LoopClosure<T> {
         let rel = p.rotation.tr_mul(&s.rotation);
         let half = T::from_f64(0.5);
         // ½ vee(R − Rᵀ): the rotation vector to first order (exact derivative ω_rel at R = I).
-        let vee = Vector3::new(rel[(2, 1)] - rel[(1, 2)], rel[(0, 2)] - rel[(2, 0)], rel[(1, 0)] - rel[(0, 1)]) * half;
+        let vee = Vector3::new(
+            rel[(2, 1)] - rel[(1, 2)],
+            rel[(0, 2)] - rel[(2, 0)],
+            rel[(1, 0)] - rel[(0, 1)],
+        ) * half;
         match self.kind {
             LoopType::Revolute => {
                 let b = rel * self.axis;
@@ -201,13 +237,21 @@ impl<T: Real> LoopClosure<T> {
     }
 
     /// Calls `f(v_index, column)` for each non-zero column of this loop's Jacobian rows.
-    pub fn for_each_column(&self, model: &Model<T>, ws: &Workspace<T>, mut f: impl FnMut(usize, &[T])) {
+    pub fn for_each_column(
+        &self,
+        model: &Model<T>,
+        ws: &Workspace<T>,
+        mut f: impl FnMut(usize, &[T]),
+    ) {
         let p = Self::frame(ws, self.predecessor, &self.predecessor_frame, false);
         let s = Self::frame(ws, self.successor, &self.successor_frame, false);
         let n = self.kind.rows();
         let mut buf = [T::zero(); 6];
         // Joints above S count +1, above P −1; joints above both cancel exactly and are skipped.
-        for (body, other, sign) in [(self.successor, self.predecessor, T::one()), (self.predecessor, self.successor, -T::one())] {
+        for (body, other, sign) in [
+            (self.successor, self.predecessor, T::one()),
+            (self.predecessor, self.successor, -T::one()),
+        ] {
             let mut cur = body;
             while let Some(b) = cur {
                 let above_other = other.is_some_and(|o| b <= o && o < model.subtree_end(b));
@@ -219,7 +263,10 @@ impl<T: Real> LoopClosure<T> {
                 for k in 0..joint.nv() {
                     let m = x.act_motion(&joint.subspace_column(k));
                     let w = p.rotation.tr_mul(&m.angular) * sign;
-                    let u = p.rotation.tr_mul(&(m.linear + m.angular.cross(&s.position))) * sign;
+                    let u = p
+                        .rotation
+                        .tr_mul(&(m.linear + m.angular.cross(&s.position)))
+                        * sign;
                     self.select(&w, &u, &mut buf);
                     f(joint.v_index + k, &buf[..n]);
                 }
@@ -238,9 +285,15 @@ impl<T: Real> LoopClosure<T> {
         let w_world = s.omega - p.omega;
         let u_world = rdot - p.omega.cross(&r);
         // d/dt (R_Pᵀ x) = R_Pᵀ (ẋ − ω_P × x).
-        let wdot = p.rotation.tr_mul(&(s.omega_dot - p.omega_dot - p.omega.cross(&w_world)));
+        let wdot = p
+            .rotation
+            .tr_mul(&(s.omega_dot - p.omega_dot - p.omega.cross(&w_world)));
         let udot = p.rotation.tr_mul(
-            &(s.acceleration - p.acceleration - p.omega_dot.cross(&r) - p.omega.cross(&rdot) - p.omega.cross(&u_world)),
+            &(s.acceleration
+                - p.acceleration
+                - p.omega_dot.cross(&r)
+                - p.omega.cross(&rdot)
+                - p.omega.cross(&u_world)),
         );
         self.select(&wdot, &udot, out);
     }

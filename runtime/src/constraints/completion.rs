@@ -1,15 +1,21 @@
 //! Completing a state: the dependent coordinates from the independent ones, at position level (Newton's
 //! method from the given guess, so it stays on that assembly branch) and at velocity level (`X_G`).
 
+use super::embedding::group_rows;
 use super::{embed, residuals};
 use crate::algorithms::{constraint_kinematics, DynamicsError, Workspace};
-use crate::linalg::lu_solve_in_place;
+use crate::linalg::{lu_in_place, lu_solve_in_place, solve_least_squares};
 use crate::model::Model;
 use crate::Real;
 
 /// Largest absolute constraint residual at position level (all equations, redundant ones included) and
 /// at velocity level (`|J v|∞`), for checking that a state is consistent (CONTRACT §2: 1e-9).
-pub fn constraint_violation<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, q: &[T], v: &[T]) -> Result<(f64, f64), DynamicsError> {
+pub fn constraint_violation<T: Real>(
+    model: &Model<T>,
+    ws: &mut Workspace<T>,
+    q: &[T],
+    v: &[T],
+) -> Result<(f64, f64), DynamicsError> {
     if !model.has_constraints() {
         return Ok((0.0, 0.0));
     }
@@ -30,7 +36,11 @@ pub fn constraint_violation<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, q:
 /// Solves the dependent entries of `q` from its independent entries (the dependent entries are the
 /// starting guess: Newton's method converges to the assembly branch nearest it). Returns the largest
 /// remaining residual of the kept equations.
-pub fn complete_configuration<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, q: &mut [T]) -> Result<f64, DynamicsError> {
+pub fn complete_configuration<T: Real>(
+    model: &Model<T>,
+    ws: &mut Workspace<T>,
+    q: &mut [T],
+) -> Result<f64, DynamicsError> {
     let zeros = vec![T::zero(); model.nv()];
     let mut groups = core::mem::take(&mut ws.groups);
     let mut r = vec![T::zero(); model.constraint_raw_rows()];
@@ -44,22 +54,40 @@ pub fn complete_configuration<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, 
                 break 'groups;
             }
             residuals(model, ws, q, &mut r);
-            worst = g.rows.iter().fold(0.0f64, |m, &i| m.max(r[i].to_f64().abs()));
+            worst = g
+                .rows
+                .iter()
+                .fold(0.0f64, |m, &i| m.max(r[i].to_f64().abs()));
             if worst <= 1e-14 {
                 break;
             }
-            // Newton step on the dependent coordinates: Y1 Δ = −r (Y1 factored by `embed`).
-            if let Err(e) = embed(model, ws, gi, gw, false) {
-                result = Err(e);
-                break 'groups;
+            // Newton step on the dependent coordinates, Y1 Δ = −r; where Y1 is singular (a guess at a
+            // toggle), the minimum-norm least-squares step instead.
+            group_rows(model, ws, g, gw, false);
+            for (col, &b) in g.dependent.iter().enumerate() {
+                let m = g.bodies.binary_search(&b).expect("member");
+                for row in 0..g.rows.len() {
+                    gw.y1_lu[(row, col)] = gw.k[(row, m)];
+                }
             }
             for (k, &row) in g.rows.iter().enumerate() {
                 gw.col[k] = -r[row];
             }
-            lu_solve_in_place(&gw.y1_lu, &gw.perm, &mut gw.col);
-            // Limit the step: Newton stays near the branch it starts on.
+            let y1 = gw.y1_lu.clone();
+            if lu_in_place(&mut gw.y1_lu, &mut gw.perm).is_ok() {
+                lu_solve_in_place(&gw.y1_lu, &gw.perm, &mut gw.col);
+            } else {
+                let step = solve_least_squares(&y1, &gw.col);
+                gw.col.copy_from_slice(&step);
+            }
+            // Limit loop steps so that Newton stays near the branch it starts on (linear equations are
+            // solved in one full step).
             let big = gw.col.iter().fold(T::zero(), |m, x| m.max(x.abs()));
-            let scale = if big.to_f64() > 0.5 { T::from_f64(0.5) / big } else { T::one() };
+            let scale = if gw.has_loop && big.to_f64() > 0.5 {
+                T::from_f64(0.5) / big
+            } else {
+                T::one()
+            };
             for (d, &b) in g.dependent.iter().enumerate() {
                 q[model.joints[b].q_index] += gw.col[d] * scale;
             }
@@ -73,7 +101,12 @@ pub fn complete_configuration<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, 
 }
 
 /// Replaces the dependent entries of `v` by `X_G` times the independent ones (the velocity projection).
-pub fn complete_velocity<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, q: &[T], v: &mut [T]) -> Result<(), DynamicsError> {
+pub fn complete_velocity<T: Real>(
+    model: &Model<T>,
+    ws: &mut Workspace<T>,
+    q: &[T],
+    v: &mut [T],
+) -> Result<(), DynamicsError> {
     let zeros = vec![T::zero(); model.nv()];
     constraint_kinematics(model, ws, q, &zeros)?;
     let mut groups = core::mem::take(&mut ws.groups);

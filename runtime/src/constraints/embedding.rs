@@ -64,11 +64,17 @@ impl<T: Real> GroupWorkspace<T> {
         let offsets = model.constraint_row_offsets();
         let mut rows = Vec::with_capacity(g.rows.len());
         for &r in &g.rows {
-            let c = offsets.iter().rposition(|&o| o <= r).expect("row belongs to a constraint");
+            let c = offsets
+                .iter()
+                .rposition(|&o| o <= r)
+                .expect("row belongs to a constraint");
             rows.push((c, r - offsets[c]));
         }
         let (m, r, ni) = (g.bodies.len(), g.rows.len(), g.independent.len());
-        let has_loop = g.constraints.iter().any(|&c| model.constraints[c].is_loop());
+        let has_loop = g
+            .constraints
+            .iter()
+            .any(|&c| model.constraints[c].is_loop());
         GroupWorkspace {
             rows,
             k: DMatrix::zeros(r, m),
@@ -102,7 +108,13 @@ fn member(g: &Group, body: usize) -> Option<usize> {
 
 /// Fills `K` (kept rows × members) and, with `with_bias`, the kept rows of `J̇ v`, from the kinematics
 /// in `ws` (world placements; velocities and velocity-product accelerations for the bias).
-pub(crate) fn group_rows<T: Real>(model: &Model<T>, ws: &Workspace<T>, g: &Group, gw: &mut GroupWorkspace<T>, with_bias: bool) {
+pub(crate) fn group_rows<T: Real>(
+    model: &Model<T>,
+    ws: &Workspace<T>,
+    g: &Group,
+    gw: &mut GroupWorkspace<T>,
+    with_bias: bool,
+) {
     gw.k.fill(T::zero());
     let mut buf = [T::zero(); 6];
     for (slot, &(c, local)) in gw.rows.iter().enumerate() {
@@ -135,11 +147,19 @@ pub(crate) fn group_rows<T: Real>(model: &Model<T>, ws: &Workspace<T>, g: &Group
 }
 
 fn model_member_of_v<T: Real>(model: &Model<T>, g: &Group, v_index: usize) -> Option<usize> {
-    g.bodies.iter().position(|&b| model.joints[b].v_index == v_index)
+    g.bodies
+        .iter()
+        .position(|&b| model.joints[b].v_index == v_index)
 }
 
 /// `X_G` and `κ_G` of group `gi` at the current kinematics. Fails past the singularity threshold.
-pub(crate) fn embed<T: Real>(model: &Model<T>, ws: &Workspace<T>, gi: usize, gw: &mut GroupWorkspace<T>, with_bias: bool) -> Result<(), DynamicsError> {
+pub(crate) fn embed<T: Real>(
+    model: &Model<T>,
+    ws: &Workspace<T>,
+    gi: usize,
+    gw: &mut GroupWorkspace<T>,
+    with_bias: bool,
+) -> Result<(), DynamicsError> {
     let g = &model.groups[gi];
     group_rows(model, ws, g, gw, with_bias);
     let r = g.rows.len();
@@ -160,7 +180,12 @@ pub(crate) fn embed<T: Real>(model: &Model<T>, ws: &Workspace<T>, gi: usize, gw:
     }
     gw.y1_lu.copy_from(&gw.y1);
     let singular = |condition: f64| DynamicsError::SingularConstraint {
-        group: g.constraints.iter().map(|&c| model.constraints[c].name.as_str()).collect::<Vec<_>>().join(", "),
+        group: g
+            .constraints
+            .iter()
+            .map(|&c| model.constraints[c].name.as_str())
+            .collect::<Vec<_>>()
+            .join(", "),
         condition,
     };
     if lu_in_place(&mut gw.y1_lu, &mut gw.perm).is_err() {
@@ -168,7 +193,7 @@ pub(crate) fn embed<T: Real>(model: &Model<T>, ws: &Workspace<T>, gi: usize, gw:
     }
     if gw.has_loop {
         let cond = condition_number_1(&gw.y1, &gw.y1_lu, &gw.perm, &mut gw.scratch).to_f64();
-        if !(cond < SINGULARITY_THRESHOLD) {
+        if cond.is_nan() || cond >= SINGULARITY_THRESHOLD {
             return Err(singular(cond));
         }
     }

@@ -76,7 +76,10 @@ fn close<T: Real>(model: &Model<T>, bodies: &mut Vec<usize>) -> Option<usize> {
 
 /// Builds the groups of a model whose constraints are set. `declared_dependent[j]`: joint `j` was declared
 /// dependent (`independent="false"`, or a mimic joint).
-pub(crate) fn build_groups<T: Real>(model: &Model<T>, declared_dependent: &[bool]) -> Result<Vec<Group>, ModelError> {
+pub(crate) fn build_groups<T: Real>(
+    model: &Model<T>,
+    declared_dependent: &[bool],
+) -> Result<Vec<Group>, ModelError> {
     let n = model.nbodies();
     // Bodies of each constraint, closed under the common-ancestor rule.
     let mut sets: Vec<(Vec<usize>, Vec<usize>)> = Vec::new(); // (bodies, constraints)
@@ -92,7 +95,9 @@ pub(crate) fn build_groups<T: Real>(model: &Model<T>, declared_dependent: &[bool
             }
         };
         if bodies.is_empty() {
-            return Err(ModelError::EmptyConstraint { constraint: c.name.clone() });
+            return Err(ModelError::EmptyConstraint {
+                constraint: c.name.clone(),
+            });
         }
         close(model, &mut bodies);
         sets.push((bodies, vec![ci]));
@@ -127,14 +132,20 @@ pub(crate) fn build_groups<T: Real>(model: &Model<T>, declared_dependent: &[bool
         };
         for &b in &bodies {
             if model.joints[b].joint_type == JointType::Floating {
-                return Err(ModelError::FloatingInGroup { joint: model.joints[b].name.clone() });
+                return Err(ModelError::FloatingInGroup {
+                    joint: model.joints[b].name.clone(),
+                });
             }
         }
         let raw_rows: Vec<usize> = constraints
             .iter()
             .flat_map(|&c| row_offset[c]..row_offset[c] + model.constraints[c].raw_rows())
             .collect();
-        let name = constraints.iter().map(|&c| model.constraints[c].name.as_str()).collect::<Vec<_>>().join(", ");
+        let name = constraints
+            .iter()
+            .map(|&c| model.constraints[c].name.as_str())
+            .collect::<Vec<_>>()
+            .join(", ");
         // An assembled, generic configuration of this group: from the neutral configuration, assemble,
         // then move the group's coordinates away (off any symmetric, possibly singular pose) and assemble
         // again. If assembly fails, the rank is still taken where we are: never reject for that.
@@ -142,29 +153,57 @@ pub(crate) fn build_groups<T: Real>(model: &Model<T>, declared_dependent: &[bool
         let cols: Vec<usize> = bodies.iter().map(|&b| model.joints[b].v_index).collect();
         assemble(model, &mut ws, &mut q, &bodies, &raw_rows, 60);
         for (k, &b) in bodies.iter().enumerate() {
-            q[model.joints[b].q_index] += T::from_f64(0.3 * (1.0 + k as f64 * 0.618_033_988_749).sin());
+            q[model.joints[b].q_index] +=
+                T::from_f64(0.3 * (1.0 + k as f64 * 0.618_033_988_749).sin());
         }
         assemble(model, &mut ws, &mut q, &bodies, &raw_rows, 60);
         let k_mat = group_jacobian(model, &mut ws, &q, &raw_rows, &cols);
         let kept_local = independent_rows(&k_mat, RANK_TOLERANCE);
         let rank = kept_local.len();
         let rows: Vec<usize> = kept_local.iter().map(|&r| raw_rows[r]).collect();
-        let declared: Vec<usize> = bodies.iter().copied().filter(|&b| declared_dependent[b]).collect();
+        let declared: Vec<usize> = bodies
+            .iter()
+            .copied()
+            .filter(|&b| declared_dependent[b])
+            .collect();
         let (dependent, chosen) = if declared.is_empty() {
             let kept = DMatrix::from_fn(rank, cols.len(), |r, c| k_mat[(kept_local[r], c)]);
             let dep_local = independent_columns(&kept, RANK_TOLERANCE);
-            (dep_local.iter().map(|&c| bodies[c]).collect::<Vec<_>>(), true)
+            (
+                dep_local.iter().map(|&c| bodies[c]).collect::<Vec<_>>(),
+                true,
+            )
         } else {
             if declared.len() != rank {
-                return Err(ModelError::DependentMismatch { group: name, declared: declared.len(), needed: rank });
+                return Err(ModelError::DependentMismatch {
+                    group: name,
+                    declared: declared.len(),
+                    needed: rank,
+                });
             }
             (declared, false)
         };
-        let independent: Vec<usize> = bodies.iter().copied().filter(|b| !dependent.contains(b)).collect();
-        let mut group = Group { bodies, parent, constraints, rows, independent, dependent, chosen, condition_at_load: 0.0 };
+        let independent: Vec<usize> = bodies
+            .iter()
+            .copied()
+            .filter(|b| !dependent.contains(b))
+            .collect();
+        let mut group = Group {
+            bodies,
+            parent,
+            constraints,
+            rows,
+            independent,
+            dependent,
+            chosen,
+            condition_at_load: 0.0,
+        };
         group.condition_at_load = y1_condition(model, &mut ws, &q, &group);
-        if !(group.condition_at_load < 1e10) && rank > 0 {
-            return Err(ModelError::SingularDependentChoice { group: name, condition: group.condition_at_load });
+        if (group.condition_at_load.is_nan() || group.condition_at_load >= super::SINGULARITY_THRESHOLD) && rank > 0 {
+            return Err(ModelError::SingularDependentChoice {
+                group: name,
+                condition: group.condition_at_load,
+            });
         }
         groups.push(group);
     }
@@ -173,7 +212,13 @@ pub(crate) fn build_groups<T: Real>(model: &Model<T>, declared_dependent: &[bool
 }
 
 /// The Jacobian rows `rows` restricted to the columns `cols`, at `q`.
-fn group_jacobian<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, q: &[T], rows: &[usize], cols: &[usize]) -> DMatrix<T> {
+fn group_jacobian<T: Real>(
+    model: &Model<T>,
+    ws: &mut Workspace<T>,
+    q: &[T],
+    rows: &[usize],
+    cols: &[usize],
+) -> DMatrix<T> {
     let zeros = vec![T::zero(); model.nv()];
     forward_kinematics(model, ws, q, &zeros).expect("sizes match");
     let mut full = DMatrix::zeros(model.constraint_raw_rows(), model.nv());
@@ -183,7 +228,14 @@ fn group_jacobian<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, q: &[T], row
 
 /// Damped Newton (minimum-norm steps) on the coordinates of `bodies`' joints until the `rows` residuals
 /// vanish. Returns whether it converged (|r|∞ ≤ 1e-12).
-pub(crate) fn assemble<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, q: &mut [T], bodies: &[usize], rows: &[usize], iterations: usize) -> bool {
+pub(crate) fn assemble<T: Real>(
+    model: &Model<T>,
+    ws: &mut Workspace<T>,
+    q: &mut [T],
+    bodies: &[usize],
+    rows: &[usize],
+    iterations: usize,
+) -> bool {
     let cols: Vec<usize> = bodies.iter().map(|&b| model.joints[b].v_index).collect();
     let mut r = vec![T::zero(); model.constraint_raw_rows()];
     let zeros = vec![T::zero(); model.nv()];
@@ -199,7 +251,11 @@ pub(crate) fn assemble<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, q: &mut
         let step = solve_least_squares(&k, &rr);
         // Limit the step so that Newton stays near the branch it started on.
         let big = step.iter().fold(T::zero(), |m, x| m.max(x.abs()));
-        let scale = if big.to_f64() > 0.5 { T::from_f64(0.5) / big } else { T::one() };
+        let scale = if big.to_f64() > 0.5 {
+            T::from_f64(0.5) / big
+        } else {
+            T::one()
+        };
         for (k, &b) in bodies.iter().enumerate() {
             q[model.joints[b].q_index] += step[k] * scale;
         }
@@ -210,7 +266,11 @@ pub(crate) fn assemble<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, q: &mut
 /// cond₁ of `Y1` (kept rows × dependent columns) at `q`.
 fn y1_condition<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, q: &[T], g: &Group) -> f64 {
     use crate::linalg::{condition_number_1, lu_in_place};
-    let cols: Vec<usize> = g.dependent.iter().map(|&b| model.joints[b].v_index).collect();
+    let cols: Vec<usize> = g
+        .dependent
+        .iter()
+        .map(|&b| model.joints[b].v_index)
+        .collect();
     if cols.is_empty() {
         return 1.0;
     }

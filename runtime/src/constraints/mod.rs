@@ -12,11 +12,11 @@ mod embedding;
 mod grouping;
 
 pub use closure::{LoopClosure, LoopType};
-pub use grouping::Group;
-pub(crate) use embedding::{embed, GroupWorkspace};
-pub use embedding::SINGULARITY_THRESHOLD;
-pub(crate) use grouping::build_groups;
 pub use completion::{complete_configuration, complete_velocity, constraint_violation};
+pub use embedding::SINGULARITY_THRESHOLD;
+pub(crate) use embedding::{embed, GroupWorkspace};
+pub(crate) use grouping::build_groups;
+pub use grouping::Group;
 
 use crate::Real;
 
@@ -77,7 +77,9 @@ pub fn residuals<T: Real>(model: &Model<T>, ws: &Workspace<T>, q: &[T], out: &mu
         let n = c.raw_rows();
         match &c.kind {
             ConstraintKind::Linear { terms, offset } => {
-                out[row] = terms.iter().fold(*offset, |s, &(j, k)| s + k * q[model.joints[j].q_index]);
+                out[row] = terms
+                    .iter()
+                    .fold(*offset, |s, &(j, k)| s + k * q[model.joints[j].q_index]);
             }
             ConstraintKind::Loop(l) => l.residual(ws, &mut out[row..row + n]),
         }
