@@ -226,7 +226,49 @@ fn grbda_files_load_unchanged() {
     ];
     for (file, nv, independent_nv, groups) in expectations {
         let path = repo_path(&format!("tests/data/grbda/{file}"));
-        let model = load(&path).and_then(|l| l.model::<f64>(&ModelOptions::default())).unwrap_or_else(|e| panic!("{e}"));
-        assert_eq!((model.nv(), model.independent_nv(), model.groups.len()), (nv, independent_nv, groups), "{file}");
+        let model = load(&path)
+            .and_then(|l| l.model::<f64>(&ModelOptions::default()))
+            .unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(
+            (model.nv(), model.independent_nv(), model.groups.len()),
+            (nv, independent_nv, groups),
+            "{file}"
+        );
     }
 }
+
+bad!(
+    loop_missing_link,
+    "loop_missing_link.urdf",
+    [
+        ":60:",
+        "loop \"loop1\" <successor>",
+        "link9",
+        "does not exist"
+    ]
+);
+bad!(
+    loop_never_meets,
+    "loop_never_meets.urdf",
+    [":56:", "loop \"loop1\"", "never meet"]
+);
+bad!(
+    loop_dependent_mismatch,
+    "loop_dependent_mismatch.urdf",
+    [
+        ":56:",
+        "loop \"loop1\"",
+        "1 joint(s) are declared dependent",
+        "remove 2"
+    ]
+);
+bad!(
+    coupling_missing_link,
+    "coupling_missing_link.urdf",
+    [":9:", "coupling \"gear1\" <predecessor>", "lnk1"]
+);
+bad!(
+    mimic_missing_joint,
+    "mimic_missing_joint.urdf",
+    [":9:", "joint \"finger2\" <mimic>", "finger_1"]
+);

@@ -9,7 +9,10 @@ use common::{load_model, Rng};
 use embedyn::constraints::{self, complete_configuration, complete_velocity, constraint_violation};
 use embedyn::linalg::cholesky_in_place;
 use embedyn::nalgebra::DMatrix;
-use embedyn::{aba, constraint_kinematics, embedding_map, forward_kinematics, kkt_forward_dynamics, reduced_mass_matrix, relative_error, rnea, JointType, Model, Workspace};
+use embedyn::{
+    aba, constraint_kinematics, embedding_map, forward_kinematics, kkt_forward_dynamics,
+    reduced_mass_matrix, relative_error, rnea, JointType, Model, Workspace,
+};
 
 /// Every model with loops, couplings or mimic joints the tests run on: (path, --floating).
 pub const LOOP_MODELS: [(&str, bool); 17] = [
@@ -34,7 +37,11 @@ pub const LOOP_MODELS: [(&str, bool); 17] = [
 
 /// A consistent random state near the zero configuration: independent coordinates perturbed by up to
 /// ±0.4 (rad or m·0.4), dependent ones completed, velocities random and projected.
-pub fn consistent_state(model: &Model<f64>, ws: &mut Workspace<f64>, rng: &mut Rng) -> (Vec<f64>, Vec<f64>) {
+pub fn consistent_state(
+    model: &Model<f64>,
+    ws: &mut Workspace<f64>,
+    rng: &mut Rng,
+) -> (Vec<f64>, Vec<f64>) {
     let mut q = model.neutral_configuration();
     for (j, joint) in model.joints.iter().enumerate() {
         match joint.joint_type {
@@ -48,17 +55,27 @@ pub fn consistent_state(model: &Model<f64>, ws: &mut Workspace<f64>, rng: &mut R
                     q[joint.q_index + 3 + k] = quat[k] / n;
                 }
             }
-            JointType::Prismatic if model.is_independent(j) => q[joint.q_index] = rng.uniform(-0.05, 0.05),
+            JointType::Prismatic if model.is_independent(j) => {
+                q[joint.q_index] = rng.uniform(-0.05, 0.05)
+            }
             _ if model.is_independent(j) => q[joint.q_index] = rng.uniform(-0.4, 0.4),
             _ => {}
         }
     }
     let residual = complete_configuration(model, ws, &mut q).unwrap();
-    assert!(residual <= 1e-12, "{}: position completion left {residual:e}", model.name);
+    assert!(
+        residual <= 1e-12,
+        "{}: position completion left {residual:e}",
+        model.name
+    );
     let mut v = rng.vec(model.nv(), -1.0, 1.0);
     complete_velocity(model, ws, &q, &mut v).unwrap();
     let (pos, vel) = constraint_violation(model, ws, &q, &v).unwrap();
-    assert!(pos <= 1e-12 && vel <= 1e-12, "{}: residuals {pos:e} {vel:e}", model.name);
+    assert!(
+        pos <= 1e-12 && vel <= 1e-12,
+        "{}: residuals {pos:e} {vel:e}",
+        model.name
+    );
     (q, v)
 }
 
@@ -78,12 +95,20 @@ fn embedding_matches_the_lagrange_multiplier_solution() {
             worst = worst.max(relative_error(&qdd, &qdd_kkt));
         }
         eprintln!("{path}: embedded ABA vs KKT {worst:.1e}");
-        assert!(worst <= 1e-9, "{path}: embedded ABA differs from the KKT solution by {worst:e}");
+        assert!(
+            worst <= 1e-9,
+            "{path}: embedded ABA differs from the KKT solution by {worst:e}"
+        );
     }
 }
 
 /// J, J̇v of the kept rows, and the residuals, at (q, v).
-fn constraint_rows(model: &Model<f64>, ws: &mut Workspace<f64>, q: &[f64], v: &[f64]) -> (DMatrix<f64>, Vec<f64>, Vec<f64>) {
+fn constraint_rows(
+    model: &Model<f64>,
+    ws: &mut Workspace<f64>,
+    q: &[f64],
+    v: &[f64],
+) -> (DMatrix<f64>, Vec<f64>, Vec<f64>) {
     constraint_kinematics(model, ws, q, v).unwrap();
     let raw = model.constraint_raw_rows();
     let mut jac = DMatrix::zeros(raw, model.nv());
@@ -109,20 +134,33 @@ fn accelerations_satisfy_the_constraints_and_rnea_inverts_them() {
         let scale = qdd.iter().fold(1.0f64, |m, x| m.max(x.abs()));
         for row in 0..jac.nrows() {
             let s: f64 = (0..model.nv()).map(|c| jac[(row, c)] * qdd[c]).sum::<f64>() + bias[row];
-            assert!(s.abs() <= 1e-9 * scale, "{path}: acceleration constraint row {row}: {s:e}");
+            assert!(
+                s.abs() <= 1e-9 * scale,
+                "{path}: acceleration constraint row {row}: {s:e}"
+            );
         }
         // RNEA of ABA's result gives back τ on the independent coordinates: Xᵀ τ' = Xᵀ τ.
         let tau_back = rnea(&model, &mut ws, &q, &v, &qdd).unwrap().to_vec();
         let x = embedding_map(&model, &mut ws, &q).unwrap();
-        let project = |t: &[f64]| -> Vec<f64> { (0..x.ncols()).map(|c| (0..model.nv()).map(|r| x[(r, c)] * t[r]).sum()).collect() };
+        let project = |t: &[f64]| -> Vec<f64> {
+            (0..x.ncols())
+                .map(|c| (0..model.nv()).map(|r| x[(r, c)] * t[r]).sum())
+                .collect()
+        };
         let e = relative_error(&project(&tau_back), &project(&tau));
         assert!(e <= 1e-9, "{path}: Xᵀ RNEA(ABA) vs Xᵀ τ: {e:e}");
         // Xᵀ M X symmetric positive definite.
         let m = reduced_mass_matrix(&model, &mut ws, &q).unwrap();
         assert_eq!(m.nrows(), model.independent_nv());
-        assert!(relative_error(m.as_slice(), m.transpose().as_slice()) <= 1e-14, "{path}: XᵀMX not symmetric");
+        assert!(
+            relative_error(m.as_slice(), m.transpose().as_slice()) <= 1e-14,
+            "{path}: XᵀMX not symmetric"
+        );
         let mut l = m.clone();
-        assert!(cholesky_in_place(&mut l) > 0.0, "{path}: XᵀMX not positive definite");
+        assert!(
+            cholesky_in_place(&mut l) > 0.0,
+            "{path}: XᵀMX not positive definite"
+        );
     }
 }
 
@@ -135,7 +173,17 @@ fn jacobian_and_bias_match_finite_differences_of_the_position_constraint() {
         let (q, v) = consistent_state(&model, &mut ws, &mut rng);
         let (jac, bias, _) = constraint_rows(&model, &mut ws, &q, &v);
         // A direction in the 1-DoF joints only (a floating base would need the quaternion map).
-        let dir: Vec<f64> = model.joints.iter().flat_map(|j| if j.nq() == 1 { vec![rng.uniform(-1.0, 1.0)] } else { vec![0.0; j.nv()] }).collect();
+        let dir: Vec<f64> = model
+            .joints
+            .iter()
+            .flat_map(|j| {
+                if j.nq() == 1 {
+                    vec![rng.uniform(-1.0, 1.0)]
+                } else {
+                    vec![0.0; j.nv()]
+                }
+            })
+            .collect();
         let shifted = |s: f64| -> Vec<f64> {
             let mut qs = q.clone();
             for j in &model.joints {
@@ -178,13 +226,21 @@ fn jacobian_and_bias_match_finite_differences_of_the_position_constraint() {
         let (j_minus, _, _) = constraint_rows(&model, &mut ws, &move_q(-h), &vv);
         let mut worst_b = 0.0f64;
         for row in 0..jac.nrows() {
-            let fd: f64 = (0..model.nv()).map(|c| (j_plus[(row, c)] - j_minus[(row, c)]) / (2.0 * h) * vv[c]).sum();
+            let fd: f64 = (0..model.nv())
+                .map(|c| (j_plus[(row, c)] - j_minus[(row, c)]) / (2.0 * h) * vv[c])
+                .sum();
             worst_b = worst_b.max((fd - bias_vv[row]).abs());
         }
         let _ = bias;
         eprintln!("{path}: |J − FD| {worst_j:.1e}, |J̇v − FD| {worst_b:.1e}");
-        assert!(worst_j <= 1e-7, "{path}: constraint Jacobian off its finite difference by {worst_j:e}");
-        assert!(worst_b <= 1e-6, "{path}: J̇v off its finite difference by {worst_b:e}");
+        assert!(
+            worst_j <= 1e-7,
+            "{path}: constraint Jacobian off its finite difference by {worst_j:e}"
+        );
+        assert!(
+            worst_b <= 1e-6,
+            "{path}: J̇v off its finite difference by {worst_b:e}"
+        );
     }
 }
 
@@ -203,6 +259,55 @@ fn position_completion_reaches_machine_precision_and_keeps_the_branch() {
     }
     let residual = complete_configuration(&model, &mut ws, &mut guess).unwrap();
     assert!(residual <= 1e-12, "{residual:e}");
-    assert!(relative_error(&guess, &q) <= 1e-10, "completion moved to another branch: {guess:?} vs {q:?}");
+    assert!(
+        relative_error(&guess, &q) <= 1e-10,
+        "completion moved to another branch: {guess:?} vs {q:?}"
+    );
     forward_kinematics(&model, &mut ws, &guess, &vec![0.0; model.nv()]).unwrap();
+}
+
+/// The same physical four-bar cut at a terminal joint (the rocker is a child of the ground) and at an
+/// internal joint (the loop closes back onto the ground): the paper's Eqs. 43 and 44 must agree. The
+/// coordinates map by q_int = T q_term, T = [[1,0,0,0],[0,1,0,0],[0,0,1,0],[−1,−1,0,1]]
+/// (models/loops/README.md), velocities and accelerations likewise.
+#[test]
+fn four_bar_cut_at_terminal_and_internal_joints_agree() {
+    let term = load_model::<f64>("models/loops/four_bar_terminal.urdf", false);
+    let int = load_model::<f64>("models/loops/four_bar_internal.urdf", false);
+    let names = ["crank_joint", "coupler_joint", "tip_joint", "rocker_joint"];
+    let vi = |m: &Model<f64>, n: &str| m.joints[m.joint_index(n).unwrap()].v_index;
+    let map = |m_from: &Model<f64>, m_to: &Model<f64>, x: &[f64]| -> Vec<f64> {
+        let g = |n: &str| x[vi(m_from, n)];
+        let mut out = vec![0.0; m_to.nv()];
+        out[vi(m_to, "crank_joint")] = g("crank_joint");
+        out[vi(m_to, "coupler_joint")] = g("coupler_joint");
+        out[vi(m_to, "tip_joint")] = g("tip_joint");
+        out[vi(m_to, "rocker_joint")] = g("rocker_joint") - g("crank_joint") - g("coupler_joint");
+        out
+    };
+    let (mut ws_t, mut ws_i) = (Workspace::new(&term), Workspace::new(&int));
+    let mut rng = Rng(12);
+    let mut worst = 0.0f64;
+    for _ in 0..5 {
+        let (q_t, v_t) = consistent_state(&term, &mut ws_t, &mut rng);
+        let (q_i, v_i) = (map(&term, &int, &q_t), map(&term, &int, &v_t));
+        let (pos, vel) = constraint_violation(&int, &mut ws_i, &q_i, &v_i).unwrap();
+        assert!(pos <= 1e-12 && vel <= 1e-12, "mapped state off the internal cut's constraints: {pos:e} {vel:e}");
+        // Torques on the independent joints only: identical in both coordinate sets (τ_term = Tᵀ τ_int).
+        let mut tau = vec![0.0; 4];
+        tau[vi(&term, "crank_joint")] = rng.uniform(-2.0, 2.0);
+        tau[vi(&term, "tip_joint")] = rng.uniform(-0.5, 0.5);
+        let tau_i = {
+            let mut t = vec![0.0; 4];
+            for n in names {
+                t[vi(&int, n)] = tau[vi(&term, n)];
+            }
+            t
+        };
+        let qdd_t = aba(&term, &mut ws_t, &q_t, &v_t, &tau).unwrap().to_vec();
+        let qdd_i = aba(&int, &mut ws_i, &q_i, &v_i, &tau_i).unwrap().to_vec();
+        worst = worst.max(relative_error(&map(&term, &int, &qdd_t), &qdd_i));
+    }
+    eprintln!("four-bar terminal vs internal cut: {worst:.1e}");
+    assert!(worst <= 1e-9, "the two cuts disagree by {worst:e}");
 }

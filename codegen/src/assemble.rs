@@ -207,7 +207,8 @@ pub fn build_model<T: Real>(robot: &Robot, options: &ModelOptions) -> Result<Mod
             ModelError::NoInertiaAboutAxis { joint, .. } => {
                 robot.joints.iter().position(|j| &j.name == joint)
             }
-            ModelError::DependentMismatch { group, .. }
+            ModelError::LoopNeverCloses { group, .. }
+            | ModelError::DependentMismatch { group, .. }
             | ModelError::SingularDependentChoice { group, .. } => {
                 return LoadError::new(constraint_location(robot, group), e.to_string());
             }

@@ -167,6 +167,8 @@ pub enum ModelError {
     FloatingNotRoot { joint: String },
     #[error("joint `{joint}`: the bodies of the subtree it moves have no inertia about its axis (D = {d:e}), so its acceleration is undetermined")]
     NoInertiaAboutAxis { joint: String, d: f64 },
+    #[error("{group}: the loop's two frames never meet: no configuration closes it (smallest residual found {gap:.3e}; check the <origin> of its predecessor and successor)")]
+    LoopNeverCloses { group: String, gap: f64 },
     #[error("constraint `{constraint}` involves no moving joint")]
     EmptyConstraint { constraint: String },
     #[error("joint `{joint}`: a floating joint cannot be part of a loop or coupling")]

@@ -130,3 +130,37 @@ pub fn complete_velocity<T: Real>(
     ws.groups = groups;
     result
 }
+
+/// cond₁(Y1) of group `group` at `q` (the number the singularity threshold is compared with).
+pub fn y1_condition<T: Real>(
+    model: &Model<T>,
+    ws: &mut Workspace<T>,
+    q: &[T],
+    group: usize,
+) -> Result<f64, DynamicsError> {
+    use crate::linalg::condition_number_1;
+    let zeros = vec![T::zero(); model.nv()];
+    constraint_kinematics(model, ws, q, &zeros)?;
+    let g = &model.groups[group];
+    let gw = &mut ws.groups[group];
+    let mut k = gw.k.clone();
+    core::mem::swap(&mut k, &mut gw.k);
+    let _ = k;
+    let mut gwc = gw.clone();
+    group_rows(model, ws, g, &mut gwc, false);
+    let r = g.rows.len();
+    let mut y1 = nalgebra::DMatrix::zeros(r, r);
+    for (col, &b) in g.dependent.iter().enumerate() {
+        let m = g.bodies.binary_search(&b).expect("member");
+        for row in 0..r {
+            y1[(row, col)] = gwc.k[(row, m)];
+        }
+    }
+    let mut lu = y1.clone();
+    let mut perm = vec![0; r];
+    if lu_in_place(&mut lu, &mut perm).is_err() {
+        return Ok(f64::INFINITY);
+    }
+    let mut scratch = nalgebra::DMatrix::zeros(r, r);
+    Ok(condition_number_1(&y1, &lu, &perm, &mut scratch).to_f64())
+}

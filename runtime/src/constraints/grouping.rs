@@ -151,12 +151,38 @@ pub(crate) fn build_groups<T: Real>(
         // again. If assembly fails, the rank is still taken where we are: never reject for that.
         let mut q = model.neutral_configuration();
         let cols: Vec<usize> = bodies.iter().map(|&b| model.joints[b].v_index).collect();
-        assemble(model, &mut ws, &mut q, &bodies, &raw_rows, 60);
+        let mut assembled = assemble(model, &mut ws, &mut q, &bodies, &raw_rows, 60);
         for (k, &b) in bodies.iter().enumerate() {
             q[model.joints[b].q_index] +=
                 T::from_f64(0.3 * (1.0 + k as f64 * 0.618_033_988_749).sin());
         }
-        assemble(model, &mut ws, &mut q, &bodies, &raw_rows, 60);
+        assembled |= assemble(model, &mut ws, &mut q, &bodies, &raw_rows, 60);
+        // A loop that assembles nowhere is a modelling error (its frames can never meet); one that merely
+        // fails to assemble at the zero configuration is not. Try spread-out starts before deciding.
+        let mut restart = 0;
+        while !assembled && restart < 8 {
+            restart += 1;
+            let mut trial = model.neutral_configuration();
+            for (k, &b) in bodies.iter().enumerate() {
+                let x = ((restart * 7 + k * 13) as f64 * 0.754_877_666).fract();
+                trial[model.joints[b].q_index] =
+                    T::from_f64(std::f64::consts::PI * (2.0 * x - 1.0));
+            }
+            if assemble(model, &mut ws, &mut trial, &bodies, &raw_rows, 200) {
+                q = trial;
+                assembled = true;
+            }
+        }
+        if !assembled && constraints.iter().any(|&c| model.constraints[c].is_loop()) {
+            let zeros = vec![T::zero(); model.nv()];
+            forward_kinematics(model, &mut ws, &q, &zeros).expect("sizes match");
+            let mut r = vec![T::zero(); model.constraint_raw_rows()];
+            residuals(model, &ws, &q, &mut r);
+            let gap = raw_rows
+                .iter()
+                .fold(0.0f64, |m, &i| m.max(r[i].to_f64().abs()));
+            return Err(ModelError::LoopNeverCloses { group: name, gap });
+        }
         let k_mat = group_jacobian(model, &mut ws, &q, &raw_rows, &cols);
         let kept_local = independent_rows(&k_mat, RANK_TOLERANCE);
         let rank = kept_local.len();
@@ -199,7 +225,10 @@ pub(crate) fn build_groups<T: Real>(
             condition_at_load: 0.0,
         };
         group.condition_at_load = y1_condition(model, &mut ws, &q, &group);
-        if (group.condition_at_load.is_nan() || group.condition_at_load >= super::SINGULARITY_THRESHOLD) && rank > 0 {
+        if (group.condition_at_load.is_nan()
+            || group.condition_at_load >= super::SINGULARITY_THRESHOLD)
+            && rank > 0
+        {
             return Err(ModelError::SingularDependentChoice {
                 group: name,
                 condition: group.condition_at_load,

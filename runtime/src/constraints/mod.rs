@@ -12,7 +12,9 @@ mod embedding;
 mod grouping;
 
 pub use closure::{LoopClosure, LoopType};
-pub use completion::{complete_configuration, complete_velocity, constraint_violation};
+pub use completion::{
+    complete_configuration, complete_velocity, constraint_violation, y1_condition,
+};
 pub use embedding::SINGULARITY_THRESHOLD;
 pub(crate) use embedding::{embed, GroupWorkspace};
 pub(crate) use grouping::build_groups;
