@@ -72,6 +72,20 @@ def main():
               "| N | ns per call | ns per body |", "|---:|---:|---:|"]
     for n, t in chain:
         lines.append(f"| {n} | {fmt(t)} | {'—' if t is None else f'{t / n:.1f}'} |")
+    lines += ["", "Constraint embedding (embedded O(N) forward dynamics) against the Lagrange-multiplier (KKT) "
+              "baseline of the same runtime, ns per call, f64. GRBDA column: GRBDA's cluster forward dynamics "
+              "as measured on this machine class (shared/PEERS.md, not this run).", "",
+              "| model | spanning nv | embedded | KKT | KKT / embedded | GRBDA FD | GRBDA / embedded |",
+              "|---|---:|---:|---:|---:|---:|---:|"]
+    grbda = {"four_bar": 24980, "six_bar": 46220, "revolute_rotor_chain": 7630, "mini_cheetah": 32450,
+             "mit_humanoid": 51270, "jvrc1_humanoid": 76620}
+    spanning = {"rotor_chain_10": 20, "rotor_chain_50": 100, "rotor_chain_200": 400, "four_bar": 3, "six_bar": 5,
+                "revolute_rotor_chain": 6, "mini_cheetah": 30, "mit_humanoid": 42, "jvrc1_humanoid": 63}
+    for m in ["rotor_chain_10", "rotor_chain_50", "rotor_chain_200", "four_bar", "six_bar",
+              "revolute_rotor_chain", "mini_cheetah", "mit_humanoid", "jvrc1_humanoid"]:
+        e, k = median_ns("embedded_aba", m), median_ns("kkt_aba", m)
+        g = grbda.get(m)
+        lines.append(f"| {m} | {spanning[m]} | {fmt(e)} | {fmt(k)} | {ratio(k, e)} | {fmt(g)} | {ratio(g, e)} |")
     lines.append("<!-- /interpreted-table -->")
     table = "\n".join(lines)
 

@@ -129,10 +129,81 @@ fn bench_scaling(c: &mut Criterion) {
     g.finish();
 }
 
+/// Models with loops and couplings: (name, path). The rotor chains measure how embedding scales against
+/// the Lagrange-multiplier (KKT) baseline; GRBDA's files compare with GRBDA's published timings.
+pub const LOOP_MODELS: [(&str, &str); 9] = [
+    ("rotor_chain_10", "models/loops/rotor_chain_10.urdf"),
+    ("rotor_chain_50", "models/loops/rotor_chain_50.urdf"),
+    ("rotor_chain_200", "models/loops/rotor_chain_200.urdf"),
+    ("four_bar", "tests/data/grbda/four_bar.urdf"),
+    ("six_bar", "tests/data/grbda/six_bar.urdf"),
+    (
+        "revolute_rotor_chain",
+        "tests/data/grbda/revolute_rotor_chain.urdf",
+    ),
+    ("mini_cheetah", "tests/data/grbda/mini_cheetah.urdf"),
+    ("mit_humanoid", "tests/data/grbda/mit_humanoid.urdf"),
+    ("jvrc1_humanoid", "tests/data/grbda/jvrc1_humanoid.urdf"),
+];
+
+/// 16 consistent states of a loop model: independent coordinates within ±0.3 of zero, completed.
+fn loop_states(model: &Model<f64>) -> States<f64> {
+    use embedyn::constraints::{complete_configuration, complete_velocity};
+    let mut ws = Workspace::new(model);
+    let mut rng = Rng(7);
+    let mut out = States {
+        q: vec![],
+        v: vec![],
+        x: vec![],
+    };
+    while out.q.len() < 16 {
+        let mut q = model.neutral_configuration();
+        for j in 0..model.joints.len() {
+            if model.is_independent(j) && model.joints[j].nq() == 1 {
+                q[model.joints[j].q_index] = rng.uniform(-0.3, 0.3);
+            }
+        }
+        if complete_configuration(model, &mut ws, &mut q).map_or(true, |r| r > 1e-12) {
+            continue;
+        }
+        let mut v = rng.vec(model.nv(), -1.0, 1.0);
+        complete_velocity(model, &mut ws, &q, &mut v).unwrap();
+        out.q.push(q);
+        out.v.push(v);
+        out.x.push(rng.vec(model.nv(), -1.0, 1.0));
+    }
+    out
+}
+
+fn bench_loops(c: &mut Criterion) {
+    for (name, path) in LOOP_MODELS {
+        let model = load_model::<f64>(path, false);
+        let st = loop_states(&model);
+        let mut ws = Workspace::new(&model);
+        let mut k = 0usize;
+        c.bench_function(&format!("embedded_aba/{name}"), |b| {
+            b.iter(|| {
+                k = (k + 1) & 15;
+                black_box(aba(&model, &mut ws, &st.q[k], &st.v[k], &st.x[k]).unwrap()[0])
+            })
+        });
+        c.bench_function(&format!("kkt_aba/{name}"), |b| {
+            b.iter(|| {
+                k = (k + 1) & 15;
+                black_box(
+                    embedyn::kkt_forward_dynamics(&model, &mut ws, &st.q[k], &st.v[k], &st.x[k])
+                        .unwrap()[0],
+                )
+            })
+        });
+    }
+}
+
 fn all(c: &mut Criterion) {
     bench_algorithms::<f64>(c, "");
     bench_algorithms::<f32>(c, "_f32");
     bench_scaling(c);
+    bench_loops(c);
 }
 
 criterion_group! {

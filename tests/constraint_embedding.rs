@@ -16,8 +16,8 @@ use embedyn::{
 
 /// Every model with loops, couplings or mimic joints the tests run on: (path, --floating).
 pub const LOOP_MODELS: [(&str, bool); 17] = [
-    ("models/loops/four_bar_terminal.urdf", false),
     ("models/loops/four_bar_internal.urdf", false),
+    ("models/loops/four_bar_terminal.urdf", false),
     ("models/loops/slider_crank.urdf", false),
     ("models/loops/geared_motor.urdf", false),
     ("models/loops/rotor_chain_10.urdf", false),
@@ -246,7 +246,7 @@ fn jacobian_and_bias_match_finite_differences_of_the_position_constraint() {
 
 #[test]
 fn position_completion_reaches_machine_precision_and_keeps_the_branch() {
-    let model = load_model::<f64>("models/loops/four_bar_terminal.urdf", false);
+    let model = load_model::<f64>("models/loops/four_bar_internal.urdf", false);
     let mut ws = Workspace::new(&model);
     let mut rng = Rng(9);
     let (q, _) = consistent_state(&model, &mut ws, &mut rng);
@@ -266,14 +266,16 @@ fn position_completion_reaches_machine_precision_and_keeps_the_branch() {
     forward_kinematics(&model, &mut ws, &guess, &vec![0.0; model.nv()]).unwrap();
 }
 
-/// The same physical four-bar cut at a terminal joint (the rocker is a child of the ground) and at an
-/// internal joint (the loop closes back onto the ground): the paper's Eqs. 43 and 44 must agree. The
-/// coordinates map by q_int = T q_term, T = [[1,0,0,0],[0,1,0,0],[0,0,1,0],[−1,−1,0,1]]
-/// (models/loops/README.md), velocities and accelerations likewise.
+/// The same physical four-bar cut two ways (the paper's Eqs. 43 and 44): at the coupler–rocker pin, with
+/// crank and rocker both children of the ground (the *internal* cut, Eq. 44), and at the rocker's ground
+/// pivot, the spanning tree a chain ground → crank → coupler → rocker closed back onto the ground (the
+/// *terminal* cut, Eq. 43; a `<loop>` whose successor is an ancestor). Coordinates map by
+/// q_terminal = T q_internal, T = [[1,0,0,0],[0,1,0,0],[0,0,1,0],[−1,−1,0,1]] (models/loops/README.md),
+/// velocities and accelerations likewise; torques on the independent joints are the same in both.
 #[test]
 fn four_bar_cut_at_terminal_and_internal_joints_agree() {
-    let term = load_model::<f64>("models/loops/four_bar_terminal.urdf", false);
-    let int = load_model::<f64>("models/loops/four_bar_internal.urdf", false);
+    let term = load_model::<f64>("models/loops/four_bar_internal.urdf", false); // Eq. 44 cut
+    let int = load_model::<f64>("models/loops/four_bar_terminal.urdf", false); // Eq. 43 cut
     let names = ["crank_joint", "coupler_joint", "tip_joint", "rocker_joint"];
     let vi = |m: &Model<f64>, n: &str| m.joints[m.joint_index(n).unwrap()].v_index;
     let map = |m_from: &Model<f64>, m_to: &Model<f64>, x: &[f64]| -> Vec<f64> {
@@ -292,7 +294,10 @@ fn four_bar_cut_at_terminal_and_internal_joints_agree() {
         let (q_t, v_t) = consistent_state(&term, &mut ws_t, &mut rng);
         let (q_i, v_i) = (map(&term, &int, &q_t), map(&term, &int, &v_t));
         let (pos, vel) = constraint_violation(&int, &mut ws_i, &q_i, &v_i).unwrap();
-        assert!(pos <= 1e-12 && vel <= 1e-12, "mapped state off the internal cut's constraints: {pos:e} {vel:e}");
+        assert!(
+            pos <= 1e-12 && vel <= 1e-12,
+            "mapped state off the internal cut's constraints: {pos:e} {vel:e}"
+        );
         // Torques on the independent joints only: identical in both coordinate sets (τ_term = Tᵀ τ_int).
         let mut tau = vec![0.0; 4];
         tau[vi(&term, "crank_joint")] = rng.uniform(-2.0, 2.0);
@@ -308,6 +313,6 @@ fn four_bar_cut_at_terminal_and_internal_joints_agree() {
         let qdd_i = aba(&int, &mut ws_i, &q_i, &v_i, &tau_i).unwrap().to_vec();
         worst = worst.max(relative_error(&map(&term, &int, &qdd_t), &qdd_i));
     }
-    eprintln!("four-bar terminal vs internal cut: {worst:.1e}");
+    eprintln!("four-bar internal (Eq. 44) vs terminal (Eq. 43) cut: {worst:.1e}");
     assert!(worst <= 1e-9, "the two cuts disagree by {worst:e}");
 }

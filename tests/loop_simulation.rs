@@ -57,7 +57,7 @@ fn simulate(model: &Model<f64>, q0: &[f64], v0: &[f64], h: f64, steps: usize) ->
 
 #[test]
 fn ten_thousand_steps_stay_on_the_constraints_and_conserve_energy() {
-    let model = load_model::<f64>("models/loops/four_bar_terminal.urdf", false);
+    let model = load_model::<f64>("models/loops/four_bar_internal.urdf", false);
     let mut ws = Workspace::new(&model);
     let mut q = model.neutral_configuration();
     let mut rng = Rng(4);

@@ -269,8 +269,14 @@ fn model_errors_reach_stderr() {
 #[test]
 fn loops_through_the_cli_match_pinocchio_reference_values() {
     let tau_ref = [-0.4241811786637768, -0.09862149314358182];
-    let m_ref = [[0.014175494833864882, -0.0017084420123845286], [-0.0017084420123845286, 0.0020330000000000005]];
-    for file in ["models/loops/four_bar_terminal.urdf", "models/loops/four_bar_internal.urdf"] {
+    let m_ref = [
+        [0.014175494833864882, -0.0017084420123845286],
+        [-0.0017084420123845286, 0.0020330000000000005],
+    ];
+    for file in [
+        "models/loops/four_bar_internal.urdf",
+        "models/loops/four_bar_terminal.urdf",
+    ] {
         let model = repo(file);
         let info = json_of(&["info", &model], "");
         assert_eq!(info["independent_nv"], 2, "{file}");
@@ -278,12 +284,27 @@ fn loops_through_the_cli_match_pinocchio_reference_values() {
         assert_eq!(g["independent"], json!(["crank_joint"]), "{file}");
         assert_eq!(g["equations"], 2, "{file}");
         assert_eq!(g["redundant_equations"], 3, "{file}");
-        let independent: Vec<bool> = info["joints"].as_array().unwrap().iter().map(|j| j["independent"].as_bool().unwrap()).collect();
+        let independent: Vec<bool> = info["joints"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|j| j["independent"].as_bool().unwrap())
+            .collect();
         assert_eq!(independent, [true, false, true, false], "{file}");
-        let zero = json!({"samples": [{"q": vec![0.0; 4], "v": vec![0.0; 4], "qdd": vec![0.0; 4]}]}).to_string();
+        let zero =
+            json!({"samples": [{"q": vec![0.0; 4], "v": vec![0.0; 4], "qdd": vec![0.0; 4]}]})
+                .to_string();
         let rnea = json_of(&["eval", &model, "--algo", "rnea"], &zero);
-        let t: Vec<f64> = rnea["samples"][0]["tau_independent"].as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect();
-        assert!((t[0] - tau_ref[0]).abs() < 1e-12 && (t[1] - tau_ref[1]).abs() < 1e-12, "{file}: {t:?}");
+        let t: Vec<f64> = rnea["samples"][0]["tau_independent"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x.as_f64().unwrap())
+            .collect();
+        assert!(
+            (t[0] - tau_ref[0]).abs() < 1e-12 && (t[1] - tau_ref[1]).abs() < 1e-12,
+            "{file}: {t:?}"
+        );
         let crba = json_of(&["eval", &model, "--algo", "crba"], &zero);
         for r in 0..2 {
             for c in 0..2 {
@@ -298,18 +319,33 @@ fn loops_through_the_cli_match_pinocchio_reference_values() {
 fn complete_then_eval_a_loop_model() {
     let model = repo("models/loops/slider_crank.urdf");
     // Independent crank at 0.3 rad moving at 1 rad/s; dependent entries are a guess.
-    let (ok, out, err) = embedyn(&["complete", &model], &json!({"samples": [{"q": [0.3, 0.0, 0.0], "v": [1.0, 0.0, 0.0]}]}).to_string());
+    let (ok, out, err) = embedyn(
+        &["complete", &model],
+        &json!({"samples": [{"q": [0.3, 0.0, 0.0], "v": [1.0, 0.0, 0.0]}]}).to_string(),
+    );
     assert!(ok, "{err}");
     let done: Value = serde_json::from_str(&out).unwrap();
     let s = &done["samples"][0];
     assert!(s["residual"].as_f64().unwrap() <= 1e-12, "{s}");
     assert_eq!(s["q"][0], 0.3);
-    let input = json!({"samples": [{"q": s["q"], "v": s["v"], "tau": [0.5, 0.0, 0.0]}]}).to_string();
+    let input =
+        json!({"samples": [{"q": s["q"], "v": s["v"], "tau": [0.5, 0.0, 0.0]}]}).to_string();
     let aba = json_of(&["eval", &model, "--algo", "aba"], &input);
     assert_eq!(aba["samples"][0]["qdd"].as_array().unwrap().len(), 3);
-    assert_eq!(aba["samples"][0]["qdd_independent"].as_array().unwrap().len(), 1);
+    assert_eq!(
+        aba["samples"][0]["qdd_independent"]
+            .as_array()
+            .unwrap()
+            .len(),
+        1
+    );
     // An inconsistent state is refused with its residual.
-    let bad = json!({"samples": [{"q": [0.3, 0.0, 0.0], "v": [1.0, 0.0, 0.0], "tau": [0.0, 0.0, 0.0]}]}).to_string();
+    let bad =
+        json!({"samples": [{"q": [0.3, 0.0, 0.0], "v": [1.0, 0.0, 0.0], "tau": [0.0, 0.0, 0.0]}]})
+            .to_string();
     let e = error_of(&["eval", &model, "--algo", "aba"], &bad);
-    assert!(e.contains("sample 0") && e.contains("violates") && e.contains("embedyn complete"), "{e}");
+    assert!(
+        e.contains("sample 0") && e.contains("violates") && e.contains("embedyn complete"),
+        "{e}"
+    );
 }

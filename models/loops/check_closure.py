@@ -2,7 +2,7 @@
 """Checks the closed-loop models of models/loops: every loop closes at q = 0, every coupling and mimic
 holds at q = 0, the velocity-constraint Jacobian has its generic rank at q = 0 and the declared dependent
 joints form a regular partition there, the groups and DoF counts, and the inertias are valid.
-Also checks the coordinate map between four_bar_terminal and four_bar_internal, and the toggle angle of
+Also checks the coordinate map between four_bar_internal and four_bar_terminal, and the toggle angle of
 singular_four_bar. Deterministic; standard library + numpy. Exit code 1 on any failure.
 
 Part of embedyn's test models. Original to this project. Licence: MIT OR Apache-2.0.
@@ -447,11 +447,11 @@ def report(path):
 
 
 def check_four_bar_map(dirname):
-    """Same physical motion in both four-bar files: solve the terminal file for several crank angles,
+    """Same physical motion in both four-bar files: solve the internal file for several crank angles,
     map with q_rocker(int) = q_rocker(term) - q_crank - q_coupler, compare body poses."""
-    t = Model(os.path.join(dirname, "four_bar_terminal.urdf"))
-    i = Model(os.path.join(dirname, "four_bar_internal.urdf"))
-    print("== four_bar_terminal <-> four_bar_internal coordinate map")
+    t = Model(os.path.join(dirname, "four_bar_internal.urdf"))
+    i = Model(os.path.join(dirname, "four_bar_terminal.urdf"))
+    print("== four_bar_internal <-> four_bar_terminal coordinate map")
     worst_res, worst_pose, worst_vel = 0.0, 0.0, 0.0
     q = {"crank_joint": 0.0, "coupler_joint": 0.0, "tip_joint": 0.4, "rocker_joint": 0.0}
     for qc in (0.0, 0.3, 0.9, 1.7, 2.6, 3.1, 0.0, -0.5, -1.4, -2.5, -3.1):
@@ -471,8 +471,8 @@ def check_four_bar_map(dirname):
             ct = Tt[link][1] + Tt[link][0] @ floats(t.links[link].find("inertial/origin").get("xyz"))
             ci = Ti[link][1] + Ti[link][0] @ floats(i.links[link].find("inertial/origin").get("xyz"))
             worst_pose = max(worst_pose, np.max(np.abs(ct - ci)), np.max(np.abs(Tt[link][0] - Ti[link][0])))
-        # velocities: v(int) = T v(term) maps the terminal file's admissible velocities onto the
-        # internal file's (K_int T v = 0 for every v with K_term v = 0)
+        # velocities: v(int) = T v(term) maps the internal file's admissible velocities onto the
+        # terminal file's (K_int T v = 0 for every v with K_term v = 0)
         Tm = np.array([[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [-1, -1, 0, 1.0]])
         assert [J.name for J in t.moving] == [J.name for J in i.moving] == \
             ["crank_joint", "coupler_joint", "tip_joint", "rocker_joint"]

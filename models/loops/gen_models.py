@@ -57,45 +57,45 @@ FB_TIP = dict(mass=0.2, com=(0, 0, -0.1), inertia=(3.4e-5, 3.3e-5, 3.0e-5, 1e-6,
 FB_TIP_XYZ = (0.16, 0, -0.03)  # tip pivot in the coupler frame
 
 
-def four_bar(internal):
+def four_bar(terminal):
     a1, b, psi_b, psi_c = four_bar_geometry()
-    if not internal:
-        name = "four_bar_terminal"
+    if not terminal:
+        name = "four_bar_internal"
         comment = (
-            "  four_bar_terminal: planar four-bar (x-z plane, axes +y) with a 0.2 kg pendulum on the coupler.\n"
+            "  four_bar_internal: planar four-bar (x-z plane, axes +y) with a 0.2 kg pendulum on the coupler.\n"
             "  Ground = root link base; crank and rocker pivot on the ground; loop cut at the coupler-rocker\n"
             "  pin (predecessor coupler, successor rocker: a direct child of the ground). Spanning joints in\n"
             "  depth-first order: crank_joint (independent), coupler_joint (dependent), tip_joint,\n"
             "  rocker_joint (dependent). 2 independent DoF (crank_joint, tip_joint).\n"
-            "  Same physical mechanism as four_bar_internal.urdf; see README.md for the coordinate map.\n"
+            "  Same physical mechanism as four_bar_terminal.urdf; see README.md for the coordinate map.\n"
         )
     else:
-        name = "four_bar_internal"
+        name = "four_bar_terminal"
         comment = (
-            "  four_bar_internal: the mechanism of four_bar_terminal.urdf (same masses, inertias, geometry,\n"
+            "  four_bar_terminal: the mechanism of four_bar_internal.urdf (same masses, inertias, geometry,\n"
             "  same tip pendulum), cut at the rocker's ground pivot instead: spanning tree base -> crank ->\n"
             "  coupler -> rocker, loop from the rocker (predecessor) back to base (successor, an ancestor).\n"
             "  Spanning joints in depth-first order: crank_joint (independent), coupler_joint (dependent),\n"
             "  tip_joint, rocker_joint (dependent; rocker relative to the coupler). 2 independent DoF.\n"
-            "  q_rocker(terminal) = q_crank + q_coupler + q_rocker(internal); other coordinates are equal.\n"
+            "  q_rocker(internal) = q_crank + q_coupler + q_rocker(terminal); other coordinates are equal.\n"
         )
     m = Model(name, comment)
     m.link("base", comment="ground (fixed root); pivots at x-z (0, 0) and (0.30, 0.05)")
     m.link("crank", **FB_CRANK)
     m.link("coupler", **FB_COUPLER)
     m.link("tip", **FB_TIP)
-    if not internal:
+    if not terminal:
         m.link("rocker", mass=0.6, com=FB_ROCKER_COM, inertia=FB_ROCKER_I,
                comment="rocker frame on its ground pivot, x axis towards the coupler pin")
     else:
         m.link("rocker", mass=0.6, com=FB_ROCKER_COM_AT_B, inertia=FB_ROCKER_I,
-               comment="rocker frame on the coupler pin (the terminal file's frame shifted 0.22 along x)")
+               comment="rocker frame on the coupler pin (the internal file's frame shifted 0.22 along x)")
     m.joint("crank_joint", "revolute", "base", "crank", (FB_A0[0], 0, FB_A0[1]), (0, FB_PSI_A, 0), Y,
             independent=True)
     m.joint("coupler_joint", "revolute", "crank", "coupler", (FB_LA, 0, 0), (0, psi_b - FB_PSI_A, 0), Y,
             independent=False)
     m.joint("tip_joint", "revolute", "coupler", "tip", FB_TIP_XYZ, (0, 0, 0), Y)
-    if not internal:
+    if not terminal:
         m.joint("rocker_joint", "revolute", "base", "rocker", (FB_C0[0], 0, FB_C0[1]), (0, psi_c, 0), Y,
                 independent=False)
         m.loop("coupler_rocker_pin", "revolute", "coupler", (FB_LB, 0, 0), (0, -psi_b, 0),
@@ -399,8 +399,8 @@ def singular_four_bar():
 
 
 MODELS = [
-    ("four_bar_terminal.urdf", lambda: four_bar(False)),
-    ("four_bar_internal.urdf", lambda: four_bar(True)),
+    ("four_bar_internal.urdf", lambda: four_bar(False)),
+    ("four_bar_terminal.urdf", lambda: four_bar(True)),
     ("slider_crank.urdf", slider_crank),
     ("geared_motor.urdf", geared_motor),
     ("differential_wrist.urdf", differential_wrist),

@@ -5,7 +5,7 @@ read as ordinary joints), which is what is checked here:
 
 1. forward kinematics: every link pose from check_closure.py's own URDF kinematics equals Pinocchio's
    at a pseudo-random configuration (fixed seed) - so both scripts follow the same URDF conventions;
-2. four_bar_terminal and four_bar_internal are the same physical system: along the assembly branch of
+2. four_bar_internal and four_bar_terminal are the same physical system: along the assembly branch of
    q = 0, with the coordinate map of README.md, the mass matrix and the gravity vector reduced to the
    independent coordinates (crank_joint, tip_joint), X^T M X and X^T g, agree.
 
@@ -82,7 +82,7 @@ def reduced(fname, qd):
 
 
 def four_bar_check():
-    t = cc.Model(os.path.join(HERE, "four_bar_terminal.urdf"))
+    t = cc.Model(os.path.join(HERE, "four_bar_internal.urdf"))
     q = {"crank_joint": 0.0, "coupler_joint": 0.0, "tip_joint": 0.4, "rocker_joint": 0.0}
     worst = 0.0
     for qc in (0.0, 0.7, 1.9, 3.0, 0.0, -1.2, -2.8):
@@ -92,8 +92,8 @@ def four_bar_check():
             q = t.solve(q, ["coupler_joint", "rocker_joint"])
         qi = dict(q)
         qi["rocker_joint"] = q["rocker_joint"] - q["crank_joint"] - q["coupler_joint"]
-        Mt, gt = reduced("four_bar_terminal.urdf", q)
-        Mi, gi = reduced("four_bar_internal.urdf", qi)
+        Mt, gt = reduced("four_bar_internal.urdf", q)
+        Mi, gi = reduced("four_bar_terminal.urdf", qi)
         d = max(np.max(np.abs(Mt - Mi)), np.max(np.abs(gt - gi)))
         worst = max(worst, d)
         print("  crank %+.2f: X^T M X = [%.9f %.9f; %.9f %.9f], X^T g = [%.9f %.9f], difference %.1e"
@@ -104,7 +104,7 @@ def four_bar_check():
 def main():
     print("== forward kinematics vs pinocchio %s" % pin.__version__)
     w1 = fk_check()
-    print("== four_bar_terminal vs four_bar_internal: reduced mass matrix and gravity (pinocchio)")
+    print("== four_bar_internal vs four_bar_terminal: reduced mass matrix and gravity (pinocchio)")
     w2 = four_bar_check()
     ok = w1 < 1e-12 and w2 < 1e-12
     print("max differences: kinematics %.1e, reduced dynamics %.1e -> %s" % (w1, w2, "OK" if ok else "FAIL"))

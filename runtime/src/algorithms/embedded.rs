@@ -5,6 +5,14 @@
 //! the group hangs from, so the group's `E_G` is the identity per member, its `φ_G H*_G X_G` is one 6-vector
 //! per member and independent coordinate (`J_b`), and what the group passes to its parent is
 //! `Σ_b P_b − Ū D⁻¹ Ūᵀ` with `Ū = Σ_b P_b J_b` — no 6k×6k matrix is ever formed.
+//!
+//! Errata of the paper, checked against this implementation (and its KKT oracle) rather than copied:
+//! - Eqs. 21 and 24: the step from the aggregate link to its outboard body uses the articulated
+//!   quantities of body `j−1` (the body after the group), so some `(i−1)` there read `(j−1)`; and `𝒯(i)` in
+//!   Eq. 21 stands for the aggregate's generalized force `X_Gᵀ 𝒯_G` (here `ε_G = X_Gᵀ τ_G − …`).
+//! - The prose under Eq. 43 is copied from Eq. 44: Eq. 43's matrices cut c's hinge to link `i+1`, a loop
+//!   closed back onto the tree (URDF+ writes it as a `<loop>` whose successor is an ancestor); both cuts
+//!   are tested to give the same motion (tests/constraint_embedding.rs).
 
 use super::aba::{backward_step, forward_step, init_articulated};
 use super::{check_len, crba, rnea, velocity_sweep, DynamicsError, Workspace};
