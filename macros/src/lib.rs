@@ -1,4 +1,93 @@
-//! The `robot!` proc-macro: a thin shell over `embedyn-codegen`.
-//!
-//! Code generation arrives with the code-generation issue; until then this crate exports nothing, so that
-//! the workspace layout (runtime ← codegen ← macros ← facade) is fixed from the start.
+//! The `robot!` proc-macro: a thin shell over `embedyn-codegen`, which does all the work (the same
+//! function serves `build.rs` and `embedyn generate`).
+
+use proc_macro::TokenStream;
+use quote::quote;
+use syn::parse::{Parse, ParseStream};
+use syn::{Ident, LitStr, Path, Token};
+
+/// `robot!("model.urdf")` or `robot!("model.urdf", floating, minv, crate = ::my_facade)`.
+struct Args {
+    path: LitStr,
+    floating: bool,
+    minv: bool,
+    f64: bool,
+    f32: bool,
+    krate: Option<Path>,
+}
+
+impl Parse for Args {
+    fn parse(input: ParseStream) -> syn::Result<Self> {
+        let path: LitStr = input.parse()?;
+        let mut args = Args { path, floating: false, minv: false, f64: true, f32: true, krate: None };
+        while !input.is_empty() {
+            input.parse::<Token![,]>()?;
+            if input.is_empty() {
+                break;
+            }
+            if input.peek(Token![crate]) {
+                input.parse::<Token![crate]>()?;
+                input.parse::<Token![=]>()?;
+                args.krate = Some(input.parse()?);
+                continue;
+            }
+            let key: Ident = input.parse()?;
+            match key.to_string().as_str() {
+                "floating" => args.floating = true,
+                "minv" => args.minv = true,
+                "f64_only" => args.f32 = false,
+                "f32_only" => args.f64 = false,
+                other => {
+                    return Err(syn::Error::new(
+                        key.span(),
+                        format!("unknown option `{other}` (expected floating, minv, f64_only, f32_only or crate = path)"),
+                    ))
+                }
+            }
+        }
+        Ok(args)
+    }
+}
+
+/// Generates straight-line dynamics for a URDF/URDF+ model at compile time.
+///
+/// The path is relative to the calling crate's `Cargo.toml`. Expands to `NQ`, `NV`, `JOINTS`,
+/// `INDEPENDENT` and modules `f64`/`f32` with `aba`, `rnea`, `crba` (and `minv` with the `minv` option).
+/// Invoke it inside a module of its own (`mod arm { embedyn::robot!("arm.urdf"); }`): the modules are
+/// named after the scalar types. Errors in the model are compile errors that name the element.
+#[proc_macro]
+pub fn robot(input: TokenStream) -> TokenStream {
+    let args = syn::parse_macro_input!(input as Args);
+    match expand(&args) {
+        Ok(ts) => ts.into(),
+        Err(msg) => syn::Error::new(args.path.span(), msg).to_compile_error().into(),
+    }
+}
+
+fn expand(args: &Args) -> Result<proc_macro2::TokenStream, String> {
+    let given = args.path.value();
+    let base = std::env::var("CARGO_MANIFEST_DIR").unwrap_or_else(|_| ".".into());
+    let full = std::path::Path::new(&base).join(&given);
+    let text = std::fs::read_to_string(&full).map_err(|e| format!("embedyn: cannot read the model file `{given}`: {e}"))?;
+    // Messages name the file as the user wrote it, not the absolute path.
+    let loaded = embedyn_codegen::parse_urdf(&text, given.as_ref()).map_err(|e| format!("embedyn: {e}"))?;
+    let krate = args.krate.clone().map_or_else(|| quote!(::embedyn), |p| quote!(#p));
+    let mut algorithms = vec![embedyn_codegen::Algorithm::Aba, embedyn_codegen::Algorithm::Rnea, embedyn_codegen::Algorithm::Crba];
+    if args.minv {
+        algorithms.push(embedyn_codegen::Algorithm::Minv);
+    }
+    let options = embedyn_codegen::GenerateOptions {
+        model: embedyn_codegen::ModelOptions { floating: args.floating, ..Default::default() },
+        algorithms,
+        f64: args.f64,
+        f32: args.f32,
+        helpers: quote!(#krate::codegen_support),
+    };
+    let items = embedyn_codegen::generate_tokens(&loaded, &options).map_err(|e| format!("embedyn: {e}"))?;
+    let abs = full.canonicalize().unwrap_or(full).to_string_lossy().into_owned();
+    Ok(quote! {
+        // Rebuilds when the model file changes.
+        const _: &[u8] = include_bytes!(#abs);
+        #items
+    })
+}

@@ -45,3 +45,10 @@ pub fn relative_error<T: Real>(a: &[T], b: &[T]) -> f64 {
     }
     diff / scale
 }
+
+/// Helpers of the code `embedyn::robot!` and `embedyn_codegen` generate (not for direct use; the
+/// standalone crates of `embedyn generate` carry the same source inline).
+#[doc(hidden)]
+pub mod codegen_support {
+    include!("codegen_support.rs");
+}

@@ -125,8 +125,29 @@ impl<T: Real> Transform<T> {
 }
 
 /// Rodrigues' formula `R = c I + s [a]× + (1 − c) a aᵀ` from a unit axis and the angle's sine and cosine.
+/// An axis along ±x, ±y or ±z gives the exact elementary rotation (its 1 stays exactly 1, and generated
+/// code sees its zeros).
 #[inline(always)]
 pub fn rotation_matrix<T: Real>(a: &Vector3<T>, s: T, c: T) -> Matrix3<T> {
+    let (o, z) = (T::one(), T::zero());
+    let unit = |v: T| v == o || v == -o;
+    if unit(a.x) && a.y == z && a.z == z {
+        let s = s * a.x;
+        return Matrix3::new(o, z, z, z, c, -s, z, s, c);
+    }
+    if unit(a.y) && a.x == z && a.z == z {
+        let s = s * a.y;
+        return Matrix3::new(c, z, s, z, o, z, -s, z, c);
+    }
+    if unit(a.z) && a.x == z && a.y == z {
+        let s = s * a.z;
+        return Matrix3::new(c, -s, z, s, c, z, z, z, o);
+    }
+    rodrigues(a, s, c)
+}
+
+#[inline(always)]
+fn rodrigues<T: Real>(a: &Vector3<T>, s: T, c: T) -> Matrix3<T> {
     let t = T::one() - c;
     let (x, y, z) = (a.x, a.y, a.z);
     Matrix3::new(

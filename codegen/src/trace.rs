@@ -1,0 +1,304 @@
+//! Symbolic tracing: the interpreted algorithms run on [`Sym`], a scalar that records every operation on
+//! runtime values into a tape and folds every operation on constants. The algorithm's loops over bodies
+//! and its branches on joint types run at generation time, so the tape is the algorithm unrolled for one
+//! model: straight-line code with the model's constants folded and the zero structure of axes, transforms
+//! and inertias removed (a product with an exact 0 never reaches the tape).
+//!
+//! One source of truth: the generated code is the oracle's own arithmetic, specialized.
+
+use embedyn_runtime::Real;
+use std::cell::RefCell;
+use std::collections::HashMap;
+use std::ops::{Add, AddAssign, Div, DivAssign, Mul, MulAssign, Neg, Sub, SubAssign};
+
+/// A traced scalar: a constant known at generation time, or a node of the tape.
+#[derive(Clone, Copy, Debug)]
+pub enum Sym {
+    Const(f64),
+    Node(u32),
+}
+
+/// An operation recorded on the tape. Operands are [`Sym`]s, so constants stay inline.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Op {
+    /// Input `index` of argument `arg` (0: q, 1: v, 2: tau/qdd).
+    Input { arg: u8, index: u32 },
+    Add(Sym, Sym),
+    Sub(Sym, Sym),
+    Mul(Sym, Sym),
+    Div(Sym, Sym),
+    Neg(Sym),
+    Sqrt(Sym),
+    Sin(Sym),
+    Cos(Sym),
+    Abs(Sym),
+}
+
+/// A hashable key of an operation (constants by their bits), for common-subexpression elimination.
+#[derive(Clone, Copy, PartialEq, Eq, Hash)]
+enum Key {
+    Input(u8, u32),
+    Bin(u8, (u8, u64), (u8, u64)),
+    Un(u8, (u8, u64)),
+}
+
+fn sym_key(s: Sym) -> (u8, u64) {
+    match s {
+        Sym::Const(c) => (0, c.to_bits()),
+        Sym::Node(n) => (1, n as u64),
+    }
+}
+
+#[derive(Default)]
+pub struct Tape {
+    pub nodes: Vec<Op>,
+    map: HashMap<Key, u32>,
+}
+
+thread_local! {
+    static TAPE: RefCell<Tape> = RefCell::new(Tape::default());
+}
+
+/// Runs `f` on a fresh tape and returns its result with the tape.
+pub fn record<R>(f: impl FnOnce() -> R) -> (R, Tape) {
+    TAPE.with(|t| *t.borrow_mut() = Tape::default());
+    let r = f();
+    let tape = TAPE.with(|t| std::mem::take(&mut *t.borrow_mut()));
+    (r, tape)
+}
+
+fn push(op: Op) -> Sym {
+    let key = match op {
+        Op::Input { arg, index } => Key::Input(arg, index),
+        Op::Add(a, b) => Key::Bin(0, sym_key(a), sym_key(b)),
+        Op::Sub(a, b) => Key::Bin(1, sym_key(a), sym_key(b)),
+        Op::Mul(a, b) => Key::Bin(2, sym_key(a), sym_key(b)),
+        Op::Div(a, b) => Key::Bin(3, sym_key(a), sym_key(b)),
+        Op::Neg(a) => Key::Un(0, sym_key(a)),
+        Op::Sqrt(a) => Key::Un(1, sym_key(a)),
+        Op::Sin(a) => Key::Un(2, sym_key(a)),
+        Op::Cos(a) => Key::Un(3, sym_key(a)),
+        Op::Abs(a) => Key::Un(4, sym_key(a)),
+    };
+    TAPE.with(|t| {
+        let mut t = t.borrow_mut();
+        if let Some(&n) = t.map.get(&key) {
+            return Sym::Node(n);
+        }
+        let n = t.nodes.len() as u32;
+        t.nodes.push(op);
+        t.map.insert(key, n);
+        Sym::Node(n)
+    })
+}
+
+/// An input value of the generated function.
+pub fn input(arg: u8, index: usize) -> Sym {
+    push(Op::Input { arg, index: index as u32 })
+}
+
+/// A value within 1e-14 of 0 or ±1 becomes exactly that (cos(π/2) = 6e-17 is a 0 of the model, not a
+/// number to multiply by); anything else stays exactly as computed.
+pub fn snap(x: f64) -> f64 {
+    if x.abs() < 1e-14 {
+        0.0
+    } else if (x - 1.0).abs() < 1e-14 {
+        1.0
+    } else if (x + 1.0).abs() < 1e-14 {
+        -1.0
+    } else {
+        x
+    }
+}
+
+impl Sym {
+    pub fn constant(&self) -> Option<f64> {
+        match self {
+            Sym::Const(c) => Some(*c),
+            Sym::Node(_) => None,
+        }
+    }
+    fn is(&self, v: f64) -> bool {
+        matches!(self, Sym::Const(c) if *c == v)
+    }
+    /// Order of commutative operands, so that `a + b` and `b + a` share one node.
+    fn order(a: Sym, b: Sym) -> (Sym, Sym) {
+        if sym_key(a) <= sym_key(b) {
+            (a, b)
+        } else {
+            (b, a)
+        }
+    }
+}
+
+impl PartialEq for Sym {
+    fn eq(&self, other: &Self) -> bool {
+        sym_key(*self) == sym_key(*other)
+    }
+}
+
+impl Eq for Sym {}
+
+impl std::hash::Hash for Sym {
+    fn hash<H: std::hash::Hasher>(&self, h: &mut H) {
+        sym_key(*self).hash(h)
+    }
+}
+
+/// Only constants compare; comparisons involving runtime values have no answer at generation time
+/// (the algorithms use them only for diagnostics, which the generated code does not carry).
+impl PartialOrd for Sym {
+    fn partial_cmp(&self, other: &Self) -> Option<std::cmp::Ordering> {
+        match (self, other) {
+            (Sym::Const(a), Sym::Const(b)) => a.partial_cmp(b),
+            _ => None,
+        }
+    }
+}
+
+impl Add for Sym {
+    type Output = Sym;
+    fn add(self, b: Sym) -> Sym {
+        match (self, b) {
+            (Sym::Const(x), Sym::Const(y)) => Sym::Const(x + y),
+            _ if self.is(0.0) => b,
+            _ if b.is(0.0) => self,
+            _ => {
+                let (x, y) = Sym::order(self, b);
+                push(Op::Add(x, y))
+            }
+        }
+    }
+}
+
+impl Sub for Sym {
+    type Output = Sym;
+    fn sub(self, b: Sym) -> Sym {
+        match (self, b) {
+            (Sym::Const(x), Sym::Const(y)) => Sym::Const(x - y),
+            _ if b.is(0.0) => self,
+            _ if self.is(0.0) => -b,
+            _ if self == b => Sym::Const(0.0),
+            _ => push(Op::Sub(self, b)),
+        }
+    }
+}
+
+impl Mul for Sym {
+    type Output = Sym;
+    fn mul(self, b: Sym) -> Sym {
+        match (self, b) {
+            (Sym::Const(x), Sym::Const(y)) => Sym::Const(x * y),
+            _ if self.is(0.0) || b.is(0.0) => Sym::Const(0.0),
+            _ if self.is(1.0) => b,
+            _ if b.is(1.0) => self,
+            _ if self.is(-1.0) => -b,
+            _ if b.is(-1.0) => -self,
+            _ => {
+                let (x, y) = Sym::order(self, b);
+                push(Op::Mul(x, y))
+            }
+        }
+    }
+}
+
+impl Div for Sym {
+    type Output = Sym;
+    fn div(self, b: Sym) -> Sym {
+        match (self, b) {
+            (Sym::Const(x), Sym::Const(y)) => Sym::Const(x / y),
+            _ if b.is(1.0) => self,
+            _ if b.is(-1.0) => -self,
+            _ if self.is(0.0) => Sym::Const(0.0),
+            _ => push(Op::Div(self, b)),
+        }
+    }
+}
+
+impl Neg for Sym {
+    type Output = Sym;
+    fn neg(self) -> Sym {
+        match self {
+            Sym::Const(x) => Sym::Const(-x),
+            Sym::Node(n) => {
+                let inner = TAPE.with(|t| t.borrow().nodes[n as usize]);
+                match inner {
+                    Op::Neg(x) => x,
+                    _ => push(Op::Neg(self)),
+                }
+            }
+        }
+    }
+}
+
+macro_rules! assign_ops {
+    ($($tr:ident $f:ident $op:tt),*) => {$(
+        impl $tr for Sym {
+            fn $f(&mut self, b: Sym) {
+                *self = *self $op b;
+            }
+        }
+    )*};
+}
+assign_ops!(AddAssign add_assign +, SubAssign sub_assign -, MulAssign mul_assign *, DivAssign div_assign /);
+
+impl num_traits::Zero for Sym {
+    fn zero() -> Self {
+        Sym::Const(0.0)
+    }
+    fn is_zero(&self) -> bool {
+        self.is(0.0)
+    }
+}
+
+impl num_traits::One for Sym {
+    fn one() -> Self {
+        Sym::Const(1.0)
+    }
+}
+
+impl Real for Sym {
+    const NAME: &'static str = "sym";
+    fn from_f64(x: f64) -> Self {
+        Sym::Const(x)
+    }
+    /// Constants convert; runtime values have no value at generation time (NaN marks them).
+    fn to_f64(self) -> f64 {
+        self.constant().unwrap_or(f64::NAN)
+    }
+    fn sqrt(self) -> Self {
+        match self {
+            Sym::Const(x) => Sym::Const(x.sqrt()),
+            _ => push(Op::Sqrt(self)),
+        }
+    }
+    fn sin(self) -> Self {
+        match self {
+            Sym::Const(x) => Sym::Const(snap(x.sin())),
+            _ => push(Op::Sin(self)),
+        }
+    }
+    fn cos(self) -> Self {
+        match self {
+            Sym::Const(x) => Sym::Const(snap(x.cos())),
+            _ => push(Op::Cos(self)),
+        }
+    }
+    fn abs(self) -> Self {
+        match self {
+            Sym::Const(x) => Sym::Const(x.abs()),
+            _ => push(Op::Abs(self)),
+        }
+    }
+    fn epsilon() -> Self {
+        Sym::Const(f64::EPSILON)
+    }
+    /// Runtime values are assumed finite: the generated code carries no checks (the model was validated
+    /// when it was loaded, and the hot functions have no panicking or erroring paths).
+    fn is_finite(self) -> bool {
+        self.constant().is_none_or(f64::is_finite)
+    }
+    fn is_positive_finite(self) -> bool {
+        self.constant().is_none_or(|c| c > 0.0 && c.is_finite())
+    }
+}
