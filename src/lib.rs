@@ -21,6 +21,6 @@
 //! ```
 
 pub use embedyn_codegen as codegen;
-pub use embedyn_macros::robot;
 pub use embedyn_codegen::{load, LoadError, Loaded, ModelOptions, Warning};
+pub use embedyn_macros::robot;
 pub use embedyn_runtime::*;

@@ -14,8 +14,15 @@ pub struct Arg {
 
 /// The outputs of a generated function: a vector `&mut [S; n]` or a matrix `&mut [[S; n]; n]`.
 pub enum Output {
-    Vector { name: &'static str, values: Vec<Sym> },
-    Matrix { name: &'static str, n: usize, values: Vec<Sym> },
+    Vector {
+        name: &'static str,
+        values: Vec<Sym>,
+    },
+    Matrix {
+        name: &'static str,
+        n: usize,
+        values: Vec<Sym>,
+    },
 }
 
 /// Statements per chunk function. At ~500 statements rustc -O compiles each in well under a second, and
@@ -41,7 +48,14 @@ fn node_ident(n: u32) -> Ident {
 pub struct EmitError(pub String);
 
 /// Emits `pub fn name(args…, outputs…)` for one scalar module; `helpers` is the path of the helper module.
-pub fn function(name: &str, doc: &str, args: &[Arg], outputs: &[Output], tape: &Tape, helpers: &TokenStream) -> Result<TokenStream, EmitError> {
+pub fn function(
+    name: &str,
+    doc: &str,
+    args: &[Arg],
+    outputs: &[Output],
+    tape: &Tape,
+    helpers: &TokenStream,
+) -> Result<TokenStream, EmitError> {
     let nodes = &tape.nodes;
     // Liveness from the outputs.
     let mut live = vec![false; nodes.len()];
@@ -56,7 +70,11 @@ pub fn function(name: &str, doc: &str, args: &[Arg], outputs: &[Output], tape: &
     for s in &out_syms {
         match s {
             Sym::Node(n) => stack.push(*n),
-            Sym::Const(c) if !c.is_finite() => return Err(EmitError(format!("`{name}`: an output folded to the non-finite constant {c}"))),
+            Sym::Const(c) if !c.is_finite() => {
+                return Err(EmitError(format!(
+                    "`{name}`: an output folded to the non-finite constant {c}"
+                )))
+            }
             _ => {}
         }
     }
@@ -68,7 +86,9 @@ pub fn function(name: &str, doc: &str, args: &[Arg], outputs: &[Output], tape: &
         for operand in operands(&nodes[n as usize]) {
             match operand {
                 Sym::Node(m) => stack.push(m),
-                Sym::Const(c) if !c.is_finite() => return Err(EmitError(format!("`{name}`: a constant folded to {c}"))),
+                Sym::Const(c) if !c.is_finite() => {
+                    return Err(EmitError(format!("`{name}`: a constant folded to {c}")))
+                }
                 _ => {}
             }
         }
@@ -90,9 +110,19 @@ pub fn function(name: &str, doc: &str, args: &[Arg], outputs: &[Output], tape: &
             _ => {}
         }
     }
-    let order: Vec<u32> = (0..nodes.len() as u32).filter(|&i| live[i as usize] && !matches!(nodes[i as usize], Op::Input { .. })).collect();
-    let chunks: Vec<&[u32]> = if order.is_empty() { vec![&order[..]] } else { order.chunks(CHUNK).collect() };
-    let chunk_of: HashMap<u32, usize> = chunks.iter().enumerate().flat_map(|(c, ns)| ns.iter().map(move |&n| (n, c))).collect();
+    let order: Vec<u32> = (0..nodes.len() as u32)
+        .filter(|&i| live[i as usize] && !matches!(nodes[i as usize], Op::Input { .. }))
+        .collect();
+    let chunks: Vec<&[u32]> = if order.is_empty() {
+        vec![&order[..]]
+    } else {
+        order.chunks(CHUNK).collect()
+    };
+    let chunk_of: HashMap<u32, usize> = chunks
+        .iter()
+        .enumerate()
+        .flat_map(|(c, ns)| ns.iter().map(move |&n| (n, c)))
+        .collect();
     // Values that cross a chunk boundary (or reach the outputs from a split body) live in a scratch array.
     let split = chunks.len() > 1;
     let mut slot: HashMap<u32, usize> = HashMap::new();
@@ -248,7 +278,10 @@ pub fn function(name: &str, doc: &str, args: &[Arg], outputs: &[Output], tape: &
     let mut out_stmts = Vec::new();
     for o in outputs {
         match o {
-            Output::Vector { name: oname, values } => {
+            Output::Vector {
+                name: oname,
+                values,
+            } => {
                 let id = format_ident!("{}", oname);
                 let n = values.len();
                 out_params.push(quote!(#id: &mut [S; #n]));
@@ -257,12 +290,23 @@ pub fn function(name: &str, doc: &str, args: &[Arg], outputs: &[Output], tape: &
                     out_stmts.push(quote!(#id[#i] = #val;));
                 }
             }
-            Output::Matrix { name: oname, n, values } => {
+            Output::Matrix {
+                name: oname,
+                n,
+                values,
+            } => {
                 let id = format_ident!("{}", oname);
                 out_params.push(quote!(#id: &mut [[S; #n]; #n]));
                 for r in 0..*n {
                     for c in 0..*n {
-                        let val = value_tokens(&values[r * n + c], split, &slot, &operand, nodes, &arg_names);
+                        let val = value_tokens(
+                            &values[r * n + c],
+                            split,
+                            &slot,
+                            &operand,
+                            nodes,
+                            &arg_names,
+                        );
                         out_stmts.push(quote!(#id[#r][#c] = #val;));
                     }
                 }
@@ -299,11 +343,20 @@ pub fn function(name: &str, doc: &str, args: &[Arg], outputs: &[Output], tape: &
     })
 }
 
-fn value_tokens(v: &Sym, split: bool, slot: &HashMap<u32, usize>, operand: &dyn Fn(&Sym) -> TokenStream, nodes: &[Op], args: &[Ident]) -> TokenStream {
+fn value_tokens(
+    v: &Sym,
+    split: bool,
+    slot: &HashMap<u32, usize>,
+    operand: &dyn Fn(&Sym) -> TokenStream,
+    nodes: &[Op],
+    args: &[Ident],
+) -> TokenStream {
     match v {
         // An input passed straight through to an output.
         Sym::Node(n) if matches!(nodes[*n as usize], Op::Input { .. }) => {
-            let Op::Input { arg, index } = nodes[*n as usize] else { unreachable!() };
+            let Op::Input { arg, index } = nodes[*n as usize] else {
+                unreachable!()
+            };
             let a = &args[arg as usize];
             let i = index as usize;
             quote!(#a[#i])

@@ -18,12 +18,16 @@ mod emit;
 mod error;
 mod generate;
 pub mod ir;
+pub mod standalone;
 pub mod trace;
 mod urdf;
 
 pub use assemble::{build_model, inertial_about_link, ModelOptions, ROOT_JOINT};
 pub use error::{LoadError, Location, Warning};
-pub use generate::{format_tokens, generate_file, generate_tokens, generation_model, Algorithm, GenerateOptions, GENERATOR_VERSION};
+pub use generate::{
+    format_tokens, generate_file, generate_tokens, generation_model, Algorithm, GenerateOptions,
+    GENERATOR_VERSION,
+};
 pub use urdf::{load_urdf, parse_urdf, Loaded};
 
 use embedyn_runtime::{Model, Real};

@@ -22,7 +22,10 @@ pub enum Sym {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Op {
     /// Input `index` of argument `arg` (0: q, 1: v, 2: tau/qdd).
-    Input { arg: u8, index: u32 },
+    Input {
+        arg: u8,
+        index: u32,
+    },
     Add(Sym, Sym),
     Sub(Sym, Sym),
     Mul(Sym, Sym),
@@ -94,7 +97,10 @@ fn push(op: Op) -> Sym {
 
 /// An input value of the generated function.
 pub fn input(arg: u8, index: usize) -> Sym {
-    push(Op::Input { arg, index: index as u32 })
+    push(Op::Input {
+        arg,
+        index: index as u32,
+    })
 }
 
 /// A value within 1e-14 of 0 or ±1 becomes exactly that (cos(π/2) = 6e-17 is a 0 of the model, not a

@@ -19,7 +19,14 @@ struct Args {
 impl Parse for Args {
     fn parse(input: ParseStream) -> syn::Result<Self> {
         let path: LitStr = input.parse()?;
-        let mut args = Args { path, floating: false, minv: false, f64: true, f32: true, krate: None };
+        let mut args = Args {
+            path,
+            floating: false,
+            minv: false,
+            f64: true,
+            f32: true,
+            krate: None,
+        };
         while !input.is_empty() {
             input.parse::<Token![,]>()?;
             if input.is_empty() {
@@ -60,7 +67,9 @@ pub fn robot(input: TokenStream) -> TokenStream {
     let args = syn::parse_macro_input!(input as Args);
     match expand(&args) {
         Ok(ts) => ts.into(),
-        Err(msg) => syn::Error::new(args.path.span(), msg).to_compile_error().into(),
+        Err(msg) => syn::Error::new(args.path.span(), msg)
+            .to_compile_error()
+            .into(),
     }
 }
 
@@ -68,23 +77,40 @@ fn expand(args: &Args) -> Result<proc_macro2::TokenStream, String> {
     let given = args.path.value();
     let base = std::env::var("CARGO_MANIFEST_DIR").unwrap_or_else(|_| ".".into());
     let full = std::path::Path::new(&base).join(&given);
-    let text = std::fs::read_to_string(&full).map_err(|e| format!("embedyn: cannot read the model file `{given}`: {e}"))?;
+    let text = std::fs::read_to_string(&full)
+        .map_err(|e| format!("embedyn: cannot read the model file `{given}`: {e}"))?;
     // Messages name the file as the user wrote it, not the absolute path.
-    let loaded = embedyn_codegen::parse_urdf(&text, given.as_ref()).map_err(|e| format!("embedyn: {e}"))?;
-    let krate = args.krate.clone().map_or_else(|| quote!(::embedyn), |p| quote!(#p));
-    let mut algorithms = vec![embedyn_codegen::Algorithm::Aba, embedyn_codegen::Algorithm::Rnea, embedyn_codegen::Algorithm::Crba];
+    let loaded =
+        embedyn_codegen::parse_urdf(&text, given.as_ref()).map_err(|e| format!("embedyn: {e}"))?;
+    let krate = args
+        .krate
+        .clone()
+        .map_or_else(|| quote!(::embedyn), |p| quote!(#p));
+    let mut algorithms = vec![
+        embedyn_codegen::Algorithm::Aba,
+        embedyn_codegen::Algorithm::Rnea,
+        embedyn_codegen::Algorithm::Crba,
+    ];
     if args.minv {
         algorithms.push(embedyn_codegen::Algorithm::Minv);
     }
     let options = embedyn_codegen::GenerateOptions {
-        model: embedyn_codegen::ModelOptions { floating: args.floating, ..Default::default() },
+        model: embedyn_codegen::ModelOptions {
+            floating: args.floating,
+            ..Default::default()
+        },
         algorithms,
         f64: args.f64,
         f32: args.f32,
         helpers: quote!(#krate::codegen_support),
     };
-    let items = embedyn_codegen::generate_tokens(&loaded, &options).map_err(|e| format!("embedyn: {e}"))?;
-    let abs = full.canonicalize().unwrap_or(full).to_string_lossy().into_owned();
+    let items =
+        embedyn_codegen::generate_tokens(&loaded, &options).map_err(|e| format!("embedyn: {e}"))?;
+    let abs = full
+        .canonicalize()
+        .unwrap_or(full)
+        .to_string_lossy()
+        .into_owned();
     Ok(quote! {
         // Rebuilds when the model file changes.
         const _: &[u8] = include_bytes!(#abs);

@@ -40,6 +40,18 @@ pub enum Command {
         #[arg(long)]
         input: Option<PathBuf>,
     },
+    /// Write a standalone, formatted, `no_std` Rust crate with the model's generated dynamics.
+    Generate {
+        model: PathBuf,
+        /// Output folder (created if needed).
+        #[arg(long)]
+        out: PathBuf,
+        #[arg(long)]
+        floating: bool,
+        /// Also generate `minv` (the O(N²) inverse mass matrix of Eq. 6).
+        #[arg(long)]
+        minv: bool,
+    },
     /// Evaluate an algorithm on the samples of a JSON file (or stdin).
     Eval {
         model: PathBuf,
@@ -97,6 +109,27 @@ pub fn run(cli: Cli) -> Result<serde_json::Value, CliError> {
         Command::Info { model, floating } => {
             let loaded = load_reporting(&model)?;
             info::info(&loaded, &options(floating))
+        }
+        Command::Generate {
+            model,
+            out,
+            floating,
+            minv,
+        } => {
+            let loaded = load_reporting(&model)?;
+            let mut options = crate::GenerateOptions {
+                model: options(floating),
+                ..Default::default()
+            };
+            if minv {
+                options.algorithms.push(crate::Algorithm::Minv);
+            }
+            let files = crate::standalone::write_crate(&loaded, &options, &out)?;
+            Ok(serde_json::json!({
+                "crate": crate::standalone::crate_name(&loaded.robot.name),
+                "out": out,
+                "files": files,
+            }))
         }
         Command::Complete {
             model,
