@@ -230,11 +230,9 @@ pub fn format_tokens(tokens: &TokenStream) -> Result<String, String> {
 /// line for the model file.
 ///
 /// ```no_run
-/// // build.rs
-/// fn main() {
-///     let out = std::path::Path::new(&std::env::var("OUT_DIR").unwrap()).join("arm.rs");
-///     embedyn_codegen::generate_file("models/arm7.urdf".as_ref(), &Default::default(), &out).unwrap();
-/// }
+/// // in build.rs's main():
+/// let out = std::path::Path::new(&std::env::var("OUT_DIR").unwrap()).join("arm.rs");
+/// embedyn_codegen::generate_file("models/arm7.urdf".as_ref(), &Default::default(), &out).unwrap();
 /// ```
 pub fn generate_file(
     model_path: &std::path::Path,

@@ -62,14 +62,15 @@ impl Float for f32 {
 /// minimax polynomials on [−π/4, π/4] (the classic fdlibm kernels' coefficients). Beyond |x| ≈ 8e5 it
 /// defers to libm's full reduction.
 #[inline(always)]
+#[allow(clippy::excessive_precision)]
 pub fn sincos_f64(x: f64) -> (f64, f64) {
-    const TWO_OVER_PI: f64 = 6.366_197_723_675_814e-1;
+    const TWO_OVER_PI: f64 = core::f64::consts::FRAC_2_PI;
     const PIO2_1: f64 = 1.570_796_326_734_125_6e0;
     const PIO2_2: f64 = 6.077_100_506_303_966e-11;
     const PIO2_3: f64 = 2.022_266_248_711_166_5e-21;
     // Rounds to the nearest integer without `f64::round` (not in core): adding and removing 1.5·2⁵².
     const SHIFTER: f64 = 6_755_399_441_055_744.0;
-    if !(libm::fabs(x) < 823_550.0) {
+    if x.is_nan() || libm::fabs(x) >= 823_550.0 {
         return (libm::sin(x), libm::cos(x));
     }
     let k = (x * TWO_OVER_PI + SHIFTER) - SHIFTER;
