@@ -7,6 +7,10 @@ use std::process::ExitCode;
 fn main() -> ExitCode {
     let cli = Cli::parse();
     match run(cli) {
+        Ok(serde_json::Value::String(text)) => {
+            print!("{text}");
+            ExitCode::SUCCESS
+        }
         Ok(json) => {
             println!("{json}");
             ExitCode::SUCCESS

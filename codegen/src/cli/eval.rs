@@ -1,7 +1,8 @@
 //! `embedyn eval`: ABA, RNEA or CRBA on every sample.
 
 use super::samples::{vector, Samples};
-use super::{Algo, CliError, Scalar};
+use super::{Algo, CliError, Engine, Scalar};
+use embedyn_runtime::nalgebra;
 use crate::{Loaded, ModelOptions};
 use embedyn_runtime::constraints::constraint_violation;
 use embedyn_runtime::{
@@ -14,6 +15,7 @@ pub fn eval(
     loaded: &Loaded,
     options: &ModelOptions,
     algo: Algo,
+    engine: Engine,
     scalar: Scalar,
     input: &str,
 ) -> Result<Value, CliError> {
@@ -32,23 +34,92 @@ pub fn eval(
             check_consistent(&model64, &mut ws, &q, &v, i)?;
         }
     }
+    if engine == Engine::Generated {
+        return eval_generated(loaded, options, &model64, algo, scalar, &samples);
+    }
     match scalar {
         Scalar::F64 => eval_in::<f64>(&model64, algo, &samples),
         Scalar::F32 => eval_in::<f32>(&loaded.model(options)?, algo, &samples),
     }
 }
 
-fn eval_in<T: Real>(model: &Model<T>, algo: Algo, samples: &Samples) -> Result<Value, CliError> {
-    let mut ws = Workspace::new(model);
+/// `--engine generated`: the same samples through the compiled generated code; the independent-coordinate
+/// projections (for couplings) use the model's embedding map, as the interpreted engine does.
+fn eval_generated(loaded: &Loaded, options: &ModelOptions, model: &Model<f64>, algo: Algo, scalar: Scalar, samples: &Samples) -> Result<Value, CliError> {
+    let gen_options = crate::GenerateOptions { model: options.clone(), ..Default::default() };
+    let binary = super::runner::build_runner(loaded, &gen_options)?;
     let (nq, nv) = (model.nq(), model.nv());
-    let independent: Vec<usize> = model
+    let mut rows = Vec::with_capacity(samples.samples.len());
+    for (i, s) in samples.samples.iter().enumerate() {
+        let mut row = vector(s, i, "q", nq)?;
+        check_quaternions(model, &row, i)?;
+        let (a, b) = match algo {
+            Algo::Aba => (vector(s, i, "v", nv)?, vector(s, i, "tau", nv)?),
+            Algo::Rnea => (vector(s, i, "v", nv)?, vector(s, i, "qdd", nv)?),
+            Algo::Crba => (vec![0.0; nv], vec![0.0; nv]),
+        };
+        row.extend(a);
+        row.extend(b);
+        rows.push(row);
+    }
+    let name = match algo {
+        Algo::Aba => "aba",
+        Algo::Rnea => "rnea",
+        Algo::Crba => "crba",
+    };
+    let scalar_name = match scalar {
+        Scalar::F64 => "f64",
+        Scalar::F32 => "f32",
+    };
+    let outputs = super::runner::run(&binary, name, scalar_name, "eval", &rows)?;
+    let mut ws = Workspace::new(model);
+    let independent = independent_indices(model);
+    let mut out = Vec::with_capacity(outputs.len());
+    for (i, (o, row)) in outputs.iter().zip(&rows).enumerate() {
+        let o = finite(o, i, name)?;
+        let q = &row[..nq];
+        out.push(match algo {
+            Algo::Aba => json!({ "qdd": o, "qdd_independent": independent.iter().map(|&k| o[k]).collect::<Vec<_>>() }),
+            Algo::Rnea => {
+                let tau_independent: Vec<f64> = if model.has_constraints() {
+                    let x = embedding_map(model, &mut ws, q).map_err(|e| CliError(format!("sample {i}: {e}")))?;
+                    (0..x.ncols()).map(|c| (0..nv).map(|r| x[(r, c)] * o[r]).sum()).collect()
+                } else {
+                    o.clone()
+                };
+                json!({ "tau": o, "tau_independent": tau_independent })
+            }
+            Algo::Crba => {
+                let mut m = nalgebra::DMatrix::from_row_slice(nv, nv, &o);
+                if model.has_constraints() {
+                    let x = embedding_map(model, &mut ws, q).map_err(|e| CliError(format!("sample {i}: {e}")))?;
+                    m = x.transpose() * m * x;
+                }
+                let n = m.nrows();
+                json!({ "M": (0..n).map(|r| (0..n).map(|c| m[(r, c)]).collect::<Vec<f64>>()).collect::<Vec<_>>() })
+            }
+        });
+    }
+    let joints: Vec<&str> = model.joints.iter().map(|j| j.name.as_str()).collect();
+    Ok(json!({ "joints": joints, "samples": out }))
+}
+
+/// v indices of the independent joints, in joint order.
+pub(super) fn independent_indices<T: Real>(model: &Model<T>) -> Vec<usize> {
+    model
         .independent_joints()
         .iter()
         .flat_map(|&j| {
             let joint = &model.joints[j];
             joint.v_index..joint.v_index + joint.nv()
         })
-        .collect();
+        .collect()
+}
+
+fn eval_in<T: Real>(model: &Model<T>, algo: Algo, samples: &Samples) -> Result<Value, CliError> {
+    let mut ws = Workspace::new(model);
+    let (nq, nv) = (model.nq(), model.nv());
+    let independent = independent_indices(model);
     let pick = |x: &[f64]| -> Vec<f64> { independent.iter().map(|&i| x[i]).collect() };
     let mut out = Vec::with_capacity(samples.samples.len());
     for (i, s) in samples.samples.iter().enumerate() {

@@ -3,6 +3,8 @@
 mod complete;
 mod eval;
 mod info;
+mod runner;
+mod bench;
 mod samples;
 
 use crate::{load, LoadError, Loaded, ModelOptions};
@@ -51,6 +53,16 @@ pub enum Command {
         /// Also generate `minv` (the O(N²) inverse mass matrix of Eq. 6).
         #[arg(long)]
         minv: bool,
+    },
+    /// Time every algorithm for each engine and scalar (median ns per call, in-process, pre-generated
+    /// random states).
+    Bench {
+        model: PathBuf,
+        #[arg(long)]
+        floating: bool,
+        /// Print JSON instead of a table.
+        #[arg(long)]
+        json: bool,
     },
     /// Evaluate an algorithm on the samples of a JSON file (or stdin).
     Eval {
@@ -110,6 +122,11 @@ pub fn run(cli: Cli) -> Result<serde_json::Value, CliError> {
             let loaded = load_reporting(&model)?;
             info::info(&loaded, &options(floating))
         }
+        Command::Bench { model, floating, json } => {
+            let loaded = load_reporting(&model)?;
+            let result = bench::bench(&loaded, &options(floating))?;
+            Ok(if json { result } else { serde_json::Value::String(bench::table(&result)) })
+        }
         Command::Generate {
             model,
             out,
@@ -148,14 +165,9 @@ pub fn run(cli: Cli) -> Result<serde_json::Value, CliError> {
             floating,
             input,
         } => {
-            if engine == Engine::Generated {
-                return Err(CliError(
-                    "--engine generated is not available yet in this version: code generation is under construction; use --engine interpreted".into(),
-                ));
-            }
             let loaded = load_reporting(&model)?;
             let text = read_input(input.as_deref())?;
-            eval::eval(&loaded, &options(floating), algo, scalar, &text)
+            eval::eval(&loaded, &options(floating), algo, engine, scalar, &text)
         }
     }
 }

@@ -1,13 +1,12 @@
 //! The mass matrix by the composite-rigid-body algorithm: `ℳ = H φ M φ* H*` (Eq. 3).
 //!
-//! Composite inertias and joint axes are expressed in the world frame, so that the entry of joint `j` in
-//! joint `i`'s column is one dot product `H(j) · (I_c(i) H*(i))` per ancestor, with no per-ancestor frame
-//! change: the composite of a rigid subtree is itself a rigid-body inertia (10 numbers), so the sums are
-//! cheap too.
+//! Everything stays in body frames: the composite inertia of each subtree (a rigid-body inertia, 10
+//! numbers) is carried to the parent frame, and each column `I_c(i) H*(i)` is carried up the ancestors as
+//! a spatial force, one frame change per ancestor. Body frames keep the zero structure of axis-aligned
+//! joints, which generated code exploits; world frames would fill it in.
 
 use super::{check_len, DynamicsError, Workspace};
 use crate::model::Model;
-use crate::spatial::{Force, SpatialInertia};
 use crate::Real;
 use nalgebra::DMatrix;
 
@@ -19,47 +18,38 @@ pub fn crba<'w, T: Real>(
 ) -> Result<&'w DMatrix<T>, DynamicsError> {
     check_len("q", q.len(), model.nq())?;
     let n = model.nbodies();
-    // World poses, world-frame body inertias.
     for (i, joint) in model.joints.iter().enumerate() {
-        let x = joint.placement.compose(&joint.joint_transform(q));
-        let world = match joint.parent {
-            Some(p) => ws.world_placement[p].compose(&x),
-            None => x,
-        };
-        ws.parent_placement[i] = x;
-        ws.world_placement[i] = world;
-        ws.composite[i] = model.bodies[i].inertia.act(&world);
-        for k in 0..joint.nv() {
-            ws.world_subspace[joint.v_index + k] = world.act_motion(&joint.subspace_column(k));
-        }
+        ws.parent_placement[i] = joint.placement.compose(&joint.joint_transform(q));
+        ws.composite[i] = model.bodies[i].inertia;
     }
-    // Composite inertias, leaves first: in a common frame, a plain sum.
+    // Composite inertias, leaves first.
     for i in (0..n).rev() {
         if let Some(p) = model.joints[i].parent {
-            let c = ws.composite[i];
+            let c = ws.composite[i].act(&ws.parent_placement[i]);
             ws.composite[p] = ws.composite[p] + c;
         }
     }
     let m = &mut ws.mass_matrix;
     // Entries of joints on different branches are zero and never written below.
     m.as_mut_slice().fill(T::zero());
-    let sw = &ws.world_subspace;
     for (i, joint) in model.joints.iter().enumerate() {
         for k in 0..joint.nv() {
             let col = joint.v_index + k;
-            let f: Force<T> = SpatialInertia::mul_motion(&ws.composite[i], &sw[col]);
+            let mut f = ws.composite[i].mul_motion(&joint.subspace_column(k));
             // The joint's own block, mirrored so that M is exactly symmetric.
-            for row in col..joint.v_index + joint.nv() {
-                let val = sw[row].dot(&f);
-                m[(row, col)] = val;
-                m[(col, row)] = val;
+            for r in k..joint.nv() {
+                let val = joint.subspace_column(r).dot(&f);
+                m[(joint.v_index + r, col)] = val;
+                m[(col, joint.v_index + r)] = val;
             }
             let mut j = i;
             while let Some(p) = model.joints[j].parent {
+                f = ws.parent_placement[j].act_force(&f);
                 j = p;
                 let jp = &model.joints[j];
-                for row in jp.v_index..jp.v_index + jp.nv() {
-                    let val = sw[row].dot(&f);
+                for r in 0..jp.nv() {
+                    let row = jp.v_index + r;
+                    let val = jp.subspace_column(r).dot(&f);
                     m[(row, col)] = val;
                     m[(col, row)] = val;
                 }

@@ -23,10 +23,8 @@ pub struct Workspace<T: Real> {
     pub force: Vec<Force<T>>,
     /// Articulated (ABA) or composite (CRBA) inertia `P(k)`.
     pub inertia: Vec<ArticulatedInertia<T>>,
-    /// CRBA: composite rigid-body inertia of each subtree, in the world frame.
+    /// CRBA: composite rigid-body inertia of each subtree, in its body frame.
     pub(crate) composite: Vec<SpatialInertia<T>>,
-    /// CRBA: each column of the motion subspace `H*` in the world frame, indexed like `v`.
-    pub(crate) world_subspace: Vec<Motion<T>>,
     /// `P(k) H*(k)` for 1-DoF joints.
     pub(crate) u: Vec<Force<T>>,
     /// `D(k)⁻¹` for 1-DoF joints.
@@ -70,7 +68,6 @@ impl<T: Real> Workspace<T> {
             force: vec![Force::zero(); n],
             inertia: vec![ArticulatedInertia::zero(); n],
             composite: vec![SpatialInertia::zero(); n],
-            world_subspace: vec![Motion::zero(); nv],
             u: vec![Force::zero(); n],
             d_inv: vec![T::zero(); n],
             epsilon: vec![T::zero(); n],
