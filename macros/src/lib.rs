@@ -58,7 +58,7 @@ impl Parse for Args {
 
 /// Generates straight-line dynamics for a URDF/URDF+ model at compile time.
 ///
-/// The path is relative to the calling crate's `Cargo.toml`. Expands to `NQ`, `NV`, `JOINTS`,
+/// The path is relative to the calling crate's `Cargo.toml` (or to `$EMBEDYN_MODEL_DIR` when set). Expands to `NQ`, `NV`, `JOINTS`,
 /// `INDEPENDENT` and modules `f64`/`f32` with `aba`, `rnea`, `crba` (and `minv` with the `minv` option).
 /// Invoke it inside a module of its own (`mod arm { embedyn::robot!("arm.urdf"); }`): the modules are
 /// named after the scalar types. Errors in the model are compile errors that name the element.
@@ -75,7 +75,11 @@ pub fn robot(input: TokenStream) -> TokenStream {
 
 fn expand(args: &Args) -> Result<proc_macro2::TokenStream, String> {
     let given = args.path.value();
-    let base = std::env::var("CARGO_MANIFEST_DIR").unwrap_or_else(|_| ".".into());
+    // Relative paths resolve against `EMBEDYN_MODEL_DIR` when set (build systems that compile outside the
+    // crate's folder, UI tests), else against the calling crate's manifest folder.
+    let base = std::env::var("EMBEDYN_MODEL_DIR")
+        .or_else(|_| std::env::var("CARGO_MANIFEST_DIR"))
+        .unwrap_or_else(|_| ".".into());
     let full = std::path::Path::new(&base).join(&given);
     let text = std::fs::read_to_string(&full)
         .map_err(|e| format!("embedyn: cannot read the model file `{given}`: {e}"))?;

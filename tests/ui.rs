@@ -1,0 +1,11 @@
+//! Compile-time errors of `embedyn::robot!` point at the macro call and name the model element. The
+//! fixtures live in tests/data/bad; `EMBEDYN_MODEL_DIR` points the macro there, because under trybuild
+//! `CARGO_MANIFEST_DIR` is trybuild's own project.
+
+#[test]
+fn robot_macro_errors() {
+    let bad = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data");
+    std::env::set_var("EMBEDYN_MODEL_DIR", bad);
+    let t = trybuild::TestCases::new();
+    t.compile_fail("tests/ui/*.rs");
+}

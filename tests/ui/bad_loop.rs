@@ -1,0 +1,4 @@
+mod robot {
+    embedyn::robot!("bad/loop_missing_link.urdf");
+}
+fn main() {}

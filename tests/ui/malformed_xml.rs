@@ -1,0 +1,4 @@
+mod robot {
+    embedyn::robot!("bad/malformed.urdf");
+}
+fn main() {}

@@ -1,0 +1,4 @@
+mod robot {
+    embedyn::robot!("bad/no_such_model.urdf");
+}
+fn main() {}

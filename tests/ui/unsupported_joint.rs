@@ -1,0 +1,4 @@
+mod robot {
+    embedyn::robot!("bad/planar_joint.urdf");
+}
+fn main() {}
