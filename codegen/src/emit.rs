@@ -27,7 +27,7 @@ pub enum Output {
 
 /// Statements per chunk function. At ~500 statements rustc -O compiles each in well under a second, and
 /// the call boundaries cost a few loads and stores of live values.
-pub const CHUNK: usize = 500;
+pub const CHUNK: usize = 2000;
 
 fn lit(x: f64) -> TokenStream {
     if x < 0.0 || (x == 0.0 && x.is_sign_negative()) {

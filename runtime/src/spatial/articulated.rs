@@ -39,9 +39,10 @@ impl<T: Real> ArticulatedInertia<T> {
         let (ua, ul) = (&u.angular, &u.linear);
         let sa = ua * s;
         let sl = ul * s;
-        self.a -= sa * ua.transpose();
+        // A and C stay symmetric: six products each, mirrored.
+        self.a -= symmetric(|i, j| sa[i] * ua[j]);
         self.b -= sa * ul.transpose();
-        self.c -= sl * ul.transpose();
+        self.c -= symmetric(|i, j| sl[i] * ul[j]);
     }
 
     /// `P − a bᵀ` (one term of a symmetric low-rank update `Σ a_k b_kᵀ`; only the upper-right block of
@@ -67,7 +68,11 @@ impl<T: Real> ArticulatedInertia<T> {
         let pxc = px * c;
         let bpx = b * px;
         // top-left: A − B[p]× + [p]×Bᵀ − [p]×C[p]×, where [p]×Bᵀ = −(B[p]×)ᵀ; top-right: B + [p]×C.
-        let a_new = a - bpx - bpx.transpose() - pxc * px;
+        // Symmetric: six entries, each a row of [p]×C times a column of [p]×.
+        let a_new = symmetric(|i, j| {
+            let pcp = pxc[(i, 0)] * px[(0, j)] + pxc[(i, 1)] * px[(1, j)] + pxc[(i, 2)] * px[(2, j)];
+            a[(i, j)] - bpx[(i, j)] - bpx[(j, i)] - pcp
+        });
         ArticulatedInertia {
             a: a_new,
             b: b + pxc,
@@ -104,4 +109,11 @@ impl<T: Real> core::ops::AddAssign for ArticulatedInertia<T> {
         self.b += o.b;
         self.c += o.c;
     }
+}
+
+/// The symmetric 3×3 matrix with upper-triangle entries `f(i, j)`, `i ≤ j` (six evaluations).
+#[inline(always)]
+fn symmetric<T: Real>(f: impl Fn(usize, usize) -> T) -> Matrix3<T> {
+    let (xx, xy, xz, yy, yz, zz) = (f(0, 0), f(0, 1), f(0, 2), f(1, 1), f(1, 2), f(2, 2));
+    Matrix3::new(xx, xy, xz, xy, yy, yz, xz, yz, zz)
 }
