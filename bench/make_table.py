@@ -59,6 +59,16 @@ def main():
             ours = median_ns(a, m)
             cells += [fmt(ours), fmt(p.get(a)), ratio(ours, p.get(a))]
         lines.append(f"| {m} | {p.get('nv', '')} | " + " | ".join(cells) + " |")
+    lines += ["", "Generated code (`embedyn::robot!`, f64) against Pinocchio and the interpreted solver, same run. "
+              "Ratios are generated / Pinocchio (issue targets: aba ≤ 0.2, rnea and crba ≤ 0.25).", "",
+              "| model | nv | aba gen | aba/Pin | aba interp/gen | rnea gen | rnea/Pin | crba gen | crba/Pin | aba gen f32 |",
+              "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
+    for m in MODELS:
+        p = pin.get(m, {})
+        ga, gr, gc, g32 = (median_ns("gen_aba", m), median_ns("gen_rnea", m), median_ns("gen_crba", m),
+                           median_ns("gen_aba_f32", m))
+        lines.append(f"| {m} | {p.get('nv', '')} | {fmt(ga)} | {ratio(ga, p.get('aba'))} | {ratio(median_ns('aba', m), ga)} | "
+                     f"{fmt(gr)} | {ratio(gr, p.get('rnea'))} | {fmt(gc)} | {ratio(gc, p.get('crba'))} | {fmt(g32)} |")
     lines += ["", "f32 against f64, interpreted (same run):", "",
               "| model | " + " | ".join(f"{a} f32 | {a} f64" for a in ALGOS) + " |",
               "|---|" + "---:|---:|" * len(ALGOS)]

@@ -199,7 +199,77 @@ fn bench_loops(c: &mut Criterion) {
     }
 }
 
+/// The same models through `embedyn::robot!` (generated straight-line code).
+macro_rules! generated_models {
+    ($($name:ident: $path:literal $(, $opt:ident)?;)*) => {
+        $(mod $name { embedyn::robot!($path $(, $opt)?); })*
+
+        fn bench_generated(c: &mut Criterion) {
+            $({
+                const NQ: usize = $name::NQ;
+                const NV: usize = $name::NV;
+                let floating = stringify!($($opt)?) == "floating";
+                let model = load_model::<f64>($path, floating);
+                let st = states(&model);
+                let q: Vec<[f64; NQ]> = st.q.iter().map(|x| x.as_slice().try_into().unwrap()).collect();
+                let v: Vec<[f64; NV]> = st.v.iter().map(|x| x.as_slice().try_into().unwrap()).collect();
+                let x: Vec<[f64; NV]> = st.x.iter().map(|x| x.as_slice().try_into().unwrap()).collect();
+                let name = bench_name(stringify!($name));
+                let mut out = [0.0; NV];
+                let mut mat = [[0.0; NV]; NV];
+                let mut k = 0usize;
+                c.bench_function(&format!("gen_aba/{name}"), |b| b.iter(|| {
+                    k = (k + 1) & 63;
+                    $name::f64::aba(black_box(&q[k]), &v[k], &x[k], &mut out);
+                    black_box(out[0])
+                }));
+                c.bench_function(&format!("gen_rnea/{name}"), |b| b.iter(|| {
+                    k = (k + 1) & 63;
+                    $name::f64::rnea(black_box(&q[k]), &v[k], &x[k], &mut out);
+                    black_box(out[0])
+                }));
+                c.bench_function(&format!("gen_crba/{name}"), |b| b.iter(|| {
+                    k = (k + 1) & 63;
+                    $name::f64::crba(black_box(&q[k]), &mut mat);
+                    black_box(mat[0][0])
+                }));
+                let (q32, v32, x32): (Vec<[f32; NQ]>, Vec<[f32; NV]>, Vec<[f32; NV]>) = (
+                    q.iter().map(|a| a.map(|e| e as f32)).collect(),
+                    v.iter().map(|a| a.map(|e| e as f32)).collect(),
+                    x.iter().map(|a| a.map(|e| e as f32)).collect(),
+                );
+                let mut out32 = [0.0f32; NV];
+                c.bench_function(&format!("gen_aba_f32/{name}"), |b| b.iter(|| {
+                    k = (k + 1) & 63;
+                    $name::f32::aba(black_box(&q32[k]), &v32[k], &x32[k], &mut out32);
+                    black_box(out32[0])
+                }));
+            })*
+        }
+    };
+}
+
+/// Module names are identifiers; benchmark names follow MODELS.
+fn bench_name(module: &str) -> &str {
+    match module {
+        "solo12_free" => "solo12_floating",
+        other => other,
+    }
+}
+
+generated_models! {
+    ur5: "tests/data/pinocchio/ur5.urdf";
+    z1: "models/peers/z1.urdf";
+    arm7: "models/arm7.urdf";
+    panda: "tests/data/pinocchio/panda.urdf";
+    anymal_b: "models/peers/anymal_b.urdf";
+    solo12_free: "tests/data/pinocchio/solo12.urdf", floating;
+    quadruped: "models/quadruped.urdf";
+    humanoid34: "models/humanoid34.urdf";
+}
+
 fn all(c: &mut Criterion) {
+    bench_generated(c);
     bench_algorithms::<f64>(c, "");
     bench_algorithms::<f32>(c, "_f32");
     bench_scaling(c);
