@@ -135,11 +135,20 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     // The generated code: same model, same state, fixed-size arrays, no allocation.
     const NQ: usize = humanoid34::NQ;
     const NV: usize = humanoid34::NV;
-    let (qa, va, ta): ([f64; NQ], [f64; NV], [f64; NV]) = (q.clone().try_into().unwrap(), v.clone().try_into().unwrap(), tau.clone().try_into().unwrap());
+    let (qa, va, ta): ([f64; NQ], [f64; NV], [f64; NV]) = (
+        q.clone().try_into().unwrap(),
+        v.clone().try_into().unwrap(),
+        tau.clone().try_into().unwrap(),
+    );
     let mut qdd_gen = [0.0; NV];
     humanoid34::f64::aba(&qa, &va, &ta, &mut qdd_gen);
     let mut qdd_gen32 = [0.0f32; NV];
-    humanoid34::f32::aba(&qa.map(|x| x as f32), &va.map(|x| x as f32), &ta.map(|x| x as f32), &mut qdd_gen32);
+    humanoid34::f32::aba(
+        &qa.map(|x| x as f32),
+        &va.map(|x| x as f32),
+        &ta.map(|x| x as f32),
+        &mut qdd_gen32,
+    );
     println!(
         "\ngenerated code (embedyn::robot!): qdd vs interpreted: f64 {:.1e}, f32 {:.1e} (relative)",
         relative_error(&qdd_gen, &qdd),

@@ -354,15 +354,27 @@ fn complete_then_eval_a_loop_model() {
 fn embedyn_cached(args: &[&str], stdin: &str) -> (bool, String, String) {
     let mut child = Command::new(env!("CARGO_BIN_EXE_embedyn"))
         .args(args)
-        .env("EMBEDYN_CACHE_DIR", PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("embedyn-cache"))
+        .env(
+            "EMBEDYN_CACHE_DIR",
+            PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("embedyn-cache"),
+        )
         .stdin(Stdio::piped())
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
-    child.stdin.take().unwrap().write_all(stdin.as_bytes()).unwrap();
+    child
+        .stdin
+        .take()
+        .unwrap()
+        .write_all(stdin.as_bytes())
+        .unwrap();
     let out = child.wait_with_output().unwrap();
-    (out.status.success(), String::from_utf8(out.stdout).unwrap(), String::from_utf8(out.stderr).unwrap())
+    (
+        out.status.success(),
+        String::from_utf8(out.stdout).unwrap(),
+        String::from_utf8(out.stderr).unwrap(),
+    )
 }
 
 fn flat(v: &Value) -> Vec<f64> {
@@ -377,33 +389,79 @@ fn flat(v: &Value) -> Vec<f64> {
 /// solver, for a tree and for a geared chain (couplings: tau_independent and the reduced M).
 #[test]
 fn generated_engine_agrees_with_interpreted() {
-    for (file, nq, nv) in [("models/arm7.urdf", 7, 7), ("models/loops/geared_motor.urdf", 4, 4)] {
+    for (file, nq, nv) in [
+        ("models/arm7.urdf", 7, 7),
+        ("models/loops/geared_motor.urdf", 4, 4),
+    ] {
         let model = repo(file);
         // A consistent state: all zero satisfies the gears of geared_motor.urdf.
-        let q: Vec<f64> = (0..nq).map(|i| if file.contains("geared") { 0.0 } else { 0.1 * i as f64 - 0.3 }).collect();
+        let q: Vec<f64> = (0..nq)
+            .map(|i| {
+                if file.contains("geared") {
+                    0.0
+                } else {
+                    0.1 * i as f64 - 0.3
+                }
+            })
+            .collect();
         let input = json!({"samples": [{"q": q, "v": vec![0.0; nv], "tau": vec![0.5; nv], "qdd": vec![0.25; nv]}]}).to_string();
         for algo in ["aba", "rnea", "crba"] {
             let interp = json_of(&["eval", &model, "--algo", algo], &input);
-            let (ok, out, err) = embedyn_cached(&["eval", &model, "--algo", algo, "--engine", "generated"], &input);
+            let (ok, out, err) = embedyn_cached(
+                &["eval", &model, "--algo", algo, "--engine", "generated"],
+                &input,
+            );
             assert!(ok, "{file} {algo}: {err}");
             let gen: Value = serde_json::from_str(&out).unwrap();
             let (a, b) = (flat(&gen["samples"]), flat(&interp["samples"]));
             assert_eq!(a.len(), b.len(), "{file} {algo}");
             let scale = b.iter().fold(1.0f64, |m, x| m.max(x.abs()));
-            let e = a.iter().zip(&b).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max) / scale;
+            let e = a
+                .iter()
+                .zip(&b)
+                .map(|(x, y)| (x - y).abs())
+                .fold(0.0, f64::max)
+                / scale;
             assert!(e <= 1e-12, "{file} {algo}: generated vs interpreted {e:e}");
-            let (ok, out32, err) = embedyn_cached(&["eval", &model, "--algo", algo, "--engine", "generated", "--scalar", "f32"], &input);
+            let (ok, out32, err) = embedyn_cached(
+                &[
+                    "eval",
+                    &model,
+                    "--algo",
+                    algo,
+                    "--engine",
+                    "generated",
+                    "--scalar",
+                    "f32",
+                ],
+                &input,
+            );
             assert!(ok, "{err}");
             let c = flat(&serde_json::from_str::<Value>(&out32).unwrap()["samples"]);
-            let e32 = c.iter().zip(&b).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max) / scale;
-            assert!(e32 <= 1e-4, "{file} {algo}: generated f32 vs interpreted f64 {e32:e}");
+            let e32 = c
+                .iter()
+                .zip(&b)
+                .map(|(x, y)| (x - y).abs())
+                .fold(0.0, f64::max)
+                / scale;
+            assert!(
+                e32 <= 1e-4,
+                "{file} {algo}: generated f32 vs interpreted f64 {e32:e}"
+            );
         }
     }
 }
 
 #[test]
 fn bench_reports_every_engine_and_scalar() {
-    let (ok, out, err) = embedyn_cached(&["bench", &repo("tests/data/pinocchio/double_pendulum.urdf"), "--json"], "");
+    let (ok, out, err) = embedyn_cached(
+        &[
+            "bench",
+            &repo("tests/data/pinocchio/double_pendulum.urdf"),
+            "--json",
+        ],
+        "",
+    );
     assert!(ok, "{err}");
     let v: Value = serde_json::from_str(&out).unwrap();
     for algo in ["aba", "rnea", "crba"] {

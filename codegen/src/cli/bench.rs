@@ -40,11 +40,17 @@ fn time(f: &mut dyn FnMut()) -> f64 {
 fn states(model: &Model<f64>) -> Vec<(Vec<f64>, Vec<f64>, Vec<f64>)> {
     let mut seed: u64 = 0x5eed;
     let mut uniform = move |lo: f64, hi: f64| {
-        seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        seed = seed
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
         lo + (hi - lo) * ((seed >> 11) as f64 / (1u64 << 53) as f64)
     };
     let mut ws = Workspace::new(model);
-    let spread = if model.has_constraints() { 0.3 } else { std::f64::consts::PI };
+    let spread = if model.has_constraints() {
+        0.3
+    } else {
+        std::f64::consts::PI
+    };
     let mut out = Vec::new();
     while out.len() < 64 {
         let mut q = model.neutral_configuration();
@@ -64,7 +70,10 @@ fn states(model: &Model<f64>) -> Vec<(Vec<f64>, Vec<f64>, Vec<f64>)> {
             }
         }
         let mut v: Vec<f64> = (0..model.nv()).map(|_| uniform(-1.0, 1.0)).collect();
-        if model.has_constraints() && (complete_configuration(model, &mut ws, &mut q).map_or(true, |r| r > 1e-12) || complete_velocity(model, &mut ws, &q, &mut v).is_err()) {
+        if model.has_constraints()
+            && (complete_configuration(model, &mut ws, &mut q).map_or(true, |r| r > 1e-12)
+                || complete_velocity(model, &mut ws, &q, &mut v).is_err())
+        {
             continue;
         }
         let x: Vec<f64> = (0..model.nv()).map(|_| uniform(-1.0, 1.0)).collect();
@@ -85,11 +94,19 @@ pub fn bench(loaded: &Loaded, options: &ModelOptions) -> Result<Value, CliError>
         match algo {
             "aba" => time(&mut || {
                 k = (k + 1) % st.len();
-                black_box(aba(model, ws, black_box(&st[k].0), &st[k].1, &st[k].2).map(|x| x[0]).ok());
+                black_box(
+                    aba(model, ws, black_box(&st[k].0), &st[k].1, &st[k].2)
+                        .map(|x| x[0])
+                        .ok(),
+                );
             }),
             "rnea" => time(&mut || {
                 k = (k + 1) % st.len();
-                black_box(rnea(model, ws, black_box(&st[k].0), &st[k].1, &st[k].2).map(|x| x[0]).ok());
+                black_box(
+                    rnea(model, ws, black_box(&st[k].0), &st[k].1, &st[k].2)
+                        .map(|x| x[0])
+                        .ok(),
+                );
             }),
             _ => time(&mut || {
                 k = (k + 1) % st.len();
@@ -97,25 +114,49 @@ pub fn bench(loaded: &Loaded, options: &ModelOptions) -> Result<Value, CliError>
             }),
         }
     };
-    let binary = build_runner(loaded, &GenerateOptions { model: options.clone(), ..Default::default() })?;
-    let rows: Vec<Vec<f64>> = st.iter().map(|(q, v, x)| q.iter().chain(v).chain(x).copied().collect()).collect();
+    let binary = build_runner(
+        loaded,
+        &GenerateOptions {
+            model: options.clone(),
+            ..Default::default()
+        },
+    )?;
+    let rows: Vec<Vec<f64>> = st
+        .iter()
+        .map(|(q, v, x)| q.iter().chain(v).chain(x).copied().collect())
+        .collect();
     let mut result = serde_json::Map::new();
     for algo in ["aba", "rnea", "crba"] {
         let i = interpreted(algo);
-        let g64 = run(&binary, algo, "f64", "bench", &rows)?.first().and_then(|r| r.first().copied()).unwrap_or(f64::NAN);
-        let g32 = run(&binary, algo, "f32", "bench", &rows)?.first().and_then(|r| r.first().copied()).unwrap_or(f64::NAN);
-        result.insert(algo.into(), json!({ "interpreted_f64": i, "generated_f64": g64, "generated_f32": g32 }));
+        let g64 = run(&binary, algo, "f64", "bench", &rows)?
+            .first()
+            .and_then(|r| r.first().copied())
+            .unwrap_or(f64::NAN);
+        let g32 = run(&binary, algo, "f32", "bench", &rows)?
+            .first()
+            .and_then(|r| r.first().copied())
+            .unwrap_or(f64::NAN);
+        result.insert(
+            algo.into(),
+            json!({ "interpreted_f64": i, "generated_f64": g64, "generated_f32": g32 }),
+        );
     }
     Ok(Value::Object(result))
 }
 
 /// A human-readable table of [`bench`]'s result.
 pub fn table(v: &Value) -> String {
-    let mut s = String::from("median ns per call   interpreted_f64  generated_f64  generated_f32\n");
+    let mut s =
+        String::from("median ns per call   interpreted_f64  generated_f64  generated_f32\n");
     for algo in ["aba", "rnea", "crba"] {
         let r = &v[algo];
         let f = |k: &str| r[k].as_f64().map_or("—".to_string(), |x| format!("{x:.0}"));
-        s.push_str(&format!("{algo:<20} {:>16} {:>14} {:>14}\n", f("interpreted_f64"), f("generated_f64"), f("generated_f32")));
+        s.push_str(&format!(
+            "{algo:<20} {:>16} {:>14} {:>14}\n",
+            f("interpreted_f64"),
+            f("generated_f64"),
+            f("generated_f32")
+        ));
     }
     s
 }

@@ -2,9 +2,9 @@
 
 use super::samples::{vector, Samples};
 use super::{Algo, CliError, Engine, Scalar};
-use embedyn_runtime::nalgebra;
 use crate::{Loaded, ModelOptions};
 use embedyn_runtime::constraints::constraint_violation;
+use embedyn_runtime::nalgebra;
 use embedyn_runtime::{
     aba, crba, embedding_map, reduced_mass_matrix, rnea, DynamicsError, JointType, Model, Real,
     Workspace,
@@ -45,8 +45,18 @@ pub fn eval(
 
 /// `--engine generated`: the same samples through the compiled generated code; the independent-coordinate
 /// projections (for couplings) use the model's embedding map, as the interpreted engine does.
-fn eval_generated(loaded: &Loaded, options: &ModelOptions, model: &Model<f64>, algo: Algo, scalar: Scalar, samples: &Samples) -> Result<Value, CliError> {
-    let gen_options = crate::GenerateOptions { model: options.clone(), ..Default::default() };
+fn eval_generated(
+    loaded: &Loaded,
+    options: &ModelOptions,
+    model: &Model<f64>,
+    algo: Algo,
+    scalar: Scalar,
+    samples: &Samples,
+) -> Result<Value, CliError> {
+    let gen_options = crate::GenerateOptions {
+        model: options.clone(),
+        ..Default::default()
+    };
     let binary = super::runner::build_runner(loaded, &gen_options)?;
     let (nq, nv) = (model.nq(), model.nv());
     let mut rows = Vec::with_capacity(samples.samples.len());

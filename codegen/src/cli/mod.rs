@@ -1,10 +1,10 @@
 //! The `embedyn` command line (CONTRACT §3): JSON on stdout, errors on stderr with a non-zero exit code.
 
+mod bench;
 mod complete;
 mod eval;
 mod info;
 mod runner;
-mod bench;
 mod samples;
 
 use crate::{load, LoadError, Loaded, ModelOptions};
@@ -122,10 +122,18 @@ pub fn run(cli: Cli) -> Result<serde_json::Value, CliError> {
             let loaded = load_reporting(&model)?;
             info::info(&loaded, &options(floating))
         }
-        Command::Bench { model, floating, json } => {
+        Command::Bench {
+            model,
+            floating,
+            json,
+        } => {
             let loaded = load_reporting(&model)?;
             let result = bench::bench(&loaded, &options(floating))?;
-            Ok(if json { result } else { serde_json::Value::String(bench::table(&result)) })
+            Ok(if json {
+                result
+            } else {
+                serde_json::Value::String(bench::table(&result))
+            })
         }
         Command::Generate {
             model,

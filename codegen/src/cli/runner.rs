@@ -41,7 +41,11 @@ pub fn build_runner(loaded: &Loaded, options: &GenerateOptions) -> Result<PathBu
     let files = crate_files(loaded, options)?;
     let krate = crate_name(&loaded.robot.name);
     let main = runner_main(&krate, &options.algorithms);
-    let parts: Vec<&[u8]> = files.iter().map(|(_, t)| t.as_bytes()).chain(std::iter::once(main.as_bytes())).collect();
+    let parts: Vec<&[u8]> = files
+        .iter()
+        .map(|(_, t)| t.as_bytes())
+        .chain(std::iter::once(main.as_bytes()))
+        .collect();
     let hash = format!("{:016x}", fnv1a(&parts));
     let key = format!("{krate}-{hash}");
     let root = cache_dir();
@@ -50,7 +54,9 @@ pub fn build_runner(loaded: &Loaded, options: &GenerateOptions) -> Result<PathBu
     // binary built from other source is never picked up.
     let target = root.join("target");
     let bin_name = format!("run_{hash}");
-    let binary = target.join("release").join(format!("{bin_name}{}", std::env::consts::EXE_SUFFIX));
+    let binary = target
+        .join("release")
+        .join(format!("{bin_name}{}", std::env::consts::EXE_SUFFIX));
     if binary.exists() {
         return Ok(binary);
     }
@@ -66,14 +72,30 @@ pub fn build_runner(loaded: &Loaded, options: &GenerateOptions) -> Result<PathBu
     );
     std::fs::write(dir.join("Cargo.toml"), cargo_toml).map_err(|e| io(e, &dir))?;
     std::fs::write(dir.join("src/main.rs"), &main).map_err(|e| io(e, &dir))?;
-    eprintln!("embedyn: compiling the generated code of `{}` (first use; cached in {})", loaded.robot.name, dir.display());
+    eprintln!(
+        "embedyn: compiling the generated code of `{}` (first use; cached in {})",
+        loaded.robot.name,
+        dir.display()
+    );
     let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
     let out = Command::new(&cargo)
-        .args(["build", "--release", "--quiet", "--offline", "--bin", &bin_name])
+        .args([
+            "build",
+            "--release",
+            "--quiet",
+            "--offline",
+            "--bin",
+            &bin_name,
+        ])
         .current_dir(&dir)
         .env("CARGO_TARGET_DIR", &target)
         .output()
-        .map_err(|e| CliError(format!("cannot run cargo ({}): {e}", cargo.to_string_lossy())))?;
+        .map_err(|e| {
+            CliError(format!(
+                "cannot run cargo ({}): {e}",
+                cargo.to_string_lossy()
+            ))
+        })?;
     if !out.status.success() {
         // Offline resolution fails on a machine that never fetched libm: try once online.
         let retry = Command::new(&cargo)
@@ -83,7 +105,10 @@ pub fn build_runner(loaded: &Loaded, options: &GenerateOptions) -> Result<PathBu
             .output()
             .map_err(|e| CliError(format!("cannot run cargo: {e}")))?;
         if !retry.status.success() {
-            return Err(CliError(format!("compiling the generated code failed:\n{}", String::from_utf8_lossy(&retry.stderr))));
+            return Err(CliError(format!(
+                "compiling the generated code failed:\n{}",
+                String::from_utf8_lossy(&retry.stderr)
+            )));
         }
     }
     Ok(binary)
@@ -91,7 +116,13 @@ pub fn build_runner(loaded: &Loaded, options: &GenerateOptions) -> Result<PathBu
 
 /// Runs the runner: `rows` are the samples (q ‖ a ‖ b). Returns one output row per sample, or in bench
 /// mode one line with the median ns per call.
-pub fn run(binary: &Path, algo: &str, scalar: &str, mode: &str, rows: &[Vec<f64>]) -> Result<Vec<Vec<f64>>, CliError> {
+pub fn run(
+    binary: &Path,
+    algo: &str,
+    scalar: &str,
+    mode: &str,
+    rows: &[Vec<f64>],
+) -> Result<Vec<Vec<f64>>, CliError> {
     let mut child = Command::new(binary)
         .stdin(Stdio::piped())
         .stdout(Stdio::piped())
@@ -106,16 +137,27 @@ pub fn run(binary: &Path, algo: &str, scalar: &str, mode: &str, rows: &[Vec<f64>
             text.push_str(&line.join(" "));
             text.push('\n');
         }
-        stdin.write_all(text.as_bytes()).map_err(|e| CliError(format!("runner input: {e}")))?;
+        stdin
+            .write_all(text.as_bytes())
+            .map_err(|e| CliError(format!("runner input: {e}")))?;
     }
-    let out = child.wait_with_output().map_err(|e| CliError(format!("runner: {e}")))?;
+    let out = child
+        .wait_with_output()
+        .map_err(|e| CliError(format!("runner: {e}")))?;
     if !out.status.success() {
-        return Err(CliError(format!("the generated code's runner failed: {}", String::from_utf8_lossy(&out.stderr))));
+        return Err(CliError(format!(
+            "the generated code's runner failed: {}",
+            String::from_utf8_lossy(&out.stderr)
+        )));
     }
     Ok(String::from_utf8_lossy(&out.stdout)
         .lines()
         .filter(|l| !l.trim().is_empty())
-        .map(|l| l.split_whitespace().map(|x| x.parse::<f64>().unwrap_or(f64::NAN)).collect())
+        .map(|l| {
+            l.split_whitespace()
+                .map(|x| x.parse::<f64>().unwrap_or(f64::NAN))
+                .collect()
+        })
         .collect())
 }
 
@@ -126,12 +168,30 @@ fn runner_main(krate: &str, algorithms: &[Algorithm]) -> String {
     for a in algorithms {
         let name = a.name();
         let (call, bench_call, emit) = match a {
-            Algorithm::Aba => ("m::aba(&q, &a, &b, &mut out)", "m::aba(black_box(&s.0), &s.1, &s.2, &mut out)", "emit(&out)"),
-            Algorithm::Rnea => ("m::rnea(&q, &a, &b, &mut out)", "m::rnea(black_box(&s.0), &s.1, &s.2, &mut out)", "emit(&out)"),
-            Algorithm::Crba => ("m::crba(&q, &mut mat)", "m::crba(black_box(&s.0), &mut mat)", "emit(mat.as_flattened())"),
-            Algorithm::Minv => ("m::minv(&q, &mut mat)", "m::minv(black_box(&s.0), &mut mat)", "emit(mat.as_flattened())"),
+            Algorithm::Aba => (
+                "m::aba(&q, &a, &b, &mut out)",
+                "m::aba(black_box(&s.0), &s.1, &s.2, &mut out)",
+                "emit(&out)",
+            ),
+            Algorithm::Rnea => (
+                "m::rnea(&q, &a, &b, &mut out)",
+                "m::rnea(black_box(&s.0), &s.1, &s.2, &mut out)",
+                "emit(&out)",
+            ),
+            Algorithm::Crba => (
+                "m::crba(&q, &mut mat)",
+                "m::crba(black_box(&s.0), &mut mat)",
+                "emit(mat.as_flattened())",
+            ),
+            Algorithm::Minv => (
+                "m::minv(&q, &mut mat)",
+                "m::minv(black_box(&s.0), &mut mat)",
+                "emit(mat.as_flattened())",
+            ),
         };
-        eval_arms.push_str(&format!("                \"{name}\" => {{ {call}; {emit}; }}\n"));
+        eval_arms.push_str(&format!(
+            "                \"{name}\" => {{ {call}; {emit}; }}\n"
+        ));
         bench_arms.push_str(&format!("                \"{name}\" => time(&mut || {{ k = (k + 1) % n; let s = &states[k]; {bench_call}; black_box((&out, &mat)); }}),\n"));
     }
     format!(

@@ -70,7 +70,8 @@ impl<T: Real> ArticulatedInertia<T> {
         // top-left: A − B[p]× + [p]×Bᵀ − [p]×C[p]×, where [p]×Bᵀ = −(B[p]×)ᵀ; top-right: B + [p]×C.
         // Symmetric: six entries, each a row of [p]×C times a column of [p]×.
         let a_new = symmetric(|i, j| {
-            let pcp = pxc[(i, 0)] * px[(0, j)] + pxc[(i, 1)] * px[(1, j)] + pxc[(i, 2)] * px[(2, j)];
+            let pcp =
+                pxc[(i, 0)] * px[(0, j)] + pxc[(i, 1)] * px[(1, j)] + pxc[(i, 2)] * px[(2, j)];
             a[(i, j)] - bpx[(i, j)] - bpx[(j, i)] - pcp
         });
         ArticulatedInertia {
