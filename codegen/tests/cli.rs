@@ -15,13 +15,19 @@ fn repo(rel: &str) -> String {
 
 /// Runs `embedyn args` with `stdin`; returns (success, stdout, stderr).
 fn embedyn(args: &[&str], stdin: &str) -> (bool, String, String) {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_embedyn"))
-        .args(args)
+    embedyn_with_env(args, stdin, &[])
+}
+
+fn embedyn_with_env(args: &[&str], stdin: &str, env: &[(&str, PathBuf)]) -> (bool, String, String) {
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_embedyn"));
+    cmd.args(args)
         .stdin(Stdio::piped())
         .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
+        .stderr(Stdio::piped());
+    for (k, v) in env {
+        cmd.env(k, v);
+    }
+    let mut child = cmd.spawn().unwrap();
     child
         .stdin
         .take()
@@ -352,29 +358,8 @@ fn complete_then_eval_a_loop_model() {
 
 /// Runs `embedyn args` with a cache folder inside the target directory.
 fn embedyn_cached(args: &[&str], stdin: &str) -> (bool, String, String) {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_embedyn"))
-        .args(args)
-        .env(
-            "EMBEDYN_CACHE_DIR",
-            PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("embedyn-cache"),
-        )
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    child
-        .stdin
-        .take()
-        .unwrap()
-        .write_all(stdin.as_bytes())
-        .unwrap();
-    let out = child.wait_with_output().unwrap();
-    (
-        out.status.success(),
-        String::from_utf8(out.stdout).unwrap(),
-        String::from_utf8(out.stderr).unwrap(),
-    )
+    let cache = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("embedyn-cache");
+    embedyn_with_env(args, stdin, &[("EMBEDYN_CACHE_DIR", cache)])
 }
 
 fn flat(v: &Value) -> Vec<f64> {

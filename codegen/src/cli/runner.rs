@@ -78,32 +78,25 @@ pub fn build_runner(loaded: &Loaded, options: &GenerateOptions) -> Result<PathBu
         dir.display()
     );
     let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
-    let out = Command::new(&cargo)
-        .args([
-            "build",
-            "--release",
-            "--quiet",
-            "--offline",
-            "--bin",
-            &bin_name,
-        ])
-        .current_dir(&dir)
-        .env("CARGO_TARGET_DIR", &target)
-        .output()
-        .map_err(|e| {
-            CliError(format!(
-                "cannot run cargo ({}): {e}",
-                cargo.to_string_lossy()
-            ))
-        })?;
-    if !out.status.success() {
-        // Offline resolution fails on a machine that never fetched libm: try once online.
-        let retry = Command::new(&cargo)
-            .args(["build", "--release", "--quiet", "--bin", &bin_name])
-            .current_dir(&dir)
+    let build = |offline: bool| {
+        let mut cmd = Command::new(&cargo);
+        cmd.args(["build", "--release", "--quiet", "--bin", &bin_name]);
+        if offline {
+            cmd.arg("--offline");
+        }
+        cmd.current_dir(&dir)
             .env("CARGO_TARGET_DIR", &target)
             .output()
-            .map_err(|e| CliError(format!("cannot run cargo: {e}")))?;
+            .map_err(|e| {
+                CliError(format!(
+                    "cannot run cargo ({}): {e}",
+                    cargo.to_string_lossy()
+                ))
+            })
+    };
+    // Offline first (the usual case: libm is in cargo's cache); online once if that fails.
+    if !build(true)?.status.success() {
+        let retry = build(false)?;
         if !retry.status.success() {
             return Err(CliError(format!(
                 "compiling the generated code failed:\n{}",

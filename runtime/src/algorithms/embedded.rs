@@ -15,7 +15,7 @@
 //!   are tested to give the same motion (tests/constraint_embedding.rs).
 
 use super::aba::{backward_step, forward_step, init_articulated};
-use super::{check_len, crba, rnea, velocity_sweep, DynamicsError, Workspace};
+use super::{check_len, crba, forward_kinematics, rnea, DynamicsError, Workspace};
 use crate::constraints::{embed, Group, GroupWorkspace};
 use crate::linalg::{cholesky_in_place, cholesky_solve_in_place, lu_in_place, lu_solve_in_place};
 use crate::model::Model;
@@ -31,19 +31,12 @@ pub fn constraint_kinematics<T: Real>(
     q: &[T],
     v: &[T],
 ) -> Result<(), DynamicsError> {
-    check_len("q", q.len(), model.nq())?;
-    check_len("v", v.len(), model.nv())?;
-    velocity_sweep(model, ws, q, v);
+    forward_kinematics(model, ws, q, v)?;
     for (i, joint) in model.joints.iter().enumerate() {
-        let (world, acc) = match joint.parent {
-            Some(p) => (
-                ws.world_placement[p].compose(&ws.parent_placement[i]),
-                ws.parent_placement[i].inv_act_motion(&ws.acceleration[p]) + ws.coriolis[i],
-            ),
-            None => (ws.parent_placement[i], ws.coriolis[i]),
+        ws.acceleration[i] = match joint.parent {
+            Some(p) => ws.parent_placement[i].inv_act_motion(&ws.acceleration[p]) + ws.coriolis[i],
+            None => ws.coriolis[i],
         };
-        ws.world_placement[i] = world;
-        ws.acceleration[i] = acc;
     }
     Ok(())
 }
