@@ -100,12 +100,6 @@ pub fn generate_tokens(
     options: &GenerateOptions,
 ) -> Result<TokenStream, LoadError> {
     let model64 = loaded.model::<f64>(&options.model)?;
-    if model64.constraints.iter().any(|c| c.is_loop()) {
-        return Err(gen_error(
-            loaded,
-            "code generation for closed loops (<loop>) is not available yet; couplings and mimic joints are supported, and the interpreted solver handles loops",
-        ));
-    }
     let model: Model<Sym> = snapped(&model64).cast();
     let (nq, nv) = (model.nq(), model.nv());
     let names: Vec<&str> = model.joints.iter().map(|j| j.name.as_str()).collect();

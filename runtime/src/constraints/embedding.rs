@@ -193,7 +193,8 @@ pub(crate) fn embed<T: Real>(
     }
     if gw.has_loop {
         let cond = condition_number_1(&gw.y1, &gw.y1_lu, &gw.perm, &mut gw.scratch).to_f64();
-        if cond.is_nan() || cond >= SINGULARITY_THRESHOLD {
+        // (A NaN in Y1 already failed the factorization above.)
+        if cond >= SINGULARITY_THRESHOLD {
             return Err(singular(cond));
         }
     }
