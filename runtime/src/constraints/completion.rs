@@ -1,7 +1,7 @@
 //! Completing a state: the dependent coordinates from the independent ones, at position level (Newton's
 //! method from the given guess, so it stays on that assembly branch) and at velocity level (`X_G`).
 
-use super::embedding::group_rows;
+use super::embedding::{fill_y1, group_rows, y1_condition_of};
 use super::{embed, residuals};
 use crate::algorithms::{constraint_kinematics, DynamicsError, Workspace};
 use crate::linalg::{lu_in_place, lu_solve_in_place, solve_least_squares};
@@ -64,20 +64,15 @@ pub fn complete_configuration<T: Real>(
             // Newton step on the dependent coordinates, Y1 Δ = −r; where Y1 is singular (a guess at a
             // toggle), the minimum-norm least-squares step instead.
             group_rows(model, ws, g, gw, false);
-            for (col, &b) in g.dependent.iter().enumerate() {
-                let m = g.bodies.binary_search(&b).expect("member");
-                for row in 0..g.rows.len() {
-                    gw.y1_lu[(row, col)] = gw.k[(row, m)];
-                }
-            }
+            fill_y1(g, gw);
             for (k, &row) in g.rows.iter().enumerate() {
                 gw.col[k] = -r[row];
             }
-            let y1 = gw.y1_lu.clone();
+            gw.y1_lu.copy_from(&gw.y1);
             if lu_in_place(&mut gw.y1_lu, &mut gw.perm).is_ok() {
                 lu_solve_in_place(&gw.y1_lu, &gw.perm, &mut gw.col);
             } else {
-                let step = solve_least_squares(&y1, &gw.col);
+                let step = solve_least_squares(&gw.y1, &gw.col);
                 gw.col.copy_from_slice(&step);
             }
             // Limit loop steps so that Newton stays near the branch it starts on (linear equations are
@@ -138,29 +133,13 @@ pub fn y1_condition<T: Real>(
     q: &[T],
     group: usize,
 ) -> Result<f64, DynamicsError> {
-    use crate::linalg::condition_number_1;
     let zeros = vec![T::zero(); model.nv()];
     constraint_kinematics(model, ws, q, &zeros)?;
-    let g = &model.groups[group];
-    let gw = &mut ws.groups[group];
-    let mut k = gw.k.clone();
-    core::mem::swap(&mut k, &mut gw.k);
-    let _ = k;
-    let mut gwc = gw.clone();
-    group_rows(model, ws, g, &mut gwc, false);
-    let r = g.rows.len();
-    let mut y1 = nalgebra::DMatrix::zeros(r, r);
-    for (col, &b) in g.dependent.iter().enumerate() {
-        let m = g.bodies.binary_search(&b).expect("member");
-        for row in 0..r {
-            y1[(row, col)] = gwc.k[(row, m)];
-        }
-    }
-    let mut lu = y1.clone();
-    let mut perm = vec![0; r];
-    if lu_in_place(&mut lu, &mut perm).is_err() {
-        return Ok(f64::INFINITY);
-    }
-    let mut scratch = nalgebra::DMatrix::zeros(r, r);
-    Ok(condition_number_1(&y1, &lu, &perm, &mut scratch).to_f64())
+    let mut groups = core::mem::take(&mut ws.groups);
+    let gw = &mut groups[group];
+    group_rows(model, ws, &model.groups[group], gw, false);
+    fill_y1(&model.groups[group], gw);
+    let cond = y1_condition_of(gw);
+    ws.groups = groups;
+    Ok(cond)
 }

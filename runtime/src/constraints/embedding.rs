@@ -152,6 +152,25 @@ fn model_member_of_v<T: Real>(model: &Model<T>, g: &Group, v_index: usize) -> Op
         .position(|&b| model.joints[b].v_index == v_index)
 }
 
+/// `Y1 = K[:, dependent]` into `gw.y1`, from the `K` of [`group_rows`].
+pub(crate) fn fill_y1<T: Real>(g: &Group, gw: &mut GroupWorkspace<T>) {
+    for (col, &b) in g.dependent.iter().enumerate() {
+        let m = member(g, b).expect("dependent joints are members");
+        for row in 0..g.rows.len() {
+            gw.y1[(row, col)] = gw.k[(row, m)];
+        }
+    }
+}
+
+/// cond₁ of `gw.y1`, factoring it into `gw.y1_lu` (∞ when singular).
+pub(crate) fn y1_condition_of<T: Real>(gw: &mut GroupWorkspace<T>) -> f64 {
+    gw.y1_lu.copy_from(&gw.y1);
+    if lu_in_place(&mut gw.y1_lu, &mut gw.perm).is_err() {
+        return f64::INFINITY;
+    }
+    condition_number_1(&gw.y1, &gw.y1_lu, &gw.perm, &mut gw.scratch).to_f64()
+}
+
 /// `X_G` and `κ_G` of group `gi` at the current kinematics. Fails past the singularity threshold.
 pub(crate) fn embed<T: Real>(
     model: &Model<T>,
@@ -164,12 +183,7 @@ pub(crate) fn embed<T: Real>(
     group_rows(model, ws, g, gw, with_bias);
     let r = g.rows.len();
     // Y1 = K[:, dependent], factor it; X[dep, :] = −Y1⁻¹ Y2, X[indep, :] = I; κ[dep] = −Y1⁻¹ J̇v.
-    for (col, &b) in g.dependent.iter().enumerate() {
-        let m = member(g, b).expect("dependent joints are members");
-        for row in 0..r {
-            gw.y1[(row, col)] = gw.k[(row, m)];
-        }
-    }
+    fill_y1(g, gw);
     gw.x.fill(T::zero());
     for (k, &b) in g.independent.iter().enumerate() {
         gw.x[(member(g, b).expect("member"), k)] = T::one();
@@ -178,7 +192,6 @@ pub(crate) fn embed<T: Real>(
     if r == 0 {
         return Ok(());
     }
-    gw.y1_lu.copy_from(&gw.y1);
     let singular = |condition: f64| DynamicsError::SingularConstraint {
         group: g
             .constraints
@@ -188,14 +201,17 @@ pub(crate) fn embed<T: Real>(
             .join(", "),
         condition,
     };
-    if lu_in_place(&mut gw.y1_lu, &mut gw.perm).is_err() {
-        return Err(singular(f64::INFINITY));
-    }
     if gw.has_loop {
-        let cond = condition_number_1(&gw.y1, &gw.y1_lu, &gw.perm, &mut gw.scratch).to_f64();
-        // (A NaN in Y1 already failed the factorization above.)
+        // Loops: Y1 depends on the configuration, so its conditioning is checked on every call (a NaN
+        // in Y1 fails the factorization and reads as infinite).
+        let cond = y1_condition_of(gw);
         if cond >= SINGULARITY_THRESHOLD {
             return Err(singular(cond));
+        }
+    } else {
+        gw.y1_lu.copy_from(&gw.y1);
+        if lu_in_place(&mut gw.y1_lu, &mut gw.perm).is_err() {
+            return Err(singular(f64::INFINITY));
         }
     }
     // −Y1⁻¹ Y2, one independent column at a time.
