@@ -165,3 +165,70 @@ fn slider_crank_generated_matches_interpreted() {
 fn floating_biped_with_knee_linkages_generated_matches_interpreted() {
     check!(biped, "models/loops/biped_floating.urdf", false);
 }
+
+/// Loop models: the generated position completion (a fixed count of Newton steps) lands where the
+/// interpreted completion does, from a guess a little off the assembly, and the generated embedding map
+/// equals the interpreted one.
+#[test]
+#[allow(clippy::modulo_one)] // NI = 1 for the one-DoF mechanisms
+fn generated_completion_and_embedding_match_interpreted() {
+    macro_rules! case {
+        ($m:ident, $path:expr) => {{
+            const NQ: usize = $m::NQ;
+            const NV: usize = $m::NV;
+            const NI: usize = $m::NI;
+            let model: Model<f64> = load_model($path, false);
+            assert_eq!(model.independent_nv(), NI);
+            let mut ws = Workspace::new(&model);
+            let mut rng = Rng(5);
+            let (mut worst_q, mut worst_x) = (0.0f64, 0.0f64);
+            for _ in 0..10 {
+                let mut q = model.neutral_configuration();
+                for (j, joint) in model.joints.iter().enumerate() {
+                    if joint.nq() == 1 && model.is_independent(j) {
+                        q[joint.q_index] = rng.uniform(-0.3, 0.3);
+                    }
+                }
+                if let Some(f) = model.joints.iter().find(|j| j.nq() == 7) {
+                    q[f.q_index + 6] = 1.0;
+                }
+                embedyn::constraints::complete_configuration(&model, &mut ws, &mut q).unwrap();
+                // A guess 0.02 off on every dependent coordinate.
+                let mut guess = q.clone();
+                for (j, joint) in model.joints.iter().enumerate() {
+                    if !model.is_independent(j) {
+                        guess[joint.q_index] += 0.02;
+                    }
+                }
+                let mut q_gen = [0.0; NQ];
+                $m::f64::complete(&guess.clone().try_into().unwrap(), &mut q_gen);
+                worst_q = worst_q.max(relative_error(&q_gen, &q));
+                let mut x = [[0.0; NI]; NV];
+                $m::f64::embedding(&q.clone().try_into().unwrap(), &mut x);
+                let want = embedyn::embedding_map(&model, &mut ws, &q).unwrap();
+                let flat: Vec<f64> = x.iter().flatten().copied().collect();
+                let want_flat: Vec<f64> = (0..NV * NI).map(|k| want[(k / NI, k % NI)]).collect();
+                worst_x = worst_x.max(relative_error(&flat, &want_flat));
+            }
+            eprintln!(
+                "{}: generated completion {:.1e}, embedding {:.1e}",
+                $path, worst_q, worst_x
+            );
+            assert!(
+                worst_q <= 1e-12,
+                "{}: generated completion off by {:e}",
+                $path,
+                worst_q
+            );
+            assert!(
+                worst_x <= 1e-12,
+                "{}: generated embedding off by {:e}",
+                $path,
+                worst_x
+            );
+        }};
+    }
+    case!(four_bar, "models/loops/four_bar_internal.urdf");
+    case!(slider_crank, "models/loops/slider_crank.urdf");
+    case!(biped, "models/loops/biped_floating.urdf");
+}

@@ -12,7 +12,8 @@ pub struct Arg {
     pub len: usize,
 }
 
-/// The outputs of a generated function: a vector `&mut [S; n]` or a matrix `&mut [[S; n]; n]`.
+/// The outputs of a generated function: a vector `&mut [S; n]` or a matrix `&mut [[S; cols]; rows]`
+/// (values row-major).
 pub enum Output {
     Vector {
         name: &'static str,
@@ -20,13 +21,14 @@ pub enum Output {
     },
     Matrix {
         name: &'static str,
-        n: usize,
+        rows: usize,
+        cols: usize,
         values: Vec<Sym>,
     },
 }
 
-/// Statements per chunk function. At ~500 statements rustc -O compiles each in well under a second, and
-/// the call boundaries cost a few loads and stores of live values.
+/// Statements per chunk function. At ~2000 statements rustc -O compiles each in about a second, and the
+/// call boundaries cost a few loads and stores of live values.
 pub const CHUNK: usize = 2000;
 
 fn lit(x: f64) -> TokenStream {
@@ -292,15 +294,16 @@ pub fn function(
             }
             Output::Matrix {
                 name: oname,
-                n,
+                rows,
+                cols,
                 values,
             } => {
                 let id = format_ident!("{}", oname);
-                out_params.push(quote!(#id: &mut [[S; #n]; #n]));
-                for r in 0..*n {
-                    for c in 0..*n {
+                out_params.push(quote!(#id: &mut [[S; #cols]; #rows]));
+                for r in 0..*rows {
+                    for c in 0..*cols {
                         let val = value_tokens(
-                            &values[r * n + c],
+                            &values[r * cols + c],
                             split,
                             &slot,
                             &operand,

@@ -69,7 +69,11 @@ pub fn crate_files(
         robot = loaded.robot.name,
         ver = GENERATOR_VERSION
     );
-    for a in &options.algorithms {
+    let mut listed = options.algorithms.clone();
+    if model.has_constraints() {
+        listed.extend([crate::Algorithm::Complete, crate::Algorithm::Embedding]);
+    }
+    for a in &listed {
         let sig = match a {
             crate::Algorithm::Aba => {
                 "aba(q: &[S; NQ], v: &[S; NV], tau: &[S; NV], qdd: &mut [S; NV])"
@@ -79,6 +83,8 @@ pub fn crate_files(
             }
             crate::Algorithm::Crba => "crba(q: &[S; NQ], m: &mut [[S; NV]; NV])",
             crate::Algorithm::Minv => "minv(q: &[S; NQ], m_inv: &mut [[S; NV]; NV])",
+            crate::Algorithm::Complete => "complete(q: &[S; NQ], q_out: &mut [S; NQ])",
+            crate::Algorithm::Embedding => "embedding(q: &[S; NQ], x: &mut [[S; NI]; NV])",
         };
         readme.push_str(&format!("- `{sig}`\n"));
     }

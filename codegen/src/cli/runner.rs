@@ -181,6 +181,8 @@ fn runner_main(krate: &str, algorithms: &[Algorithm]) -> String {
                 "m::minv(black_box(&s.0), &mut mat)",
                 "emit(mat.as_flattened())",
             ),
+            // Not evaluated through the runner (the CLI completes states with the interpreted solver).
+            Algorithm::Complete | Algorithm::Embedding => continue,
         };
         eval_arms.push_str(&format!(
             "                \"{name}\" => {{ {call}; {emit}; }}\n"

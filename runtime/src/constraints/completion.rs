@@ -41,6 +41,18 @@ pub fn complete_configuration<T: Real>(
     ws: &mut Workspace<T>,
     q: &mut [T],
 ) -> Result<f64, DynamicsError> {
+    complete_configuration_with(model, ws, q, 50)
+}
+
+/// [`complete_configuration`] with at most `iterations` Newton steps per group (stopping earlier once the
+/// residual is below 1e-14). Generated code uses a fixed count: Newton converges quadratically from a
+/// guess near the assembly, so a few steps reach machine precision.
+pub fn complete_configuration_with<T: Real>(
+    model: &Model<T>,
+    ws: &mut Workspace<T>,
+    q: &mut [T],
+    iterations: usize,
+) -> Result<f64, DynamicsError> {
     let zeros = vec![T::zero(); model.nv()];
     let mut groups = core::mem::take(&mut ws.groups);
     let mut r = vec![T::zero(); model.constraint_raw_rows()];
@@ -48,16 +60,22 @@ pub fn complete_configuration<T: Real>(
     'groups: for (gi, gw) in groups.iter_mut().enumerate() {
         let g = &model.groups[gi];
         let mut worst = 0.0;
-        for _ in 0..50 {
+        for _ in 0..iterations {
             if let Err(e) = constraint_kinematics(model, ws, q, &zeros) {
                 result = Err(e);
                 break 'groups;
             }
             residuals(model, ws, q, &mut r);
-            worst = g
-                .rows
-                .iter()
-                .fold(0.0f64, |m, &i| m.max(r[i].to_f64().abs()));
+            // NaN propagates (f64::max would drop it): an unknown residual never reads as converged, so
+            // a traced completion (whose residuals have no value yet) runs every step.
+            worst = g.rows.iter().fold(0.0f64, |m, &i| {
+                let x = r[i].to_f64().abs();
+                if m.is_nan() || x.is_nan() {
+                    f64::NAN
+                } else {
+                    m.max(x)
+                }
+            });
             if worst <= 1e-14 {
                 break;
             }

@@ -13,7 +13,8 @@ mod grouping;
 
 pub use closure::{LoopClosure, LoopType};
 pub use completion::{
-    complete_configuration, complete_velocity, constraint_violation, y1_condition,
+    complete_configuration, complete_configuration_with, complete_velocity, constraint_violation,
+    y1_condition,
 };
 pub use embedding::SINGULARITY_THRESHOLD;
 pub(crate) use embedding::{embed, GroupWorkspace};
