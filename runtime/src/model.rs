@@ -109,6 +109,20 @@ impl<T: Real> Joint<T> {
         }
     }
 
+    /// For a 1-DoF joint whose axis is ±x, ±y or ±z exactly: (whether it is angular, the axis index).
+    pub fn coordinate_axis(&self) -> Option<(bool, usize)> {
+        let angular = match self.joint_type {
+            JointType::Revolute | JointType::Continuous => true,
+            JointType::Prismatic => false,
+            JointType::Floating => return None,
+        };
+        let (o, z) = (T::one(), T::zero());
+        let a = &self.axis;
+        (0..3)
+            .find(|&k| (a[k] == o || a[k] == -o) && (0..3).all(|m| m == k || a[m] == z))
+            .map(|k| (angular, k))
+    }
+
     /// Column `k` of the motion subspace `S` (the paper's `H*(k)`), in the child body frame.
     #[inline(always)]
     pub fn subspace_column(&self, k: usize) -> Motion<T> {

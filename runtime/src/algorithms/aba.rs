@@ -168,7 +168,20 @@ pub(crate) fn backward_step<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, i:
         // P⁺ = τ̄ P = P − U D⁻¹ Uᵀ;  𝔷⁺ = 𝔷 + P⁺ a(k) + G ε.
         let mut p_plus = p;
         p_plus.sub_rank_one(&u, d_inv);
-        let z_plus = ws.force[i] + p_plus.mul_motion(&ws.coriolis[i]) + u * (eps * d_inv);
+        let mut z_plus = ws.force[i] + p_plus.mul_motion(&ws.coriolis[i]) + u * (eps * d_inv);
+        // P⁺ H* = 0 and H 𝔷⁺ = 𝒯 exactly (τ̄ removes the joint's own direction). For an axis along a
+        // coordinate axis that makes a row and column of P⁺ zero: set them exactly, which removes
+        // rounding noise and, in generated code, every product with them.
+        if let Some((angular, k)) = joint.coordinate_axis() {
+            p_plus.clear_direction(angular, k);
+            let sign = joint.axis[k];
+            let tau_i = tau[joint.v_index] * sign;
+            if angular {
+                z_plus.angular[k] = tau_i;
+            } else {
+                z_plus.linear[k] = tau_i;
+            }
+        }
         let x = ws.parent_placement[i];
         ws.inertia[parent] += p_plus.act(&x);
         let zf = x.act_force(&z_plus);

@@ -54,6 +54,23 @@ impl<T: Real> ArticulatedInertia<T> {
         self.c -= a.linear * b.linear.transpose();
     }
 
+    /// Zeroes the row and column of one spatial direction (angular or linear axis `k`): what an
+    /// articulated inertia `τ̄ P` has exactly for a joint moving along that direction.
+    pub fn clear_direction(&mut self, angular: bool, k: usize) {
+        let z = T::zero();
+        for m in 0..3 {
+            if angular {
+                self.a[(k, m)] = z;
+                self.a[(m, k)] = z;
+                self.b[(k, m)] = z;
+            } else {
+                self.c[(k, m)] = z;
+                self.c[(m, k)] = z;
+                self.b[(m, k)] = z;
+            }
+        }
+    }
+
     /// The same inertia expressed in the parent frame of `x` (`Xᵀ P X` in Featherstone's notation).
     ///
     /// Rotate each block, then shift the reference point with `[p]×`; written in blocks so the cost is a few
