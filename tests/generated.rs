@@ -33,6 +33,21 @@ mod slider_crank {
 mod biped {
     embedyn::robot!("models/loops/biped_floating.urdf");
 }
+mod four_bar_terminal {
+    embedyn::robot!("models/loops/four_bar_terminal.urdf");
+}
+mod geared_motor {
+    embedyn::robot!("models/loops/geared_motor.urdf");
+}
+mod differential_wrist {
+    embedyn::robot!("models/loops/differential_wrist.urdf");
+}
+mod six_bar {
+    embedyn::robot!("models/loops/six_bar.urdf");
+}
+mod parallel_gripper {
+    embedyn::robot!("models/loops/parallel_gripper.urdf");
+}
 
 /// Compares one generated model with the interpreted one on random states.
 macro_rules! check {
@@ -231,4 +246,27 @@ fn generated_completion_and_embedding_match_interpreted() {
     case!(four_bar, "models/loops/four_bar_internal.urdf");
     case!(slider_crank, "models/loops/slider_crank.urdf");
     case!(biped, "models/loops/biped_floating.urdf");
+}
+
+/// The remaining bundled mechanisms: the four-bar's terminal cut, a two-stage geared arm, a bevel-gear
+/// differential (two mimics per rotor), a six-bar (two loops, one aggregate link) and a mimic gripper.
+#[test]
+fn other_bundled_mechanisms_generated_match_interpreted() {
+    check!(
+        four_bar_terminal,
+        "models/loops/four_bar_terminal.urdf",
+        false
+    );
+    check!(geared_motor, "models/loops/geared_motor.urdf", false);
+    check!(
+        differential_wrist,
+        "models/loops/differential_wrist.urdf",
+        false
+    );
+    check!(six_bar, "models/loops/six_bar.urdf", false);
+    check!(
+        parallel_gripper,
+        "models/loops/parallel_gripper.urdf",
+        false
+    );
 }
