@@ -169,11 +169,35 @@ impl Add for Sym {
             (Sym::Const(x), Sym::Const(y)) => Sym::Const(x + y),
             _ if self.is(0.0) => b,
             _ if b.is(0.0) => self,
+            // x + (−x) = 0 exactly for every finite x.
+            _ if is_neg_of(self, b) || is_neg_of(b, self) => Sym::Const(0.0),
+            // Negations fold into the operation (exact): a + (−y) = a − y.
+            _ if negated(b).is_some() => self - negated(b).unwrap(),
+            _ if negated(self).is_some() => b - negated(self).unwrap(),
             _ => {
                 let (x, y) = Sym::order(self, b);
                 push(Op::Add(x, y))
             }
         }
+    }
+}
+
+/// `Some(x)` when `a` is the node `−x`.
+fn negated(a: Sym) -> Option<Sym> {
+    match a {
+        Sym::Node(n) => TAPE.with(|t| match t.borrow().nodes[n as usize] {
+            Op::Neg(x) => Some(x),
+            _ => None,
+        }),
+        Sym::Const(_) => None,
+    }
+}
+
+/// Whether `a` is the node `−b`.
+fn is_neg_of(a: Sym, b: Sym) -> bool {
+    match a {
+        Sym::Node(n) => TAPE.with(|t| matches!(t.borrow().nodes[n as usize], Op::Neg(x) if x == b)),
+        Sym::Const(_) => false,
     }
 }
 
@@ -185,6 +209,7 @@ impl Sub for Sym {
             _ if b.is(0.0) => self,
             _ if self.is(0.0) => -b,
             _ if self == b => Sym::Const(0.0),
+            _ if negated(b).is_some() => self + negated(b).unwrap(),
             _ => push(Op::Sub(self, b)),
         }
     }
@@ -200,6 +225,14 @@ impl Mul for Sym {
             _ if b.is(1.0) => self,
             _ if self.is(-1.0) => -b,
             _ if b.is(-1.0) => -self,
+            // (−x)(−y) = xy; c (−y) = (−c) y: the sign moves into a constant or disappears.
+            _ if negated(self).is_some() && negated(b).is_some() => {
+                negated(self).unwrap() * negated(b).unwrap()
+            }
+            (Sym::Const(c), _) if negated(b).is_some() => Sym::Const(-c) * negated(b).unwrap(),
+            (_, Sym::Const(c)) if negated(self).is_some() => {
+                negated(self).unwrap() * Sym::Const(-c)
+            }
             _ => {
                 let (x, y) = Sym::order(self, b);
                 push(Op::Mul(x, y))
@@ -230,6 +263,10 @@ impl Neg for Sym {
                 let inner = TAPE.with(|t| t.borrow().nodes[n as usize]);
                 match inner {
                     Op::Neg(x) => x,
+                    // −(c y) = (−c) y and −(a − b) = b − a: no separate negation.
+                    Op::Mul(Sym::Const(c), y) => Sym::Const(-c) * y,
+                    Op::Mul(y, Sym::Const(c)) => y * Sym::Const(-c),
+                    Op::Sub(a, b) => b - a,
                     _ => push(Op::Neg(self)),
                 }
             }

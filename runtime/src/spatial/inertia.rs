@@ -69,23 +69,15 @@ impl<T: Real> SpatialInertia<T> {
         let h_rot = r * self.first_moment;
         // I_o about the new origin: rotate, then shift the reference point by −p using
         // I_new = I_rot − [p]×[h]× − [h]×[p]× − m [p]×[p]× (h the rotated first moment), which with
-        // [a]×[b]× = b aᵀ − (a·b) 1 is (2 p·h + m |p|²) 1 − h pᵀ − p hᵀ − m p pᵀ.
+        // [a]×[b]× = b aᵀ − (a·b) 1 is (2 p·h + m |p|²) 1 − h pᵀ − p hᵀ − m p pᵀ. The diagonal is written as
+        // Σ_{j≠k} p_j (2 h_j + m p_j): no cancelling terms, so an offset along one axis leaves exact zeros.
         let m = self.mass;
         let h = &h_rot;
-        let diag = (p.dot(h) + p.dot(h)) + m * p.dot(p);
+        let w = |j: usize| p[j] * (h[j] + h[j] + m * p[j]);
+        let (w0, w1, w2) = (w(0), w(1), w(2));
         let s = |i: usize, j: usize| -(h[i] * p[j] + p[i] * h[j] + m * p[i] * p[j]);
         let (xy, xz, yz) = (s(0, 1), s(0, 2), s(1, 2));
-        let shift = Matrix3::new(
-            diag + s(0, 0),
-            xy,
-            xz,
-            xy,
-            diag + s(1, 1),
-            yz,
-            xz,
-            yz,
-            diag + s(2, 2),
-        );
+        let shift = Matrix3::new(w1 + w2, xy, xz, xy, w0 + w2, yz, xz, yz, w0 + w1);
         let rot = rotate_tensor(r, &self.rotational) + shift;
         SpatialInertia {
             mass: self.mass,
