@@ -14,6 +14,12 @@ if [[ "${1:-}" != "--skip-pinocchio" ]]; then
     > bench/results/pinocchio.jsonl
   "$PINOCCHIO_BENCH" --floating tests/data/pinocchio/solo12.urdf \
     | sed 's/"model": "solo12"/"model": "solo12_floating"/' >> bench/results/pinocchio.jsonl
+  # The floating-base humanoid, read from the pip package (its licence keeps it out of the repo).
+  TALOS="$ERD_ROBOTS/talos_data/robots/talos_reduced.urdf"
+  if [[ -f "$TALOS" ]]; then
+    "$PINOCCHIO_BENCH" --floating "$TALOS" | sed 's/"model": "talos_reduced"/"model": "talos_reduced_floating"/' >> bench/results/pinocchio.jsonl
+    cargo run --release -q -p embedyn-codegen --bin embedyn -- bench "$TALOS" --floating --json > bench/results/talos_embedyn.json 2>/dev/null || true
+  fi
 fi
 cargo bench --bench dynamics 2>&1 | grep -E "^(aba|rnea|crba|minv)|time:" >&2 || true
 python3 bench/make_table.py

@@ -69,6 +69,18 @@ def main():
                            median_ns("gen_aba_f32", m))
         lines.append(f"| {m} | {p.get('nv', '')} | {fmt(ga)} | {ratio(ga, p.get('aba'))} | {ratio(median_ns('aba', m), ga)} | "
                      f"{fmt(gr)} | {ratio(gr, p.get('rnea'))} | {fmt(gc)} | {ratio(gc, p.get('crba'))} | {fmt(g32)} |")
+    talos = os.path.join(ROOT, "bench", "results", "talos_embedyn.json")
+    pt = pin.get("talos_reduced_floating")
+    if os.path.exists(talos) and pt:
+        t = json.load(open(talos))
+        lines += ["", f"talos_reduced, floating base (nv {pt.get('nv')}; example-robot-data's file, read from the pip "
+                  "package; `embedyn bench`, same session): ns per call and ratio to Pinocchio.", "",
+                  "| algorithm | interpreted | generated f64 | generated f32 | Pinocchio | generated / Pinocchio |",
+                  "|---|---:|---:|---:|---:|---:|"]
+        for a in ["aba", "rnea", "crba"]:
+            r = t[a]
+            lines.append(f"| {a} | {fmt(r['interpreted_f64'])} | {fmt(r['generated_f64'])} | {fmt(r['generated_f32'])} | "
+                         f"{fmt(pt.get(a))} | {ratio(r['generated_f64'], pt.get(a))} |")
     lines += ["", "f32 against f64, interpreted (same run):", "",
               "| model | " + " | ".join(f"{a} f32 | {a} f64" for a in ALGOS) + " |",
               "|---|" + "---:|---:|" * len(ALGOS)]

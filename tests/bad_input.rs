@@ -272,3 +272,13 @@ bad!(
     "mimic_missing_joint.urdf",
     [":9:", "joint \"finger2\" <mimic>", "finger_1"]
 );
+
+#[test]
+fn mimic_on_a_fixed_joint_is_ignored_with_a_warning() {
+    let w = warnings_of("mimic_on_fixed.urdf");
+    assert_eq!(w.len(), 1, "{w:?}");
+    assert!(
+        w[0].contains("joint \"finger_fixed\"") && w[0].contains("ignored") && w[0].contains(":8:"),
+        "{w:?}"
+    );
+}

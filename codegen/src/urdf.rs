@@ -359,6 +359,16 @@ impl<'a, 'input> Parser<'a, 'input> {
                 line: self.line(m),
             });
         }
+        if kind == JointKind::Fixed && !mimics.is_empty() {
+            // A fixed joint has no coordinate to drive (talos_reduced.urdf has such gripper leftovers):
+            // Pinocchio ignores these too.
+            self.warn(
+                node,
+                what.clone(),
+                "<mimic> on a fixed joint has nothing to drive; ignored",
+            );
+            mimics.clear();
+        }
         let independent = match node.attribute("independent") {
             None => None,
             Some("true") => Some(true),
