@@ -129,20 +129,7 @@ fn eval_reproduces_pinocchio_through_the_cli() {
     let rnea = json_of(&["eval", &model, "--floating", "--algo", "rnea"], &input);
     let crba = json_of(&["eval", &model, "--floating", "--algo", "crba"], &input);
     let rel = |a: &Value, b: &Value| -> f64 {
-        let a: Vec<f64> = a
-            .as_array()
-            .unwrap()
-            .iter()
-            .flat_map(|x| x.as_array().cloned().unwrap_or_else(|| vec![x.clone()]))
-            .map(|x| x.as_f64().unwrap())
-            .collect();
-        let b: Vec<f64> = b
-            .as_array()
-            .unwrap()
-            .iter()
-            .flat_map(|x| x.as_array().cloned().unwrap_or_else(|| vec![x.clone()]))
-            .map(|x| x.as_f64().unwrap())
-            .collect();
+        let (a, b) = (flat(a), flat(b));
         assert_eq!(a.len(), b.len());
         let scale = b.iter().fold(1.0f64, |m, x| m.max(x.abs()));
         a.iter()

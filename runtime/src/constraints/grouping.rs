@@ -2,6 +2,7 @@
 //! system is a tree again; and, once per model, which equations are redundant and which coordinates are
 //! independent.
 
+use super::embedding::{fill_y1, group_rows, y1_condition_of, GroupWorkspace};
 use super::{jacobian, residuals, ConstraintKind};
 use crate::algorithms::{forward_kinematics, Workspace};
 use crate::linalg::{independent_columns, independent_rows, solve_least_squares};
@@ -294,21 +295,14 @@ pub(crate) fn assemble<T: Real>(
 
 /// cond₁ of `Y1` (kept rows × dependent columns) at `q`.
 fn y1_condition<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, q: &[T], g: &Group) -> f64 {
-    use crate::linalg::{condition_number_1, lu_in_place};
-    let cols: Vec<usize> = g
-        .dependent
-        .iter()
-        .map(|&b| model.joints[b].v_index)
-        .collect();
-    if cols.is_empty() {
+    if g.dependent.is_empty() {
         return 1.0;
     }
-    let y1 = group_jacobian(model, ws, q, &g.rows, &cols);
-    let mut lu = y1.clone();
-    let mut perm = vec![0; cols.len()];
-    if lu_in_place(&mut lu, &mut perm).is_err() {
-        return f64::INFINITY;
-    }
-    let mut scratch = DMatrix::zeros(cols.len(), cols.len());
-    condition_number_1(&y1, &lu, &perm, &mut scratch).to_f64()
+    // The same rows, Y1 and conditioning as every call will use.
+    let zeros = vec![T::zero(); model.nv()];
+    forward_kinematics(model, ws, q, &zeros).expect("sizes match");
+    let mut gw = GroupWorkspace::new(model, g);
+    group_rows(model, ws, g, &mut gw, false);
+    fill_y1(g, &mut gw);
+    y1_condition_of(&mut gw)
 }
