@@ -243,10 +243,8 @@ pub fn function(
                 }
                 Op::Sin(_) | Op::Cos(_) if batch.contains(&n) => {
                     // All angles that depend on the inputs alone, in one helper call.
-                    let args: Vec<TokenStream> = batch_args(nodes, &batch)
-                        .iter()
-                        .map(|a| operand(a))
-                        .collect();
+                    let args: Vec<TokenStream> =
+                        batch_args(nodes, &batch).iter().map(&operand).collect();
                     stmts.push(quote!(
                         let (sin_batch, cos_batch) = #helpers::sincos_batch([#(#args),*]);
                     ));
