@@ -48,6 +48,9 @@ mod six_bar {
 mod parallel_gripper {
     embedyn::robot!("models/loops/parallel_gripper.urdf");
 }
+mod singular_four_bar {
+    embedyn::robot!("models/loops/singular_four_bar.urdf", f64_only);
+}
 
 /// Compares one generated model with the interpreted one on random states.
 macro_rules! check {
@@ -183,7 +186,7 @@ fn floating_biped_with_knee_linkages_generated_matches_interpreted() {
 
 /// Loop models: the generated position completion (a fixed count of Newton steps) lands where the
 /// interpreted completion does, from a guess a little off the assembly, and the generated embedding map
-/// equals the interpreted one.
+/// equals the interpreted one, as do its pivot ratio and `crba_independent` (`Xᵀ M X`).
 #[test]
 #[allow(clippy::modulo_one)] // NI = 1 for the one-DoF mechanisms
 fn generated_completion_and_embedding_match_interpreted() {
@@ -219,10 +222,29 @@ fn generated_completion_and_embedding_match_interpreted() {
                 $m::f64::complete(&guess.clone().try_into().unwrap(), &mut q_gen);
                 worst_q = worst_q.max(relative_error(&q_gen, &q));
                 let mut x = [[0.0; NI]; NV];
-                $m::f64::embedding(&q.clone().try_into().unwrap(), &mut x);
+                let ratio = $m::f64::embedding(&q.clone().try_into().unwrap(), &mut x);
                 let want = embedyn::embedding_map(&model, &mut ws, &q).unwrap();
                 let flat: Vec<f64> = x.iter().flatten().copied().collect();
                 let want_flat: Vec<f64> = (0..NV * NI).map(|k| want[(k / NI, k % NI)]).collect();
+                worst_x = worst_x.max(relative_error(&flat, &want_flat));
+                // The same pivot ratio as the interpreted elimination (same arithmetic), well away
+                // from 0 near the zero pose.
+                let want_ratio = embedyn::constraints::constraint_pivot_ratio(&ws);
+                assert!(
+                    (ratio - want_ratio).abs() <= 1e-12 * want_ratio,
+                    "{ratio} vs {want_ratio}"
+                );
+                assert!(
+                    ratio > 1e-3,
+                    "{}: pivot ratio {ratio:e} near the zero pose",
+                    $path
+                );
+                // Xᵀ M X over the independent coordinates.
+                let mut m = [[0.0; NI]; NI];
+                $m::f64::crba_independent(&q.clone().try_into().unwrap(), &mut m);
+                let want = embedyn::reduced_mass_matrix(&model, &mut ws, &q).unwrap();
+                let flat: Vec<f64> = m.iter().flatten().copied().collect();
+                let want_flat: Vec<f64> = (0..NI * NI).map(|k| want[(k / NI, k % NI)]).collect();
                 worst_x = worst_x.max(relative_error(&flat, &want_flat));
             }
             eprintln!(
@@ -268,5 +290,83 @@ fn other_bundled_mechanisms_generated_match_interpreted() {
         parallel_gripper,
         "models/loops/parallel_gripper.urdf",
         false
+    );
+}
+
+/// Generated loop code pivots at run time (the row order is not frozen at generation time) and reports
+/// how close the mechanism is to a singular configuration: along the parallelogram four-bar's branch up
+/// to 1e-7 rad from its toggle, the generated `aba` matches the interpreted one to the accuracy the
+/// conditioning allows, returns the interpreted elimination's pivot ratio, and that ratio bounds
+/// cond₁(Y1) from below as documented; at the toggle it returns a ratio that reads as singular.
+#[test]
+fn generated_loop_code_pivots_and_reports_singular_configurations() {
+    use embedyn::constraints::{complete_configuration, constraint_pivot_ratio, y1_condition};
+    const NQ: usize = singular_four_bar::NQ;
+    let model: Model<f64> = load_model("models/loops/singular_four_bar.urdf", false);
+    let mut ws = Workspace::new(&model);
+    let crank = model.joint_index("crank_joint").unwrap();
+    let rows = model.groups[0].rows.len() as f64;
+    let toggle = std::f64::consts::FRAC_PI_3;
+    let mut q = model.neutral_configuration();
+    let (mut worst, mut min_ratio) = (0.0f64, f64::INFINITY);
+    let v = vec![0.4; model.nv()];
+    let tau = vec![0.3; model.nv()];
+    // From 1 rad below the toggle to 1e-7 rad from it, closer and closer (continuation keeps the branch).
+    let gaps: Vec<f64> = (0..=60)
+        .map(|k| 10f64.powf(-7.0 * k as f64 / 60.0))
+        .collect();
+    for gap in gaps {
+        q[model.joints[crank].q_index] = toggle - gap;
+        complete_configuration(&model, &mut ws, &mut q).unwrap();
+        let mut v = v.clone();
+        embedyn::constraints::complete_velocity(&model, &mut ws, &q, &mut v).unwrap();
+        let cond = y1_condition(&model, &mut ws, &q, 0).unwrap();
+        let want = aba(&model, &mut ws, &q, &v, &tau).unwrap().to_vec();
+        let want_ratio = constraint_pivot_ratio(&ws);
+        let mut qdd = [0.0; NQ];
+        let ratio = singular_four_bar::f64::aba(
+            &q.clone().try_into().unwrap(),
+            &v.clone().try_into().unwrap(),
+            &tau.clone().try_into().unwrap(),
+            &mut qdd,
+        );
+        let e = relative_error(&qdd, &want);
+        // Both are accurate to about cond · eps; they differ by no more.
+        assert!(
+            e <= 1e-13 * cond.max(1.0),
+            "{gap:e} rad from the toggle: generated off by {e:e} (cond {cond:e})"
+        );
+        // A measure of a near-singular matrix: relative accuracy about cond · eps.
+        assert!(
+            (ratio - want_ratio).abs() <= 1e-13 * cond.max(1.0) * want_ratio,
+            "ratio {ratio:e} vs interpreted {want_ratio:e} (cond {cond:e})"
+        );
+        assert!(
+            cond * rows * ratio >= 1.0 - 1e-9,
+            "cond {cond:e} below 1/(rows · ratio {ratio:e})"
+        );
+        worst = worst.max(e / cond.max(1.0));
+        min_ratio = min_ratio.min(ratio);
+    }
+    eprintln!("singular_four_bar: generated vs interpreted ≤ {worst:.1e} · cond(Y1); smallest pivot ratio {min_ratio:.1e}");
+    assert!(
+        min_ratio < 1e-6,
+        "the sweep gets close to the toggle: ratio {min_ratio:e}"
+    );
+    // At the toggle (exact coordinates of the flat parallelogram): a ratio that proves cond₁(Y1) ≥ 1e10.
+    let mut q_at = model.neutral_configuration();
+    for (name, value) in [
+        ("crank_joint", toggle),
+        ("coupler_joint", -toggle),
+        ("rocker_joint", toggle),
+    ] {
+        q_at[model.joints[model.joint_index(name).unwrap()].q_index] = value;
+    }
+    let mut qdd = [0.0; NQ];
+    let ratio =
+        singular_four_bar::f64::aba(&q_at.try_into().unwrap(), &[0.0; NQ], &[0.3; NQ], &mut qdd);
+    assert!(
+        ratio * rows * 1e10 <= 1.0,
+        "at the toggle the pivot ratio is {ratio:e}"
     );
 }

@@ -26,6 +26,8 @@ pub enum Output {
         cols: usize,
         values: Vec<Sym>,
     },
+    /// The function's return value (`-> S`).
+    Return(Sym),
 }
 
 /// Statements per chunk function. At ~2000 statements rustc -O compiles each in about a second, and the
@@ -65,10 +67,12 @@ pub fn function(
     let mut stack: Vec<u32> = Vec::new();
     let mut out_syms: Vec<Sym> = Vec::new();
     for o in outputs {
-        let values = match o {
-            Output::Vector { values, .. } | Output::Matrix { values, .. } => values,
-        };
-        out_syms.extend(values.iter().copied());
+        match o {
+            Output::Vector { values, .. } | Output::Matrix { values, .. } => {
+                out_syms.extend(values.iter().copied())
+            }
+            Output::Return(v) => out_syms.push(*v),
+        }
     }
     for s in &out_syms {
         match s {
@@ -241,6 +245,20 @@ pub fn function(
                     let a = operand(a);
                     quote!(#helpers::abs(#a))
                 }
+                Op::Select {
+                    lhs,
+                    rhs,
+                    then,
+                    otherwise,
+                } => {
+                    let (l, r, t, o) = (
+                        operand(lhs),
+                        operand(rhs),
+                        operand(then),
+                        operand(otherwise),
+                    );
+                    quote!(if #l > #r { #t } else { #o })
+                }
                 Op::Sin(_) | Op::Cos(_) if batch.contains(&n) => {
                     // All angles that depend on the inputs alone, in one helper call.
                     let args: Vec<TokenStream> =
@@ -302,8 +320,15 @@ pub fn function(
     // Outputs.
     let mut out_params = Vec::new();
     let mut out_stmts = Vec::new();
+    let mut ret_type = quote!();
+    let mut ret_value = quote!();
     for o in outputs {
         match o {
+            Output::Return(v) => {
+                ret_type = quote!(-> S);
+                let val = value_tokens(v, split, &slot, &operand, nodes, &arg_names);
+                ret_value = quote!(#val);
+            }
             Output::Vector {
                 name: oname,
                 values,
@@ -352,19 +377,21 @@ pub fn function(
             let mut s: [S; #nslots] = [0.0; #nslots];
             #(#calls)*
             #(#out_stmts)*
+            #ret_value
         }
     } else {
         let stmts = bodies.pop().unwrap_or_default();
         quote! {
             #(#stmts)*
             #(#out_stmts)*
+            #ret_value
         }
     };
     Ok(quote! {
         #(#chunk_fns)*
         #[doc = #doc]
         #[allow(unused_variables, clippy::all)]
-        pub fn #fname(#(#scalar_args,)* #(#out_params),*) {
+        pub fn #fname(#(#scalar_args,)* #(#out_params),*) #ret_type {
             #body
         }
     })
@@ -401,6 +428,12 @@ fn operands(op: &Op) -> Vec<Sym> {
         Op::Input { .. } => vec![],
         Op::Add(a, b) | Op::Sub(a, b) | Op::Mul(a, b) | Op::Div(a, b) => vec![a, b],
         Op::Neg(a) | Op::Sqrt(a) | Op::Sin(a) | Op::Cos(a) | Op::Abs(a) => vec![a],
+        Op::Select {
+            lhs,
+            rhs,
+            then,
+            otherwise,
+        } => vec![lhs, rhs, then, otherwise],
     }
 }
 
@@ -408,7 +441,7 @@ fn operands(op: &Op) -> Vec<Sym> {
 fn latency(op: &Op) -> u32 {
     match op {
         Op::Input { .. } => 0,
-        Op::Add(..) | Op::Sub(..) | Op::Neg(..) | Op::Abs(..) => 3,
+        Op::Add(..) | Op::Sub(..) | Op::Neg(..) | Op::Abs(..) | Op::Select { .. } => 3,
         Op::Mul(..) => 4,
         Op::Div(..) => 14,
         Op::Sqrt(..) => 20,

@@ -7,8 +7,10 @@
 use crate::emit::{function, Arg, Output};
 use crate::trace::{input, record, snap, Sym};
 use crate::{build_model, LoadError, Loaded, Location, ModelOptions};
-use embedyn_runtime::constraints::complete_configuration_with;
-use embedyn_runtime::{aba, crba, embedding_map, mass_matrix_inverse, rnea, Model, Workspace};
+use embedyn_runtime::constraints::{complete_configuration_with, constraint_pivot_ratio};
+use embedyn_runtime::{
+    aba, crba, embedding_map, mass_matrix_inverse, reduced_mass_matrix, rnea, Model, Workspace,
+};
 
 /// Newton steps of the generated position completion.
 const COMPLETION_STEPS: usize = 5;
@@ -32,6 +34,9 @@ pub enum Algorithm {
     /// Models with loops or couplings: `embedding(q, x)`, the map `X` (nv × independent nv) with
     /// `v = X v_independent`; `Xᵀ τ` is the force on the independent coordinates.
     Embedding,
+    /// Models with loops or couplings: `crba_independent(q, m)`, the mass matrix over the independent
+    /// coordinates, `Xᵀ M X` (what `embedyn eval --algo crba` reports for such a model).
+    CrbaIndependent,
 }
 
 impl Algorithm {
@@ -43,6 +48,7 @@ impl Algorithm {
             Algorithm::Minv => "minv",
             Algorithm::Complete => "complete",
             Algorithm::Embedding => "embedding",
+            Algorithm::CrbaIndependent => "crba_independent",
         }
     }
 }
@@ -118,7 +124,11 @@ pub fn generate_tokens(
         let mut algorithms = options.algorithms.clone();
         // A model with constraints also gets its position completion and embedding map.
         if model.has_constraints() {
-            for extra in [Algorithm::Complete, Algorithm::Embedding] {
+            for extra in [
+                Algorithm::Complete,
+                Algorithm::Embedding,
+                Algorithm::CrbaIndependent,
+            ] {
                 if !algorithms.contains(&extra) {
                     algorithms.push(extra);
                 }
@@ -182,10 +192,14 @@ fn generate_algorithm(
         Ok(match algo {
             Algorithm::Aba => {
                 let (v, tau) = (inputs(1, nv), inputs(2, nv));
-                vec![Output::Vector {
+                let mut out = vec![Output::Vector {
                     name: "qdd",
                     values: aba(model, &mut ws, &q, &v, &tau).map_err(fail)?.to_vec(),
-                }]
+                }];
+                if model.has_constraints() {
+                    out.push(Output::Return(constraint_pivot_ratio(&ws)));
+                }
+                out
             }
             Algorithm::Rnea => {
                 let (v, qdd) = (inputs(1, nv), inputs(2, nv));
@@ -227,10 +241,24 @@ fn generate_algorithm(
                 let x = embedding_map(model, &mut ws, &q).map_err(fail)?;
                 let (rows, cols) = (x.nrows(), x.ncols());
                 let values = (0..rows * cols).map(|k| x[(k / cols, k % cols)]).collect();
+                vec![
+                    Output::Matrix {
+                        name: "x",
+                        rows,
+                        cols,
+                        values,
+                    },
+                    Output::Return(constraint_pivot_ratio(&ws)),
+                ]
+            }
+            Algorithm::CrbaIndependent => {
+                let m = reduced_mass_matrix(model, &mut ws, &q).map_err(fail)?;
+                let n = m.nrows();
+                let values = (0..n * n).map(|k| m[(k / n, k % n)]).collect();
                 vec![Output::Matrix {
-                    name: "x",
-                    rows,
-                    cols,
+                    name: "m",
+                    rows: n,
+                    cols: n,
                     values,
                 }]
             }
@@ -240,7 +268,11 @@ fn generate_algorithm(
     let (args, doc): (Vec<Arg>, &str) = match algo {
         Algorithm::Aba => (
             vec![Arg { name: "q", len: nq }, Arg { name: "v", len: nv }, Arg { name: "tau", len: nv }],
-            "Forward dynamics: `qdd = M(q)⁻¹ (τ − C(q, v) − g(q))` (the O(N) articulated-body algorithm, unrolled).",
+            if model.has_constraints() {
+                "Forward dynamics with constraint embedding: `qdd` over all spanning coordinates (the O(N) articulated-body algorithm with each aggregate link inline, unrolled); only `Xᵀ τ` acts. Returns the constraint pivot ratio, `min |u_kk| / max |Y1_ij|` over the groups' partial-pivoting eliminations: near 0 at a singular configuration (a toggle), where `qdd` is meaningless; `cond₁(Y1) ≥ 1 / (rows · ratio)`, so below about 1e-11 is where the interpreted solver refuses (cond₁ ≥ 1e10)."
+            } else {
+                "Forward dynamics: `qdd = M(q)⁻¹ (τ − C(q, v) − g(q))` (the O(N) articulated-body algorithm, unrolled)."
+            },
         ),
         Algorithm::Rnea => (
             vec![Arg { name: "q", len: nq }, Arg { name: "v", len: nv }, Arg { name: "qdd", len: nv }],
@@ -252,7 +284,8 @@ fn generate_algorithm(
             vec![Arg { name: "q", len: nq }],
             "Position completion: `q_out` is `q` with its dependent coordinates solved from the independent ones (5 Newton steps from `q`'s dependent entries as the guess; check the result where the guess may be far).",
         ),
-        Algorithm::Embedding => (vec![Arg { name: "q", len: nq }], "The embedding map `X` (rows: all velocity coordinates, columns: independent ones): `v = X v_independent`."),
+        Algorithm::Embedding => (vec![Arg { name: "q", len: nq }], "The embedding map `X` (rows: all velocity coordinates, columns: independent ones): `v = X v_independent`. Returns the constraint pivot ratio (as `aba` does)."),
+        Algorithm::CrbaIndependent => (vec![Arg { name: "q", len: nq }], "The mass matrix over the independent coordinates, `Xᵀ M(q) X` (the spanning tree's `M` is `crba`)."),
     };
     function(algo.name(), doc, &args, &outputs, &tape, helpers).map_err(|e| gen_error(loaded, e.0))
 }

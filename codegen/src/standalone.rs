@@ -71,22 +71,41 @@ pub fn crate_files(
     );
     let mut listed = options.algorithms.clone();
     if model.has_constraints() {
-        listed.extend([crate::Algorithm::Complete, crate::Algorithm::Embedding]);
+        listed.extend([
+            crate::Algorithm::Complete,
+            crate::Algorithm::Embedding,
+            crate::Algorithm::CrbaIndependent,
+        ]);
     }
+    let constrained = model.has_constraints();
     for a in &listed {
-        let sig = match a {
-            crate::Algorithm::Aba => {
-                "aba(q: &[S; NQ], v: &[S; NV], tau: &[S; NV], qdd: &mut [S; NV])"
-            }
-            crate::Algorithm::Rnea => {
-                "rnea(q: &[S; NQ], v: &[S; NV], qdd: &[S; NV], tau: &mut [S; NV])"
-            }
-            crate::Algorithm::Crba => "crba(q: &[S; NQ], m: &mut [[S; NV]; NV])",
-            crate::Algorithm::Minv => "minv(q: &[S; NQ], m_inv: &mut [[S; NV]; NV])",
-            crate::Algorithm::Complete => "complete(q: &[S; NQ], q_out: &mut [S; NQ])",
-            crate::Algorithm::Embedding => "embedding(q: &[S; NQ], x: &mut [[S; NI]; NV])",
+        let (sig, note) = match a {
+            crate::Algorithm::Aba if constrained => (
+                "aba(q: &[S; NQ], v: &[S; NV], tau: &[S; NV], qdd: &mut [S; NV]) -> S",
+                " — returns the constraint pivot ratio: near 0 at a singular configuration, where `qdd` \
+                 is meaningless (below about 1e-11 the interpreted solver refuses)",
+            ),
+            crate::Algorithm::Aba => (
+                "aba(q: &[S; NQ], v: &[S; NV], tau: &[S; NV], qdd: &mut [S; NV])",
+                "",
+            ),
+            crate::Algorithm::Rnea => (
+                "rnea(q: &[S; NQ], v: &[S; NV], qdd: &[S; NV], tau: &mut [S; NV])",
+                "",
+            ),
+            crate::Algorithm::Crba => ("crba(q: &[S; NQ], m: &mut [[S; NV]; NV])", ""),
+            crate::Algorithm::Minv => ("minv(q: &[S; NQ], m_inv: &mut [[S; NV]; NV])", ""),
+            crate::Algorithm::Complete => ("complete(q: &[S; NQ], q_out: &mut [S; NQ])", ""),
+            crate::Algorithm::Embedding => (
+                "embedding(q: &[S; NQ], x: &mut [[S; NI]; NV]) -> S",
+                " — `v = X v_independent`; returns the pivot ratio too",
+            ),
+            crate::Algorithm::CrbaIndependent => (
+                "crba_independent(q: &[S; NQ], m: &mut [[S; NI]; NI])",
+                " — the mass matrix over the independent coordinates, `Xᵀ M X`",
+            ),
         };
-        readme.push_str(&format!("- `{sig}`\n"));
+        readme.push_str(&format!("- `{sig}`{note}\n"));
     }
     readme.push_str(&format!(
         "\nnq = {}, nv = {}. Coordinates (CONTRACT §2: revolute angles in rad, prismatic in m; a floating base is\n\

@@ -35,6 +35,13 @@ pub enum Op {
     Sin(Sym),
     Cos(Sym),
     Abs(Sym),
+    /// `if lhs > rhs { then } else { otherwise }`.
+    Select {
+        lhs: Sym,
+        rhs: Sym,
+        then: Sym,
+        otherwise: Sym,
+    },
 }
 
 /// A hashable key of an operation (constants by their bits), for common-subexpression elimination.
@@ -43,6 +50,7 @@ enum Key {
     Input(u8, u32),
     Bin(u8, (u8, u64), (u8, u64)),
     Un(u8, (u8, u64)),
+    Select([(u8, u64); 4]),
 }
 
 fn sym_key(s: Sym) -> (u8, u64) {
@@ -82,6 +90,17 @@ fn push(op: Op) -> Sym {
         Op::Sin(a) => Key::Un(2, sym_key(a)),
         Op::Cos(a) => Key::Un(3, sym_key(a)),
         Op::Abs(a) => Key::Un(4, sym_key(a)),
+        Op::Select {
+            lhs,
+            rhs,
+            then,
+            otherwise,
+        } => Key::Select([
+            sym_key(lhs),
+            sym_key(rhs),
+            sym_key(then),
+            sym_key(otherwise),
+        ]),
     };
     TAPE.with(|t| {
         let mut t = t.borrow_mut();
@@ -340,6 +359,28 @@ impl Real for Sym {
     /// when it was loaded, and the hot functions have no panicking or erroring paths).
     fn is_finite(self) -> bool {
         self.constant().is_none_or(f64::is_finite)
+    }
+    fn select_gt(self, other: Self, then: Self, otherwise: Self) -> Self {
+        if then == otherwise {
+            return then;
+        }
+        if let (Sym::Const(a), Sym::Const(b)) = (self, other) {
+            return if a > b { then } else { otherwise };
+        }
+        // 0 > |x| never holds.
+        if self.is(0.0) {
+            if let Sym::Node(n) = other {
+                if TAPE.with(|t| matches!(t.borrow().nodes[n as usize], Op::Abs(_))) {
+                    return otherwise;
+                }
+            }
+        }
+        push(Op::Select {
+            lhs: self,
+            rhs: other,
+            then,
+            otherwise,
+        })
     }
     fn is_positive_finite(self) -> bool {
         self.constant().is_none_or(|c| c > 0.0 && c.is_finite())

@@ -424,6 +424,47 @@ fn generated_engine_agrees_with_interpreted() {
     }
 }
 
+/// At a loop's toggle both engines refuse with an error naming the singularity instead of printing a
+/// meaningless answer (the generated engine reads the pivot ratio its `aba` returns); 0.1 rad away both
+/// answer and agree.
+#[test]
+fn both_engines_refuse_a_singular_loop_configuration() {
+    let model = repo("models/loops/singular_four_bar.urdf");
+    let t = std::f64::consts::FRAC_PI_3;
+    // crank, coupler, rocker: the flat parallelogram.
+    let at = json!({"samples": [{"q": [t, -t, t], "v": [0.0, 0.0, 0.0], "tau": [0.3, 0.0, 0.0]}]})
+        .to_string();
+    for engine in ["interpreted", "generated"] {
+        let (ok, _, err) =
+            embedyn_cached(&["eval", &model, "--algo", "aba", "--engine", engine], &at);
+        assert!(!ok, "{engine}: accepted the toggle");
+        assert!(
+            err.contains("singular configuration") && err.contains("cond(Y1)"),
+            "{engine}: {err}"
+        );
+    }
+    let near = json!({"samples": [{"q": [t - 0.1, -(t - 0.1), t - 0.1], "v": [0.0, 0.0, 0.0], "tau": [0.3, 0.0, 0.0]}]}).to_string();
+    let interp = json_of(&["eval", &model, "--algo", "aba"], &near);
+    let (ok, out, err) = embedyn_cached(
+        &["eval", &model, "--algo", "aba", "--engine", "generated"],
+        &near,
+    );
+    assert!(ok, "{err}");
+    let gen: Value = serde_json::from_str(&out).unwrap();
+    let (a, b) = (flat(&gen["samples"]), flat(&interp["samples"]));
+    let scale = b.iter().fold(1.0f64, |m, x| m.max(x.abs()));
+    let e = a
+        .iter()
+        .zip(&b)
+        .map(|(x, y)| (x - y).abs())
+        .fold(0.0, f64::max)
+        / scale;
+    assert!(
+        e <= 1e-12,
+        "0.1 rad from the toggle: generated vs interpreted {e:e}"
+    );
+}
+
 #[test]
 fn bench_reports_every_engine_and_scalar() {
     let (ok, out, err) = embedyn_cached(

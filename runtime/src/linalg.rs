@@ -151,6 +151,78 @@ pub fn lu_in_place<T: Real>(a: &mut DMatrix<T>, perm: &mut [usize]) -> Result<()
     Ok(())
 }
 
+/// Solves `A X = B` in place for a small square `A`, with `aug = [A | B]` (`n × (n + m)`): Gaussian
+/// elimination with partial pivoting in which each candidate row is compared with the pivot row and
+/// the two are exchanged by [`Real::select_gt`] rather than by index. The arithmetic is that of ordinary
+/// partial pivoting (the largest magnitude wins, the first one on ties), but written without
+/// data-dependent control flow, so that generated code keeps the pivoting instead of freezing the row
+/// order seen at generation time. On return columns `n..` hold `X`.
+///
+/// Returns the pivot ratio `min_k |u_kk| / max_ij |a_ij|` (0 for a singular `A`), a cheap measure of
+/// singularity: `cond₁(A) ≥ 1 / (n · ratio)` (because `U⁻¹ = A⁻¹ Pᵀ L` with `|l_ij| ≤ 1`). Never
+/// allocates.
+///
+/// # Panics
+/// If `aug` has fewer than `n` rows or columns.
+pub fn solve_pivoted_in_place<T: Real>(aug: &mut DMatrix<T>, n: usize) -> T {
+    assert!(
+        aug.nrows() >= n && aug.ncols() >= n,
+        "solve_pivoted_in_place: aug is too small"
+    );
+    let cols = aug.ncols();
+    if n == 0 {
+        return T::one();
+    }
+    let mut scale = T::zero();
+    for i in 0..n {
+        for j in 0..n {
+            let a = aug[(i, j)].abs();
+            scale = a.select_gt(scale, a, scale);
+        }
+    }
+    let mut min_pivot = T::zero();
+    for k in 0..n {
+        for i in k + 1..n {
+            let (candidate, current) = (aug[(i, k)].abs(), aug[(k, k)].abs());
+            for j in k..cols {
+                let (top, bottom) = (aug[(k, j)], aug[(i, j)]);
+                aug[(k, j)] = candidate.select_gt(current, bottom, top);
+                aug[(i, j)] = candidate.select_gt(current, top, bottom);
+            }
+        }
+        let pivot = aug[(k, k)];
+        let magnitude = pivot.abs();
+        min_pivot = if k == 0 {
+            magnitude
+        } else {
+            min_pivot.select_gt(magnitude, magnitude, min_pivot)
+        };
+        // The reciprocal once, so the eliminations and the back substitution multiply.
+        let inv = T::one() / pivot;
+        aug[(k, k)] = inv;
+        for i in k + 1..n {
+            let f = aug[(i, k)] * inv;
+            aug[(i, k)] = T::zero();
+            for j in k + 1..cols {
+                let u = aug[(k, j)];
+                aug[(i, j)] -= f * u;
+            }
+        }
+    }
+    for j in n..cols {
+        for k in (0..n).rev() {
+            let mut s = aug[(k, j)];
+            for m in k + 1..n {
+                s -= aug[(k, m)] * aug[(m, j)];
+            }
+            aug[(k, j)] = s * aug[(k, k)];
+        }
+    }
+    // 0/0 for a zero matrix: report 0 (singular) rather than NaN.
+    let ratio = min_pivot / scale;
+    scale.select_gt(T::zero(), ratio, T::zero())
+}
+
 /// The row order of the factor of [`lu_in_place`]: row `i` of `P A` is row `order[i]` of `A`.
 /// Allocates (a convenience for callers and tests that want `P` explicitly).
 pub fn lu_row_order(perm: &[usize]) -> Vec<usize> {
@@ -1456,5 +1528,59 @@ mod tests {
         );
         let x = solve_least_squares_with_tol(&a, &[2.0, 3e-10], 1e-8);
         assert_eq!(x, vec![2.0, 0.0]);
+    }
+
+    #[test]
+    fn select_pivoted_solve_matches_lu_and_bounds_the_condition_number() {
+        let mut rng = Rng(17);
+        for n in 1..=6 {
+            for trial in 0..40 {
+                let mut a: DMatrix<f64> = rng.matrix(n, n);
+                // Some matrices need pivoting from the first step, some are ill-conditioned.
+                if trial % 3 == 0 && n > 1 {
+                    a[(0, 0)] = 0.0;
+                }
+                if trial % 5 == 0 && n > 1 {
+                    let row: Vec<f64> = (0..n)
+                        .map(|j| a[(0, j)] + 1e-9 * rng.signed_unit())
+                        .collect();
+                    for (j, x) in row.into_iter().enumerate() {
+                        a[(n - 1, j)] = x;
+                    }
+                }
+                let b: DMatrix<f64> = rng.matrix(n, 3);
+                let mut aug = DMatrix::zeros(n, n + 3);
+                aug.view_mut((0, 0), (n, n)).copy_from(&a);
+                aug.view_mut((0, n), (n, 3)).copy_from(&b);
+                let ratio = solve_pivoted_in_place(&mut aug, n);
+                let x = aug.view((0, n), (n, 3)).into_owned();
+                let residual = (&a * &x - &b).abs().max();
+                let cond = condition_number_1_of(&a);
+                assert!(
+                    residual <= 1e-14 * cond * (1.0 + x.abs().max()),
+                    "n {n} trial {trial}: residual {residual:e}, cond {cond:e}"
+                );
+                assert!(
+                    cond * n as f64 * ratio >= 1.0 - 1e-9,
+                    "cond {cond:e} vs ratio {ratio:e}"
+                );
+                assert!(ratio > 0.0 && ratio <= 1.0);
+            }
+        }
+        // A singular matrix reads as ratio 0; the zero matrix too (not NaN).
+        let mut aug = DMatrix::from_row_slice(2, 3, &[1.0, 2.0, 1.0, 2.0, 4.0, 0.0]);
+        assert_eq!(solve_pivoted_in_place(&mut aug, 2), 0.0);
+        let mut aug = DMatrix::<f64>::zeros(2, 3);
+        assert_eq!(solve_pivoted_in_place(&mut aug, 2), 0.0);
+        // The same answer in double-double to 1e-25 relative of a well-conditioned system.
+        let a: DMatrix<Dd> = DMatrix::from_row_slice(2, 2, &[0.0, 2.0, 3.0, 1.0].map(Dd::from_f64));
+        let mut aug = DMatrix::zeros(2, 3);
+        aug.view_mut((0, 0), (2, 2)).copy_from(&a);
+        aug[(0, 2)] = Dd::from_f64(4.0);
+        aug[(1, 2)] = Dd::from_f64(5.0);
+        solve_pivoted_in_place(&mut aug, 2);
+        // 2 y = 4, 3 x + y = 5 → x = 1, y = 2.
+        assert!((aug[(0, 2)] - Dd::from_f64(1.0)).abs().to_f64() < 1e-30);
+        assert!((aug[(1, 2)] - Dd::from_f64(2.0)).abs().to_f64() < 1e-30);
     }
 }

@@ -55,6 +55,18 @@ pub trait Real:
         self > Self::zero() && self.is_finite()
     }
 
+    /// `if self > other { then } else { otherwise }`: a data-dependent choice that generated code keeps
+    /// (the tracing scalar records it as a select instead of answering the comparison at generation
+    /// time). Used where the branch matters at run time, e.g. pivoting.
+    #[inline(always)]
+    fn select_gt(self, other: Self, then: Self, otherwise: Self) -> Self {
+        if self > other {
+            then
+        } else {
+            otherwise
+        }
+    }
+
     #[inline(always)]
     fn max(self, other: Self) -> Self {
         if self >= other {

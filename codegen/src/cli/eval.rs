@@ -3,7 +3,7 @@
 use super::samples::{vector, Samples};
 use super::{Algo, CliError, Engine, Scalar};
 use crate::{Loaded, ModelOptions};
-use embedyn_runtime::constraints::constraint_violation;
+use embedyn_runtime::constraints::{constraint_violation, SINGULARITY_THRESHOLD};
 use embedyn_runtime::nalgebra;
 use embedyn_runtime::{
     aba, crba, embedding_map, reduced_mass_matrix, rnea, DynamicsError, JointType, Model, Real,
@@ -86,10 +86,31 @@ fn eval_generated(
     let independent = independent_indices(model);
     let mut out = Vec::with_capacity(outputs.len());
     for (i, (o, row)) in outputs.iter().zip(&rows).enumerate() {
-        let o = finite(o, i, name)?;
+        let mut o = o.clone();
+        if algo == Algo::Aba && model.has_constraints() {
+            // The generated `aba` also returns the pivot ratio (before any NaN the singular solve made
+            // is reported); refuse where it proves cond₁(Y1) ≥ 1e10, as the interpreted engine does.
+            let ratio = o.pop().unwrap_or(0.0);
+            let rows = model
+                .groups
+                .iter()
+                .map(|g| g.rows.len())
+                .max()
+                .unwrap_or(1)
+                .max(1) as f64;
+            if ratio.is_nan() || ratio * rows * SINGULARITY_THRESHOLD <= 1.0 {
+                return Err(CliError(format!(
+                    "sample {i}: the loop is at or too near a singular configuration: pivot ratio {ratio:.3e}, so cond(Y1) ≥ {:.3e} ≥ 1e10 (the dependent joints are not determined by the independent ones here)",
+                    1.0 / (rows * ratio)
+                )));
+            }
+        }
+        let o = finite(&o, i, name)?;
         let q = &row[..nq];
         out.push(match algo {
-            Algo::Aba => json!({ "qdd": o, "qdd_independent": independent.iter().map(|&k| o[k]).collect::<Vec<_>>() }),
+            Algo::Aba => {
+                json!({ "qdd": o, "qdd_independent": independent.iter().map(|&k| o[k]).collect::<Vec<_>>() })
+            }
             Algo::Rnea => {
                 let tau_independent: Vec<f64> = if model.has_constraints() {
                     let x = embedding_map(model, &mut ws, q).map_err(|e| CliError(format!("sample {i}: {e}")))?;
@@ -100,12 +121,9 @@ fn eval_generated(
                 json!({ "tau": o, "tau_independent": tau_independent })
             }
             Algo::Crba => {
-                let mut m = nalgebra::DMatrix::from_row_slice(nv, nv, &o);
-                if model.has_constraints() {
-                    let x = embedding_map(model, &mut ws, q).map_err(|e| CliError(format!("sample {i}: {e}")))?;
-                    m = x.transpose() * m * x;
-                }
-                let n = m.nrows();
+                // Xᵀ M X for a model with constraints (the generated `crba_independent`).
+                let n = if model.has_constraints() { model.independent_nv() } else { nv };
+                let m = nalgebra::DMatrix::from_row_slice(n, n, &o);
                 json!({ "M": (0..n).map(|r| (0..n).map(|c| m[(r, c)]).collect::<Vec<f64>>()).collect::<Vec<_>>() })
             }
         });

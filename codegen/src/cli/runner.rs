@@ -40,7 +40,8 @@ fn fnv1a(parts: &[&[u8]]) -> u64 {
 pub fn build_runner(loaded: &Loaded, options: &GenerateOptions) -> Result<PathBuf, CliError> {
     let files = crate_files(loaded, options)?;
     let krate = crate_name(&loaded.robot.name);
-    let main = runner_main(&krate, &options.algorithms);
+    let constrained = loaded.model::<f64>(&options.model)?.has_constraints();
+    let main = runner_main(&krate, &options.algorithms, constrained);
     let parts: Vec<&[u8]> = files
         .iter()
         .map(|(_, t)| t.as_bytes())
@@ -155,16 +156,29 @@ pub fn run(
 }
 
 /// The runner's `main.rs`.
-fn runner_main(krate: &str, algorithms: &[Algorithm]) -> String {
+///
+/// For a model with constraints, `aba` prints the pivot ratio after `qdd` and `crba` is
+/// `crba_independent` (`Xᵀ M X`, what the CLI reports).
+fn runner_main(krate: &str, algorithms: &[Algorithm], constrained: bool) -> String {
     let mut eval_arms = String::new();
     let mut bench_arms = String::new();
     for a in algorithms {
         let name = a.name();
         let (call, bench_call, emit) = match a {
+            Algorithm::Aba if constrained => (
+                "let ratio = m::aba(&q, &a, &b, &mut out)",
+                "black_box(m::aba(black_box(&s.0), &s.1, &s.2, &mut out))",
+                "let mut o = out.to_vec(); o.push(ratio); emit(&o)",
+            ),
             Algorithm::Aba => (
                 "m::aba(&q, &a, &b, &mut out)",
                 "m::aba(black_box(&s.0), &s.1, &s.2, &mut out)",
                 "emit(&out)",
+            ),
+            Algorithm::Crba if constrained => (
+                "m::crba_independent(&q, &mut mat_i)",
+                "m::crba_independent(black_box(&s.0), &mut mat_i)",
+                "emit(mat_i.as_flattened())",
             ),
             Algorithm::Rnea => (
                 "m::rnea(&q, &a, &b, &mut out)",
@@ -182,12 +196,12 @@ fn runner_main(krate: &str, algorithms: &[Algorithm]) -> String {
                 "emit(mat.as_flattened())",
             ),
             // Not evaluated through the runner (the CLI completes states with the interpreted solver).
-            Algorithm::Complete | Algorithm::Embedding => continue,
+            Algorithm::Complete | Algorithm::Embedding | Algorithm::CrbaIndependent => continue,
         };
         eval_arms.push_str(&format!(
             "                \"{name}\" => {{ {call}; {emit}; }}\n"
         ));
-        bench_arms.push_str(&format!("                \"{name}\" => time(&mut || {{ k = (k + 1) % n; let s = &states[k]; {bench_call}; black_box((&out, &mat)); }}),\n"));
+        bench_arms.push_str(&format!("                \"{name}\" => time(&mut || {{ k = (k + 1) % n; let s = &states[k]; {bench_call}; black_box((&out, &mat, &mat_i)); }}),\n"));
     }
     format!(
         r#"// Evaluates or times the generated functions of `{krate}` for `embedyn eval --engine generated` and
@@ -196,7 +210,7 @@ fn runner_main(krate: &str, algorithms: &[Algorithm]) -> String {
 // median ns per call (bench).
 use std::hint::black_box;
 use std::io::BufRead;
-use {krate}::{{NQ, NV}};
+use {krate}::{{NI, NQ, NV}};
 
 fn emit<T: std::fmt::Debug>(x: &[T]) {{
     let s: Vec<String> = x.iter().map(|v| format!("{{v:?}}")).collect();
@@ -232,6 +246,7 @@ macro_rules! run {{
             .collect();
         let mut out = [0.0 as $S; NV];
         let mut mat = [[0.0 as $S; NV]; NV];
+        let mut mat_i = [[0.0 as $S; NI]; NI];
         let n = states.len().max(1);
         let mut k = 0usize;
         if $bench {{
@@ -241,7 +256,7 @@ macro_rules! run {{
             println!("{{ns}}");
         }} else {{
             for (q, a, b) in &states {{
-                let _ = (a, b);
+                let _ = (a, b, &mut mat, &mut mat_i);
                 match $algo {{
 {eval_arms}                    other => panic!("unknown algorithm {{other}}"),
                 }}

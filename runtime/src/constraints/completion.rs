@@ -4,7 +4,7 @@
 use super::embedding::{fill_y1, group_rows, y1_condition_of};
 use super::{embed, residuals};
 use crate::algorithms::{constraint_kinematics, DynamicsError, Workspace};
-use crate::linalg::{lu_in_place, lu_solve_in_place, solve_least_squares};
+use crate::linalg::{lu_in_place, solve_least_squares, solve_pivoted_in_place};
 use crate::model::Model;
 use crate::Real;
 
@@ -88,16 +88,32 @@ pub fn complete_configuration_with<T: Real>(
             }
             gw.y1_lu.copy_from(&gw.y1);
             if lu_in_place(&mut gw.y1_lu, &mut gw.perm).is_ok() {
-                lu_solve_in_place(&gw.y1_lu, &gw.perm, &mut gw.col);
+                // Solved with select pivoting, so that generated completion pivots at run time too.
+                let n = g.rows.len();
+                for row in 0..n {
+                    for col in 0..n {
+                        gw.newton[(row, col)] = gw.y1[(row, col)];
+                    }
+                    gw.newton[(row, n)] = gw.col[row];
+                }
+                solve_pivoted_in_place(&mut gw.newton, n);
+                for row in 0..n {
+                    gw.col[row] = gw.newton[(row, n)];
+                }
             } else {
                 let step = solve_least_squares(&gw.y1, &gw.col);
                 gw.col.copy_from_slice(&step);
             }
             // Limit loop steps so that Newton stays near the branch it starts on (linear equations are
             // solved in one full step).
-            let big = gw.col.iter().fold(T::zero(), |m, x| m.max(x.abs()));
-            let scale = if gw.has_loop && big.to_f64() > 0.5 {
-                T::from_f64(0.5) / big
+            // (Selects rather than branches: generated completion limits its steps the same way.)
+            let big = gw.col.iter().fold(T::zero(), |m, x| {
+                let a = x.abs();
+                a.select_gt(m, a, m)
+            });
+            let half = T::from_f64(0.5);
+            let scale = if gw.has_loop {
+                big.select_gt(half, half / big, T::one())
             } else {
                 T::one()
             };

@@ -5,7 +5,7 @@
 
 use super::{ConstraintKind, Group};
 use crate::algorithms::{DynamicsError, Workspace};
-use crate::linalg::{condition_number_1, lu_in_place, lu_solve_in_place};
+use crate::linalg::{condition_number_1, lu_in_place, solve_pivoted_in_place};
 use crate::model::Model;
 use crate::spatial::{ArticulatedInertia, Force, Motion, Transform};
 use crate::Real;
@@ -28,6 +28,13 @@ pub struct GroupWorkspace<T: Real> {
     pub(crate) perm: Vec<usize>,
     pub(crate) scratch: DMatrix<T>,
     pub(crate) col: Vec<T>,
+    /// `[Y1 | Y2 | bias]`, solved in place by [`solve_pivoted_in_place`].
+    pub(crate) aug: DMatrix<T>,
+    /// `[Y1 | −residual]` of a completion Newton step.
+    pub(crate) newton: DMatrix<T>,
+    /// The pivot ratio of the last [`embed`] (see [`solve_pivoted_in_place`]; 1 for a group without
+    /// rows): near 0 at a singular configuration.
+    pub pivot_ratio: T,
     /// `X_G`: members × independent.
     pub x: DMatrix<T>,
     /// `κ_G`: members.
@@ -84,6 +91,9 @@ impl<T: Real> GroupWorkspace<T> {
             perm: vec![0; r],
             scratch: DMatrix::zeros(r, r),
             col: vec![T::zero(); r],
+            aug: DMatrix::zeros(r, r + ni + 1),
+            newton: DMatrix::zeros(r, r + 1),
+            pivot_ratio: T::one(),
             x: DMatrix::zeros(m, ni),
             kappa: vec![T::zero(); m],
             has_loop,
@@ -189,6 +199,7 @@ pub(crate) fn embed<T: Real>(
         gw.x[(member(g, b).expect("member"), k)] = T::one();
     }
     gw.kappa.fill(T::zero());
+    gw.pivot_ratio = T::one();
     if r == 0 {
         return Ok(());
     }
@@ -214,23 +225,38 @@ pub(crate) fn embed<T: Real>(
             return Err(singular(f64::INFINITY));
         }
     }
-    // −Y1⁻¹ Y2, one independent column at a time.
-    for (k, &b) in g.independent.iter().enumerate() {
-        let m = member(g, b).expect("member");
-        for row in 0..r {
-            gw.col[row] = gw.k[(row, m)];
+    // [Y1 | Y2 | bias] → [· | Y1⁻¹ Y2 | Y1⁻¹ bias], pivoting by selects so that generated code pivots at
+    // run time as this code does.
+    let ni = g.independent.len();
+    for row in 0..r {
+        for col in 0..r {
+            gw.aug[(row, col)] = gw.y1[(row, col)];
         }
-        lu_solve_in_place(&gw.y1_lu, &gw.perm, &mut gw.col);
-        for (d, &bd) in g.dependent.iter().enumerate() {
-            gw.x[(member(g, bd).expect("member"), k)] = -gw.col[d];
+        for (k, &b) in g.independent.iter().enumerate() {
+            gw.aug[(row, r + k)] = gw.k[(row, member(g, b).expect("member"))];
         }
+        gw.aug[(row, r + ni)] = if with_bias { gw.bias[row] } else { T::zero() };
     }
-    if with_bias {
-        gw.col.copy_from_slice(&gw.bias);
-        lu_solve_in_place(&gw.y1_lu, &gw.perm, &mut gw.col);
-        for (d, &bd) in g.dependent.iter().enumerate() {
-            gw.kappa[member(g, bd).expect("member")] = -gw.col[d];
+    gw.pivot_ratio = solve_pivoted_in_place(&mut gw.aug, r);
+    for (d, &bd) in g.dependent.iter().enumerate() {
+        let m = member(g, bd).expect("member");
+        for k in 0..ni {
+            gw.x[(m, k)] = -gw.aug[(d, r + k)];
+        }
+        if with_bias {
+            gw.kappa[m] = -gw.aug[(d, r + ni)];
         }
     }
     Ok(())
+}
+
+/// The smallest pivot ratio over the groups after the last call that embedded them (embedded `aba`,
+/// `embedding_map`, velocity completion): a cheap singularity measure, near 0 at a toggle, 1 for a
+/// model without groups. `cond₁(Y1) ≥ 1 / (rows · ratio)` for every group, so a ratio below
+/// `1 / (rows · SINGULARITY_THRESHOLD)` means a configuration the interpreted solver refuses.
+/// Generated code returns it from `aba` and `embedding` of models with constraints.
+pub fn constraint_pivot_ratio<T: Real>(ws: &Workspace<T>) -> T {
+    ws.groups.iter().fold(T::one(), |m, gw| {
+        m.select_gt(gw.pivot_ratio, gw.pivot_ratio, m)
+    })
 }

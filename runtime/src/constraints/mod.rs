@@ -16,7 +16,7 @@ pub use completion::{
     complete_configuration, complete_configuration_with, complete_velocity, constraint_violation,
     y1_condition,
 };
-pub use embedding::SINGULARITY_THRESHOLD;
+pub use embedding::{constraint_pivot_ratio, SINGULARITY_THRESHOLD};
 pub(crate) use embedding::{embed, GroupWorkspace};
 pub(crate) use grouping::build_groups;
 pub use grouping::Group;
