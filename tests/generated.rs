@@ -4,7 +4,10 @@
 mod common;
 
 use common::{load_model, Rng};
-use embedyn::{aba, crba, mass_matrix_inverse, relative_error, rnea, Model, Workspace};
+use embedyn::{
+    aba, crba, forward_kinematics, link_poses, mass_matrix_inverse, relative_error, rnea, Model,
+    Workspace,
+};
 
 mod arm7 {
     embedyn::robot!("models/arm7.urdf", minv);
@@ -63,7 +66,7 @@ macro_rules! check {
         assert_eq!(names, $m::JOINTS.to_vec());
         let mut ws = Workspace::new(&model);
         let mut rng = Rng(99);
-        let mut worst = [0.0f64; 8];
+        let mut worst = [0.0f64; 9];
         for _ in 0..20 {
             let q: [f64; NQ] = rng.configuration(&model).try_into().unwrap();
             let v: [f64; NV] = rng.vec(NV, -2.0, 2.0).try_into().unwrap();
@@ -110,6 +113,25 @@ macro_rules! check {
             let flat32: Vec<f64> = (0..NV * NV).map(|k| mat32[k / NV][k % NV] as f64).collect();
             worst[6] = worst[6].max(relative_error(&flat32, &want_flat));
 
+            // Link frames: rotation row-major, then the origin.
+            forward_kinematics(&model, &mut ws, &q, &v).unwrap();
+            let want: Vec<f64> = link_poses(&model, &ws)
+                .flat_map(|(_, x)| {
+                    let mut f: Vec<f64> = x.rotation.transpose().iter().copied().collect();
+                    f.extend(x.translation.iter());
+                    f
+                })
+                .collect();
+            let names: Vec<&str> = link_poses(&model, &ws).map(|(n, _)| n).collect();
+            assert_eq!(names, $m::FRAMES.to_vec());
+            let mut frames = [[0.0; 12]; $m::FRAMES.len()];
+            $m::f64::kinematics(&q, &mut frames);
+            worst[7] = worst[7].max(relative_error(frames.as_flattened(), &want));
+            let mut frames32 = [[0.0f32; 12]; $m::FRAMES.len()];
+            $m::f32::kinematics(&q.map(|a| a as f32), &mut frames32);
+            let f32_as_f64: Vec<f64> = frames32.as_flattened().iter().map(|&a| a as f64).collect();
+            worst[8] = worst[8].max(relative_error(&f32_as_f64, &want));
+
             $(
                 let _ = stringify!($minv);
                 let want = mass_matrix_inverse(&model, &mut ws, &q).unwrap().clone();
@@ -117,13 +139,13 @@ macro_rules! check {
             )?
         }
         eprintln!(
-            "{}: generated f64 vs interpreted: aba {:.1e} rnea {:.1e} crba {:.1e} minv {:.1e}; f32: aba {:.1e} rnea {:.1e} crba {:.1e}",
-            $path, worst[0], worst[1], worst[2], worst[3], worst[4], worst[5], worst[6]
+            "{}: generated f64 vs interpreted: aba {:.1e} rnea {:.1e} crba {:.1e} minv {:.1e} kinematics {:.1e}; f32: aba {:.1e} rnea {:.1e} crba {:.1e} kinematics {:.1e}",
+            $path, worst[0], worst[1], worst[2], worst[3], worst[7], worst[4], worst[5], worst[6], worst[8]
         );
-        for k in 0..4 {
+        for k in [0, 1, 2, 3, 7] {
             assert!(worst[k] <= 1e-12, "{}: generated f64 differs by {:e} (index {k})", $path, worst[k]);
         }
-        for k in 4..7 {
+        for k in [4, 5, 6, 8] {
             assert!(worst[k] <= 1e-4, "{}: generated f32 differs by {:e} (index {k})", $path, worst[k]);
         }
     }};

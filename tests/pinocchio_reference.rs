@@ -1,10 +1,11 @@
 //! Reproduces reference answers computed with Pinocchio 4.1.0 on example-robot-data 6.0.0 URDFs
-//! (tests/data/pinocchio/README.md): ABA, RNEA, non-linear effects and the mass matrix, to 1e-9 relative.
+//! (tests/data/pinocchio/README.md): ABA, RNEA, non-linear effects and the mass matrix, to 1e-9 relative;
+//! the world pose of every link frame, interpreted and generated, to 1e-12 m / 1e-12.
 
 mod common;
 
 use common::{load_model, repo_path};
-use embedyn::{aba, crba, relative_error, rnea, Workspace};
+use embedyn::{aba, crba, forward_kinematics, link_poses, relative_error, rnea, Workspace};
 use serde_json::Value;
 
 const TOL: f64 = 1e-9;
@@ -129,4 +130,76 @@ fn solo12() {
 #[test]
 fn solo12_floating_base() {
     check_robot("solo12_floating", true);
+}
+
+mod ur5_generated {
+    embedyn::robot!("tests/data/pinocchio/ur5.urdf", f64_only);
+}
+
+/// Link frames against Pinocchio's `framesForwardKinematics` (tests/data/pinocchio/frames.py): every link
+/// on a moving body, interpreted (`link_poses`) on UR5, Panda and a floating Solo-12, and the generated
+/// `kinematics` on UR5.
+#[test]
+fn link_frames_match_pinocchio() {
+    for (name, floating) in [("ur5", false), ("panda", false), ("solo12_floating", true)] {
+        let json: Value = serde_json::from_str(
+            &std::fs::read_to_string(repo_path(&format!(
+                "tests/data/pinocchio/{name}_frames.json"
+            )))
+            .unwrap(),
+        )
+        .unwrap();
+        let model = load_model::<f64>(&format!("tests/data/pinocchio/{name}.urdf"), floating);
+        let mut ws = Workspace::new(&model);
+        let mut worst = 0.0f64;
+        let mut compared = 0;
+        for s in json["samples"].as_array().unwrap() {
+            // No continuous joints in these robots: Pinocchio's q is ours, joint by joint in the same
+            // depth-first file order (checked by name through the reference test above).
+            let q = vecf(&s["q"]);
+            assert_eq!(q.len(), model.nq());
+            forward_kinematics(&model, &mut ws, &q, &vec![0.0; model.nv()]).unwrap();
+            let frames = s["frames"].as_object().unwrap();
+            let mut generated = [[0.0; 12]; ur5_generated::FRAMES.len()];
+            if name == "ur5" {
+                ur5_generated::f64::kinematics(&q.clone().try_into().unwrap(), &mut generated);
+            }
+            for (k, (link, x)) in link_poses(&model, &ws).enumerate() {
+                let f = &frames[link];
+                let (r, p) = (vecf(&f["R"]), vecf(&f["p"]));
+                let ours: Vec<f64> = x
+                    .rotation
+                    .transpose()
+                    .iter()
+                    .chain(x.translation.iter())
+                    .copied()
+                    .collect();
+                let theirs: Vec<f64> = r.iter().chain(&p).copied().collect();
+                let e = ours
+                    .iter()
+                    .zip(&theirs)
+                    .map(|(a, b)| (a - b).abs())
+                    .fold(0.0, f64::max);
+                worst = worst.max(e);
+                if name == "ur5" {
+                    assert_eq!(ur5_generated::FRAMES[k], link);
+                    let g = generated[k]
+                        .iter()
+                        .zip(&theirs)
+                        .map(|(a, b)| (a - b).abs())
+                        .fold(0.0, f64::max);
+                    worst = worst.max(g);
+                }
+                compared += 1;
+            }
+        }
+        // Every link on a moving body is compared (Pinocchio also lists the world-fixed ones).
+        let listed = model.bodies.iter().map(|b| b.links.len()).sum::<usize>();
+        assert_eq!(compared, 5 * listed, "{name}");
+        eprintln!("{name}: {listed} link frames, worst difference from Pinocchio {worst:.1e}");
+        assert!(
+            worst <= 1e-12,
+            "{name}: link frames differ from Pinocchio by {worst:e}"
+        );
+    }
 }

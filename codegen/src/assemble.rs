@@ -83,7 +83,7 @@ pub fn build_model<T: Real>(robot: &Robot, options: &ModelOptions) -> Result<Mod
         placement: Transform<T>,
         link: usize,
         inertia: SpatialInertia<T>,
-        links: Vec<String>,
+        links: Vec<(String, Transform<T>)>,
     }
     let mut bodies: Vec<Pending<T>> = Vec::new();
     let mut link_body: Vec<Option<(Option<usize>, Transform<T>)>> = vec![None; robot.links.len()];
@@ -133,7 +133,7 @@ pub fn build_model<T: Real>(robot: &Robot, options: &ModelOptions) -> Result<Mod
     for (l, link) in robot.links.iter().enumerate() {
         let (body, pose) = link_body[l].expect("every link is reachable from the root");
         if let Some(b) = body {
-            bodies[b].links.push(link.name.clone());
+            bodies[b].links.push((link.name.clone(), pose));
             if let Some(inertial) = &link.inertial {
                 let i = inertial_about_link::<T>(inertial).act(&pose);
                 bodies[b].inertia = bodies[b].inertia + i;
@@ -182,11 +182,12 @@ pub fn build_model<T: Real>(robot: &Robot, options: &ModelOptions) -> Result<Mod
         // The body's own link first.
         if let Some(k) = links
             .iter()
-            .position(|n| *n == robot.links[pending.link].name)
+            .position(|(n, _)| *n == robot.links[pending.link].name)
         {
             links.swap(0, k);
         }
-        builder.set_merged_links(index, links);
+        let (names, placements) = links.into_iter().unzip();
+        builder.set_merged_links(index, names, placements);
     }
     fn bodies_joint<T: Real>(bodies: &[Pending<T>], b: usize) -> Option<usize> {
         bodies[b].joint

@@ -94,6 +94,10 @@ pub fn crate_files(
                 "",
             ),
             crate::Algorithm::Crba => ("crba(q: &[S; NQ], m: &mut [[S; NV]; NV])", ""),
+            crate::Algorithm::Kinematics => (
+                "kinematics(q: &[S; NQ], frames: &mut [[S; 12]; FRAMES.len()])",
+                " — the world pose of each link in `FRAMES`: rotation row-major, then the origin",
+            ),
             crate::Algorithm::Minv => ("minv(q: &[S; NQ], m_inv: &mut [[S; NV]; NV])", ""),
             crate::Algorithm::Complete => ("complete(q: &[S; NQ], q_out: &mut [S; NQ])", ""),
             crate::Algorithm::Embedding => (

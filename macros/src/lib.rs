@@ -90,11 +90,7 @@ fn expand(args: &Args) -> Result<proc_macro2::TokenStream, String> {
         .krate
         .clone()
         .map_or_else(|| quote!(::embedyn), |p| quote!(#p));
-    let mut algorithms = vec![
-        embedyn_codegen::Algorithm::Aba,
-        embedyn_codegen::Algorithm::Rnea,
-        embedyn_codegen::Algorithm::Crba,
-    ];
+    let mut algorithms = embedyn_codegen::GenerateOptions::default().algorithms;
     if args.minv {
         algorithms.push(embedyn_codegen::Algorithm::Minv);
     }

@@ -148,6 +148,8 @@ pub struct Body<T: Real> {
     pub inertia: SpatialInertia<T>,
     /// Names of the URDF links merged into this body (the first is `name`).
     pub links: Vec<String>,
+    /// Pose of each of `links` in the body frame (the first, the body's own link, is the identity).
+    pub link_placements: Vec<Transform<T>>,
 }
 
 /// A kinematic tree ready for the algorithms. Build it with [`Model::builder`].
@@ -327,6 +329,7 @@ impl<T: Real> Model<T> {
                     name: b.name.clone(),
                     inertia: b.inertia.cast(),
                     links: b.links.clone(),
+                    link_placements: b.link_placements.iter().map(|x| x.cast()).collect(),
                 })
                 .collect(),
             gravity: self.gravity.map(c),
@@ -447,6 +450,7 @@ impl<T: Real> ModelBuilder<T> {
         self.nv += joint_type.nv();
         self.bodies.push(Body {
             links: vec![body_name.clone()],
+            link_placements: vec![Transform::identity()],
             name: body_name,
             inertia,
         });
@@ -468,9 +472,24 @@ impl<T: Real> ModelBuilder<T> {
         self.declared_dependent[body] = true;
     }
 
-    /// Records the URDF links merged into a body (for reports).
-    pub fn set_merged_links(&mut self, body: usize, links: Vec<String>) {
+    /// Records the URDF links merged into a body with their poses in the body frame (for reports and
+    /// link-frame kinematics).
+    ///
+    /// # Panics
+    /// If the two lists differ in length.
+    pub fn set_merged_links(
+        &mut self,
+        body: usize,
+        links: Vec<String>,
+        placements: Vec<Transform<T>>,
+    ) {
+        assert_eq!(
+            links.len(),
+            placements.len(),
+            "one placement per merged link"
+        );
         self.bodies[body].links = links;
+        self.bodies[body].link_placements = placements;
     }
 
     /// Numbers the bodies depth-first (siblings in the order they were added; CONTRACT §2), assigns

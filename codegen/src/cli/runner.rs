@@ -196,7 +196,10 @@ fn runner_main(krate: &str, algorithms: &[Algorithm], constrained: bool) -> Stri
                 "emit(mat.as_flattened())",
             ),
             // Not evaluated through the runner (the CLI completes states with the interpreted solver).
-            Algorithm::Complete | Algorithm::Embedding | Algorithm::CrbaIndependent => continue,
+            Algorithm::Complete
+            | Algorithm::Embedding
+            | Algorithm::CrbaIndependent
+            | Algorithm::Kinematics => continue,
         };
         eval_arms.push_str(&format!(
             "                \"{name}\" => {{ {call}; {emit}; }}\n"

@@ -1,5 +1,6 @@
 use super::{check_len, velocity_sweep, DynamicsError, Workspace};
 use crate::model::Model;
+use crate::spatial::Transform;
 use crate::Real;
 
 /// Forward kinematics: each body's pose in the parent and world frames, and its spatial velocity.
@@ -19,6 +20,26 @@ pub fn forward_kinematics<T: Real>(
         };
     }
     Ok(())
+}
+
+/// The world pose of every URDF link that rides on a moving body, from the poses of the last
+/// [`forward_kinematics`] call: bodies in coordinate order, each body's links in the order of
+/// [`Body::links`](crate::Body) (its own link first, then those merged into it through fixed joints).
+/// Links fixed to the world have constant poses and are not listed. Never allocates.
+pub fn link_poses<'a, T: Real>(
+    model: &'a Model<T>,
+    ws: &'a Workspace<T>,
+) -> impl Iterator<Item = (&'a str, Transform<T>)> + 'a {
+    model
+        .bodies
+        .iter()
+        .zip(&ws.world_placement)
+        .flat_map(|(body, world)| {
+            body.links
+                .iter()
+                .zip(&body.link_placements)
+                .map(move |(name, x)| (name.as_str(), world.compose(x)))
+        })
 }
 
 /// Kinetic energy ½ vᵀ M(q) v, from the velocities of the last [`forward_kinematics`] call.

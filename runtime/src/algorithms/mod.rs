@@ -14,7 +14,7 @@ pub use crba::crba;
 pub use embedded::{
     constraint_kinematics, embedding_map, kkt_forward_dynamics, reduced_mass_matrix,
 };
-pub use kinematics::{forward_kinematics, kinetic_energy, potential_energy};
+pub use kinematics::{forward_kinematics, kinetic_energy, link_poses, potential_energy};
 pub use minv::mass_matrix_inverse;
 pub use rnea::{rnea, rnea_with_gravity};
 pub use workspace::Workspace;
