@@ -3,7 +3,7 @@
 //! CRBA + Cholesky oracle, and by the constraint embedding of closed kinematic loops (matrices up to
 //! about 30×30):
 //!
-//! - Cholesky for symmetric positive-definite systems ([`cholesky_in_place`], [`solve_spd`]);
+//! - LDLᵀ (square-root-free Cholesky) for symmetric positive-definite systems ([`cholesky_in_place`], [`solve_spd`]);
 //! - LU with partial pivoting for general square systems ([`lu_in_place`], [`lu_solve_in_place`],
 //!   [`lu_inverse_into`]) and the exact 1-norm condition number ([`condition_number_1`]);
 //! - Householder QR with column pivoting ([`qr_column_pivoted`]) for rank decisions
@@ -16,37 +16,44 @@
 use crate::Real;
 use nalgebra::{DMatrix, Dim, Matrix, RawStorageMut};
 
-/// In-place Cholesky `A = L Lᵀ` of a symmetric positive-definite matrix, reading the lower triangle.
-/// Returns the smallest pivot `L_kk²` seen, or the first non-positive one (then `A` is not SPD and the
-/// factor is unusable).
+/// In-place factorization `A = L D Lᵀ` of a symmetric positive-definite matrix (unit lower-triangular
+/// `L`, diagonal `D`), reading the lower triangle. On return the strict lower triangle holds `L` and the
+/// diagonal holds `1 / D` — no square roots, and the solves multiply instead of dividing, which takes
+/// the slow operations off the serial chain (one division per column). Returns the smallest pivot `D_kk`
+/// seen, or the first non-positive one (then `A` is not SPD and the factor is unusable).
 pub fn cholesky_in_place<T: Real, R: Dim, S: RawStorageMut<T, R, R>>(
     a: &mut Matrix<T, R, R, S>,
 ) -> T {
     let n = a.nrows();
     let mut min_pivot: Option<T> = None;
     for j in 0..n {
+        // D_j = A_jj − Σ_k L_jk² D_k, with L_jk D_k kept in the upper triangle (row k, column j) while
+        // column j is formed, so every product is computed once.
         let mut d = a[(j, j)];
         for k in 0..j {
-            d -= a[(j, k)] * a[(j, k)];
+            d -= a[(j, k)] * a[(k, j)];
         }
         min_pivot = Some(min_pivot.map_or(d, |m| m.min(d)));
         if !d.is_positive_finite() {
             return d;
         }
-        let l = d.sqrt();
-        a[(j, j)] = l;
+        let inv = T::one() / d;
+        a[(j, j)] = inv;
         for i in j + 1..n {
-            let mut s = a[(i, j)];
+            // W_ij = A_ij − Σ_k L_ik (L_jk D_k); L_ij = W_ij / D_j.
+            let mut w = a[(i, j)];
             for k in 0..j {
-                s -= a[(i, k)] * a[(j, k)];
+                w -= a[(i, k)] * a[(k, j)];
             }
-            a[(i, j)] = s / l;
+            a[(j, i)] = w;
+            a[(i, j)] = w * inv;
         }
     }
     min_pivot.unwrap_or(T::one())
 }
 
-/// Solves `L Lᵀ x = b` in place with the factor of [`cholesky_in_place`].
+/// Solves `L D Lᵀ x = b` in place with the factor of [`cholesky_in_place`] (reads its strict lower
+/// triangle and diagonal).
 pub fn cholesky_solve_in_place<T: Real, R: Dim, S: RawStorageMut<T, R, R>>(
     l: &Matrix<T, R, R, S>,
     b: &mut [T],
@@ -57,14 +64,17 @@ pub fn cholesky_solve_in_place<T: Real, R: Dim, S: RawStorageMut<T, R, R>>(
         for k in 0..i {
             s -= l[(i, k)] * b[k];
         }
-        b[i] = s / l[(i, i)];
+        b[i] = s;
+    }
+    for i in 0..n {
+        b[i] *= l[(i, i)];
     }
     for i in (0..n).rev() {
         let mut s = b[i];
         for k in i + 1..n {
             s -= l[(k, i)] * b[k];
         }
-        b[i] = s / l[(i, i)];
+        b[i] = s;
     }
 }
 
