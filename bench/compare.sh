@@ -21,5 +21,12 @@ if [[ "${1:-}" != "--skip-pinocchio" ]]; then
     cargo run --release -q -p embedyn-codegen --bin embedyn -- bench "$TALOS" --floating --json > bench/results/talos_embedyn.json 2>/dev/null || true
   fi
 fi
-cargo bench --bench dynamics 2>&1 | grep -E "^(aba|rnea|crba|minv)|time:" >&2 || true
+# The whole log is kept: a benchmark that panics must stop the script, not leave stale rows in the table.
+mkdir -p target
+if ! cargo bench --bench dynamics > target/cargo_bench.log 2>&1; then
+  tail -20 target/cargo_bench.log >&2
+  echo "cargo bench failed (log: target/cargo_bench.log); BENCHMARKS.md not updated" >&2
+  exit 1
+fi
+grep -E "^(aba|rnea|crba|minv)|time:" target/cargo_bench.log >&2 || true
 python3 bench/make_table.py

@@ -87,6 +87,7 @@ pub fn complete_configuration_with<T: Real>(
                 gw.col[k] = -r[row];
             }
             gw.y1_lu.copy_from(&gw.y1);
+            let mut solved = false;
             if lu_in_place(&mut gw.y1_lu, &mut gw.perm).is_ok() {
                 // Solved with select pivoting, so that generated completion pivots at run time too.
                 let n = g.rows.len();
@@ -96,11 +97,18 @@ pub fn complete_configuration_with<T: Real>(
                     }
                     gw.newton[(row, n)] = gw.col[row];
                 }
-                solve_pivoted_in_place(&mut gw.newton, n);
-                for row in 0..n {
-                    gw.col[row] = gw.newton[(row, n)];
+                // An exactly zero pivot in this elimination (where the LU's rounding left a tiny one)
+                // is as singular: least squares then. (A traced ratio has no value: always solved.)
+                if solve_pivoted_in_place(&mut gw.newton, n).is_positive_finite()
+                    && (0..n).all(|row| gw.newton[(row, n)].is_finite())
+                {
+                    for row in 0..n {
+                        gw.col[row] = gw.newton[(row, n)];
+                    }
+                    solved = true;
                 }
-            } else {
+            }
+            if !solved {
                 let step = solve_least_squares(&gw.y1, &gw.col);
                 gw.col.copy_from_slice(&step);
             }
@@ -122,7 +130,12 @@ pub fn complete_configuration_with<T: Real>(
             }
         }
         if let Ok(w) = &mut result {
-            *w = w.max(worst);
+            // NaN (a configuration that left the representable range) is reported, not dropped.
+            *w = if w.is_nan() || worst.is_nan() {
+                f64::NAN
+            } else {
+                w.max(worst)
+            };
         }
     }
     ws.groups = groups;
