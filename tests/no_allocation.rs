@@ -4,7 +4,11 @@
 mod common;
 
 use common::{load_model, Rng};
-use embedyn::{aba, crba, forward_kinematics, mass_matrix_inverse, rnea, Workspace};
+use embedyn::constraints::{complete_configuration, complete_velocity};
+use embedyn::{
+    aba, crba, embedding_map_in, forward_kinematics, mass_matrix_inverse, reduced_mass_matrix_in,
+    rnea, Workspace,
+};
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
@@ -50,6 +54,41 @@ fn algorithm_calls_do_not_allocate() {
             let _ = rnea(&model, &mut ws, &q, &v, &tau).unwrap();
             let _ = crba(&model, &mut ws, &q).unwrap();
             let _ = mass_matrix_inverse(&model, &mut ws, &q).unwrap();
+        }
+        let after = ALLOCATIONS.load(Ordering::SeqCst);
+        assert_eq!(
+            after - before,
+            0,
+            "{path}: {} allocations inside algorithm calls",
+            after - before
+        );
+    }
+    // Models with loops and couplings: embedded forward dynamics, inverse dynamics, the tree's M, the
+    // embedding map, XᵀMX, position completion (from a guess near the assembly) and velocity projection.
+    for path in [
+        "models/loops/four_bar_internal.urdf",
+        "models/loops/biped_floating.urdf",
+        "models/loops/differential_wrist.urdf",
+        "models/loops/rotor_chain_10.urdf",
+    ] {
+        let model = load_model::<f64>(path, false);
+        let mut ws = Workspace::new(&model);
+        let mut q = model.neutral_configuration();
+        complete_configuration(&model, &mut ws, &mut q).unwrap();
+        let mut v = vec![0.3; model.nv()];
+        complete_velocity(&model, &mut ws, &q, &mut v).unwrap();
+        let tau = vec![0.2; model.nv()];
+        let mut guess = q.clone();
+        let before = ALLOCATIONS.load(Ordering::SeqCst);
+        for _ in 0..3 {
+            let _ = aba(&model, &mut ws, &q, &v, &tau).unwrap();
+            let _ = rnea(&model, &mut ws, &q, &v, &tau).unwrap();
+            let _ = crba(&model, &mut ws, &q).unwrap();
+            let _ = embedding_map_in(&model, &mut ws, &q).unwrap();
+            let _ = reduced_mass_matrix_in(&model, &mut ws, &q).unwrap();
+            let r = complete_configuration(&model, &mut ws, &mut guess).unwrap();
+            assert!(r <= 1e-12);
+            complete_velocity(&model, &mut ws, &q, &mut v).unwrap();
         }
         let after = ALLOCATIONS.load(Ordering::SeqCst);
         assert_eq!(

@@ -19,9 +19,9 @@ mod scalar;
 pub mod spatial;
 
 pub use algorithms::{
-    aba, constraint_kinematics, crba, embedding_map, forward_kinematics, kinetic_energy,
-    kkt_forward_dynamics, link_poses, mass_matrix_inverse, potential_energy, reduced_mass_matrix,
-    rnea, rnea_with_gravity, DynamicsError, Workspace,
+    aba, constraint_kinematics, crba, embedding_map, embedding_map_in, forward_kinematics,
+    kinetic_energy, kkt_forward_dynamics, link_poses, mass_matrix_inverse, potential_energy,
+    reduced_mass_matrix, reduced_mass_matrix_in, rnea, rnea_with_gravity, DynamicsError, Workspace,
 };
 pub use model::{Body, Joint, JointType, Model, ModelBuilder, ModelError};
 pub use scalar::{DoubleDouble, Real};

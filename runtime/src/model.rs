@@ -385,9 +385,9 @@ impl<T: Real> Model<T> {
 
     /// Number of independent velocity coordinates.
     pub fn independent_nv(&self) -> usize {
-        self.independent_joints()
-            .iter()
-            .map(|&j| self.joints[j].nv())
+        (0..self.joints.len())
+            .filter(|&j| self.is_independent(j))
+            .map(|j| self.joints[j].nv())
             .sum()
     }
 }

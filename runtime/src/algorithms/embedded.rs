@@ -230,15 +230,29 @@ fn group_forward<T: Real>(
 }
 
 /// The embedding map of the whole model, `θ̇ = X θ̇_R` (nv × independent nv) at `q`: `Xᵀ τ` is the
-/// generalized force on the independent coordinates. Allocates its result.
+/// generalized force on the independent coordinates. Allocates its result (see [`embedding_map_in`]).
 pub fn embedding_map<T: Real>(
     model: &Model<T>,
     ws: &mut Workspace<T>,
     q: &[T],
 ) -> Result<DMatrix<T>, DynamicsError> {
-    let mut x = DMatrix::zeros(model.nv(), model.independent_nv());
-    fill_embedding(model, ws, q, &mut x)?;
-    Ok(x)
+    embedding_map_in(model, ws, q).cloned()
+}
+
+/// [`embedding_map`] into `ws.embedding`, without allocating (once the workspace has it: see
+/// [`Workspace::reserve_embedding`]).
+pub fn embedding_map_in<'w, T: Real>(
+    model: &Model<T>,
+    ws: &'w mut Workspace<T>,
+    q: &[T],
+) -> Result<&'w DMatrix<T>, DynamicsError> {
+    check_len("q", q.len(), model.nq())?;
+    ws.reserve_embedding(model);
+    let mut out = core::mem::take(&mut ws.embedding);
+    let result = fill_embedding(model, ws, q, &mut out);
+    ws.embedding = out;
+    result?;
+    Ok(&ws.embedding)
 }
 
 fn fill_embedding<T: Real>(
@@ -247,8 +261,10 @@ fn fill_embedding<T: Real>(
     q: &[T],
     out: &mut DMatrix<T>,
 ) -> Result<(), DynamicsError> {
-    let zeros = vec![T::zero(); model.nv()];
-    constraint_kinematics(model, ws, q, &zeros)?;
+    let zeros = core::mem::take(&mut ws.zero_velocity);
+    let kinematics = constraint_kinematics(model, ws, q, &zeros);
+    ws.zero_velocity = zeros;
+    kinematics?;
     let mut groups = core::mem::take(&mut ws.groups);
     let mut result = Ok(());
     for (g, gw) in groups.iter_mut().enumerate() {
@@ -260,7 +276,7 @@ fn fill_embedding<T: Real>(
     out.fill(T::zero());
     if result.is_ok() {
         let mut col = 0;
-        for j in model.independent_joints() {
+        for j in (0..model.joints.len()).filter(|&j| model.is_independent(j)) {
             let joint = &model.joints[j];
             match model.group_of(j) {
                 None => {
@@ -288,15 +304,56 @@ fn fill_embedding<T: Real>(
 }
 
 /// The reduced mass matrix `Xᵀ M X` over the independent coordinates (CONTRACT §3 `crba` for models with
-/// loops); allocates its result (it is O(nv²) anyway).
+/// loops); allocates its result (see [`reduced_mass_matrix_in`]).
 pub fn reduced_mass_matrix<T: Real>(
     model: &Model<T>,
     ws: &mut Workspace<T>,
     q: &[T],
 ) -> Result<DMatrix<T>, DynamicsError> {
-    let x = embedding_map(model, ws, q)?;
-    let m = crba(model, ws, q)?.clone();
-    Ok(x.transpose() * m * x)
+    reduced_mass_matrix_in(model, ws, q).cloned()
+}
+
+/// [`reduced_mass_matrix`] into `ws.reduced_mass_matrix` (also leaving `M` in `ws.mass_matrix` and `X`
+/// in `ws.embedding`), without allocating once the workspace has its buffers.
+pub fn reduced_mass_matrix_in<'w, T: Real>(
+    model: &Model<T>,
+    ws: &'w mut Workspace<T>,
+    q: &[T],
+) -> Result<&'w DMatrix<T>, DynamicsError> {
+    embedding_map_in(model, ws, q)?;
+    crba(model, ws, q)?;
+    // Plain loops rather than nalgebra's gemm (which allocates packing buffers for larger matrices),
+    // skipping the zeros of X — most of its entries: identity columns for the joints outside groups.
+    let (nv, ni) = ws.embedding.shape();
+    let (x, m) = (&ws.embedding, &ws.mass_matrix);
+    let mx = &mut ws.mass_times_x;
+    mx.fill(T::zero());
+    for c in 0..ni {
+        for k in 0..nv {
+            let xk = x[(k, c)];
+            if xk != T::zero() {
+                for r in 0..nv {
+                    mx[(r, c)] += m[(r, k)] * xk;
+                }
+            }
+        }
+    }
+    // Xᵀ (M X), one triangle computed and mirrored so that the result is exactly symmetric.
+    let red = &mut ws.reduced_mass_matrix;
+    for c in 0..ni {
+        for r in 0..=c {
+            let mut s = T::zero();
+            for k in 0..nv {
+                let xk = x[(k, r)];
+                if xk != T::zero() {
+                    s += xk * mx[(k, c)];
+                }
+            }
+            red[(r, c)] = s;
+            red[(c, r)] = s;
+        }
+    }
+    Ok(&ws.reduced_mass_matrix)
 }
 
 /// The Lagrange-multiplier oracle: `[M Jᵀ; J 0] [qdd; −λ] = [τ − C − g; −J̇ v]` over the spanning tree,

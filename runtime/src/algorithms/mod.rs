@@ -12,7 +12,8 @@ mod workspace;
 pub use aba::aba;
 pub use crba::crba;
 pub use embedded::{
-    constraint_kinematics, embedding_map, kkt_forward_dynamics, reduced_mass_matrix,
+    constraint_kinematics, embedding_map, embedding_map_in, kkt_forward_dynamics,
+    reduced_mass_matrix, reduced_mass_matrix_in,
 };
 pub use kinematics::{forward_kinematics, kinetic_energy, link_poses, potential_energy};
 pub use minv::mass_matrix_inverse;

@@ -49,6 +49,16 @@ pub struct Workspace<T: Real> {
     /// Per aggregate link: the embedding maps and its articulated-body scratch.
     pub(crate) groups: Vec<crate::constraints::GroupWorkspace<T>>,
     pub(crate) minv_accel: Vec<[T; 6]>,
+    /// `nv` zeros (the velocity of position-level constraint kinematics); never written.
+    pub(crate) zero_velocity: Vec<T>,
+    /// Residuals of every constraint row (position completion).
+    pub(crate) constraint_residual: Vec<T>,
+    /// Output of [`crate::embedding_map_in`]: `X`, nv × independent nv.
+    pub embedding: DMatrix<T>,
+    /// Output of [`crate::reduced_mass_matrix_in`]: `Xᵀ M X`.
+    pub reduced_mass_matrix: DMatrix<T>,
+    /// `M X` (scratch of the reduced mass matrix).
+    pub(crate) mass_times_x: DMatrix<T>,
 }
 
 impl<T: Real> Workspace<T> {
@@ -59,7 +69,7 @@ impl<T: Real> Workspace<T> {
     pub fn new(model: &Model<T>) -> Self {
         let n = model.nbodies();
         let nv = model.nv();
-        Workspace {
+        let mut ws = Workspace {
             parent_placement: vec![Transform::identity(); n],
             world_placement: vec![Transform::identity(); n],
             velocity: vec![Motion::zero(); n],
@@ -85,6 +95,26 @@ impl<T: Real> Workspace<T> {
                 .map(|g| crate::constraints::GroupWorkspace::new(model, g))
                 .collect(),
             minv_accel: Vec::new(),
+            zero_velocity: vec![T::zero(); nv],
+            constraint_residual: vec![T::zero(); model.constraint_raw_rows()],
+            embedding: DMatrix::zeros(0, 0),
+            reduced_mass_matrix: DMatrix::zeros(0, 0),
+            mass_times_x: DMatrix::zeros(0, 0),
+        };
+        if model.has_constraints() {
+            ws.reserve_embedding(model);
+        }
+        ws
+    }
+
+    /// Allocates the outputs of [`crate::embedding_map_in`] and [`crate::reduced_mass_matrix_in`] (done
+    /// by [`Workspace::new`] for a model with constraints and on first use otherwise).
+    pub fn reserve_embedding(&mut self, model: &Model<T>) {
+        let (nv, ni) = (model.nv(), model.independent_nv());
+        if self.embedding.shape() != (nv, ni) {
+            self.embedding = DMatrix::zeros(nv, ni);
+            self.reduced_mass_matrix = DMatrix::zeros(ni, ni);
+            self.mass_times_x = DMatrix::zeros(nv, ni);
         }
     }
 

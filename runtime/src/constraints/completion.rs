@@ -53,9 +53,9 @@ pub fn complete_configuration_with<T: Real>(
     q: &mut [T],
     iterations: usize,
 ) -> Result<f64, DynamicsError> {
-    let zeros = vec![T::zero(); model.nv()];
+    let zeros = core::mem::take(&mut ws.zero_velocity);
     let mut groups = core::mem::take(&mut ws.groups);
-    let mut r = vec![T::zero(); model.constraint_raw_rows()];
+    let mut r = core::mem::take(&mut ws.constraint_residual);
     let mut result = Ok(0.0f64);
     'groups: for (gi, gw) in groups.iter_mut().enumerate() {
         let g = &model.groups[gi];
@@ -139,6 +139,8 @@ pub fn complete_configuration_with<T: Real>(
         }
     }
     ws.groups = groups;
+    ws.zero_velocity = zeros;
+    ws.constraint_residual = r;
     result
 }
 
@@ -149,8 +151,10 @@ pub fn complete_velocity<T: Real>(
     q: &[T],
     v: &mut [T],
 ) -> Result<(), DynamicsError> {
-    let zeros = vec![T::zero(); model.nv()];
-    constraint_kinematics(model, ws, q, &zeros)?;
+    let zeros = core::mem::take(&mut ws.zero_velocity);
+    let kinematics = constraint_kinematics(model, ws, q, &zeros);
+    ws.zero_velocity = zeros;
+    kinematics?;
     let mut groups = core::mem::take(&mut ws.groups);
     let mut result = Ok(());
     for (gi, gw) in groups.iter_mut().enumerate() {
