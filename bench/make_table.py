@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
-"""Writes the interpreted-vs-Pinocchio table of BENCHMARKS.md from criterion's estimates and
-bench/results/pinocchio.jsonl (both produced by bench/compare.sh in one session)."""
+"""Writes the tables of BENCHMARKS.md and bench/results/speed_vs_pinocchio.svg from criterion's estimates
+and bench/results/pinocchio.jsonl (both produced by bench/compare.sh in one session)."""
 import datetime, json, os, platform, subprocess, sys
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -36,6 +36,41 @@ def fmt(x):
 
 def ratio(a, b):
     return "—" if a is None or b is None else f"{a / b:.2f}"
+
+
+def svg_bars(path, title, groups, series, targets):
+    """A horizontal grouped bar chart as a standalone SVG (no plotting library needed).
+    groups: [(label, [value or None per series])]; series: [(name, colour)]; targets: [(x, label)]."""
+    row_h, bar_h, left, width, top = 14 * len(series) + 10, 12, 130, 520, 40
+    height = top + row_h * len(groups) + 50
+    xmax = max([v for _, vals in groups for v in vals if v is not None] + [t for t, _ in targets]) * 1.1
+    x = lambda v: left + width * v / xmax
+    out = [f'<svg xmlns="http://www.w3.org/2000/svg" width="{left + width + 30}" height="{height}" '
+           'font-family="sans-serif" font-size="11">',
+           f'<rect width="100%" height="100%" fill="white"/>',
+           f'<text x="{left}" y="18" font-size="13" font-weight="bold">{title}</text>']
+    for gi, (label, vals) in enumerate(groups):
+        y0 = top + gi * row_h
+        out.append(f'<text x="{left - 6}" y="{y0 + row_h / 2 + 2}" text-anchor="end">{label}</text>')
+        for si, ((name, colour), v) in enumerate(zip(series, vals)):
+            if v is None:
+                continue
+            y = y0 + 4 + si * 14
+            out.append(f'<rect x="{left}" y="{y}" width="{x(v) - left:.1f}" height="{bar_h}" fill="{colour}"/>')
+            out.append(f'<text x="{x(v) + 3:.1f}" y="{y + 10}">{v:.2f}</text>')
+    bottom = top + row_h * len(groups)
+    for t, label in targets:
+        out.append(f'<line x1="{x(t):.1f}" y1="{top - 4}" x2="{x(t):.1f}" y2="{bottom}" stroke="black" '
+                   'stroke-dasharray="4,3"/>')
+        out.append(f'<text x="{x(t) + 2:.1f}" y="{top - 8}">{label}</text>')
+    out.append(f'<line x1="{left}" y1="{bottom}" x2="{left + width}" y2="{bottom}" stroke="black"/>')
+    for si, (name, colour) in enumerate(series):
+        lx = left + si * (width // len(series))
+        out.append(f'<rect x="{lx}" y="{bottom + 18}" width="10" height="10" fill="{colour}"/>')
+        out.append(f'<text x="{lx + 14}" y="{bottom + 27}">{name}</text>')
+    out.append("</svg>")
+    with open(path, "w") as f:
+        f.write("\n".join(out) + "\n")
 
 
 def main():
@@ -110,6 +145,19 @@ def main():
         lines.append(f"| {m} | {spanning[m]} | {fmt(e)} | {fmt(k)} | {ratio(k, e)} | {fmt(g)} | {ratio(g, e)} |")
     lines.append("<!-- /interpreted-table -->")
     table = "\n".join(lines)
+
+    # The picture: time relative to Pinocchio (1 = as fast), interpreted and generated, with the targets.
+    groups = []
+    for m in MODELS:
+        p = pin.get(m, {})
+        r = lambda ours, a: None if ours is None or not p.get(a) else ours / p[a]
+        groups.append((m, [r(median_ns("aba", m), "aba"), r(median_ns("gen_aba", m), "aba"),
+                           r(median_ns("gen_rnea", m), "rnea"), r(median_ns("gen_crba", m), "crba")]))
+    svg_bars(os.path.join(ROOT, "bench", "results", "speed_vs_pinocchio.svg"),
+             "Time per call relative to Pinocchio 4.1 (1 = as fast; shorter is faster)", groups,
+             [("interpreted aba", "#9e9e9e"), ("generated aba", "#1f77b4"), ("generated rnea", "#2ca02c"),
+              ("generated crba", "#ff7f0e")],
+             [(0.2, "0.2"), (0.25, "0.25"), (1.0, "Pinocchio")])
 
     bench_md = os.path.join(ROOT, "BENCHMARKS.md")
     text = open(bench_md).read() if os.path.exists(bench_md) else ""
