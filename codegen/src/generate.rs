@@ -8,9 +8,10 @@ use crate::emit::{function, Arg, Output};
 use crate::trace::{input, record, snap, Sym};
 use crate::{build_model, LoadError, Loaded, Location, ModelOptions};
 use embedyn_runtime::constraints::{complete_configuration_with, constraint_pivot_ratio};
+use embedyn_runtime::nalgebra::DMatrix;
 use embedyn_runtime::{
-    aba, crba, embedding_map, forward_kinematics, link_poses, mass_matrix_inverse,
-    reduced_mass_matrix, rnea, Model, Workspace,
+    aba, crba, embedding_map_in, forward_kinematics, link_poses, mass_matrix_inverse,
+    reduced_mass_matrix_in, rnea, Model, Workspace,
 };
 
 /// Newton steps of the generated position completion.
@@ -194,6 +195,17 @@ pub fn generate_tokens(
     })
 }
 
+/// A matrix result as a row-major output.
+fn matrix_output(name: &'static str, m: &DMatrix<Sym>) -> Output {
+    let (rows, cols) = m.shape();
+    Output::Matrix {
+        name,
+        rows,
+        cols,
+        values: (0..rows * cols).map(|k| m[(k / cols, k % cols)]).collect(),
+    }
+}
+
 fn generate_algorithm(
     loaded: &Loaded,
     model: &Model<Sym>,
@@ -228,14 +240,7 @@ fn generate_algorithm(
                 }]
             }
             Algorithm::Crba => {
-                let m = crba(model, &mut ws, &q).map_err(fail)?;
-                let values = (0..nv * nv).map(|k| m[(k / nv, k % nv)]).collect();
-                vec![Output::Matrix {
-                    name: "m",
-                    rows: nv,
-                    cols: nv,
-                    values,
-                }]
+                vec![matrix_output("m", crba(model, &mut ws, &q).map_err(fail)?)]
             }
             Algorithm::Kinematics => {
                 let zeros = vec![Sym::Const(0.0); nv];
@@ -257,14 +262,10 @@ fn generate_algorithm(
                 }]
             }
             Algorithm::Minv => {
-                let m = mass_matrix_inverse(model, &mut ws, &q).map_err(fail)?;
-                let values = (0..nv * nv).map(|k| m[(k / nv, k % nv)]).collect();
-                vec![Output::Matrix {
-                    name: "m_inv",
-                    rows: nv,
-                    cols: nv,
-                    values,
-                }]
+                vec![matrix_output(
+                    "m_inv",
+                    mass_matrix_inverse(model, &mut ws, &q).map_err(fail)?,
+                )]
             }
             Algorithm::Complete => {
                 let mut q_out = q.clone();
@@ -276,29 +277,17 @@ fn generate_algorithm(
                 }]
             }
             Algorithm::Embedding => {
-                let x = embedding_map(model, &mut ws, &q).map_err(fail)?;
-                let (rows, cols) = (x.nrows(), x.ncols());
-                let values = (0..rows * cols).map(|k| x[(k / cols, k % cols)]).collect();
+                let x = embedding_map_in(model, &mut ws, &q).map_err(fail)?;
                 vec![
-                    Output::Matrix {
-                        name: "x",
-                        rows,
-                        cols,
-                        values,
-                    },
+                    matrix_output("x", x),
                     Output::Return(constraint_pivot_ratio(&ws)),
                 ]
             }
             Algorithm::CrbaIndependent => {
-                let m = reduced_mass_matrix(model, &mut ws, &q).map_err(fail)?;
-                let n = m.nrows();
-                let values = (0..n * n).map(|k| m[(k / n, k % n)]).collect();
-                vec![Output::Matrix {
-                    name: "m",
-                    rows: n,
-                    cols: n,
-                    values,
-                }]
+                vec![matrix_output(
+                    "m",
+                    reduced_mass_matrix_in(model, &mut ws, &q).map_err(fail)?,
+                )]
             }
         })
     });

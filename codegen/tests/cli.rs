@@ -357,6 +357,16 @@ fn flat(v: &Value) -> Vec<f64> {
     }
 }
 
+/// Largest difference between two answers, relative to the reference's largest magnitude (at least 1).
+fn scaled_difference(a: &[f64], reference: &[f64]) -> f64 {
+    let scale = reference.iter().fold(1.0f64, |m, x| m.max(x.abs()));
+    a.iter()
+        .zip(reference)
+        .map(|(x, y)| (x - y).abs())
+        .fold(0.0, f64::max)
+        / scale
+}
+
 /// `--engine generated` compiles the model's generated code (cached) and agrees with the interpreted
 /// solver, for a tree and for a geared chain (couplings: tau_independent and the reduced M).
 #[test]
@@ -387,13 +397,7 @@ fn generated_engine_agrees_with_interpreted() {
             let gen: Value = serde_json::from_str(&out).unwrap();
             let (a, b) = (flat(&gen["samples"]), flat(&interp["samples"]));
             assert_eq!(a.len(), b.len(), "{file} {algo}");
-            let scale = b.iter().fold(1.0f64, |m, x| m.max(x.abs()));
-            let e = a
-                .iter()
-                .zip(&b)
-                .map(|(x, y)| (x - y).abs())
-                .fold(0.0, f64::max)
-                / scale;
+            let e = scaled_difference(&a, &b);
             assert!(e <= 1e-12, "{file} {algo}: generated vs interpreted {e:e}");
             let (ok, out32, err) = embedyn_cached(
                 &[
@@ -410,12 +414,7 @@ fn generated_engine_agrees_with_interpreted() {
             );
             assert!(ok, "{err}");
             let c = flat(&serde_json::from_str::<Value>(&out32).unwrap()["samples"]);
-            let e32 = c
-                .iter()
-                .zip(&b)
-                .map(|(x, y)| (x - y).abs())
-                .fold(0.0, f64::max)
-                / scale;
+            let e32 = scaled_difference(&c, &b);
             assert!(
                 e32 <= 1e-4,
                 "{file} {algo}: generated f32 vs interpreted f64 {e32:e}"
@@ -451,14 +450,7 @@ fn both_engines_refuse_a_singular_loop_configuration() {
     );
     assert!(ok, "{err}");
     let gen: Value = serde_json::from_str(&out).unwrap();
-    let (a, b) = (flat(&gen["samples"]), flat(&interp["samples"]));
-    let scale = b.iter().fold(1.0f64, |m, x| m.max(x.abs()));
-    let e = a
-        .iter()
-        .zip(&b)
-        .map(|(x, y)| (x - y).abs())
-        .fold(0.0, f64::max)
-        / scale;
+    let e = scaled_difference(&flat(&gen["samples"]), &flat(&interp["samples"]));
     assert!(
         e <= 1e-12,
         "0.1 rad from the toggle: generated vs interpreted {e:e}"

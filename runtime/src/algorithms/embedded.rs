@@ -41,6 +41,19 @@ pub fn constraint_kinematics<T: Real>(
     Ok(())
 }
 
+/// [`constraint_kinematics`] at zero velocity (what position-level constraint work needs: placements
+/// and the constraint Jacobian), with the workspace's own zero vector: no allocation.
+pub(crate) fn position_kinematics<T: Real>(
+    model: &Model<T>,
+    ws: &mut Workspace<T>,
+    q: &[T],
+) -> Result<(), DynamicsError> {
+    let zeros = core::mem::take(&mut ws.zero_velocity);
+    let result = constraint_kinematics(model, ws, q, &zeros);
+    ws.zero_velocity = zeros;
+    result
+}
+
 fn group_name<T: Real>(model: &Model<T>, g: &Group) -> String {
     g.constraints
         .iter()
@@ -261,10 +274,7 @@ fn fill_embedding<T: Real>(
     q: &[T],
     out: &mut DMatrix<T>,
 ) -> Result<(), DynamicsError> {
-    let zeros = core::mem::take(&mut ws.zero_velocity);
-    let kinematics = constraint_kinematics(model, ws, q, &zeros);
-    ws.zero_velocity = zeros;
-    kinematics?;
+    position_kinematics(model, ws, q)?;
     let mut groups = core::mem::take(&mut ws.groups);
     let mut result = Ok(());
     for (g, gw) in groups.iter_mut().enumerate() {

@@ -11,6 +11,7 @@ mod workspace;
 
 pub use aba::aba;
 pub use crba::crba;
+pub(crate) use embedded::position_kinematics;
 pub use embedded::{
     constraint_kinematics, embedding_map, embedding_map_in, kkt_forward_dynamics,
     reduced_mass_matrix, reduced_mass_matrix_in,

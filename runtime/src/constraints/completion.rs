@@ -3,7 +3,7 @@
 
 use super::embedding::{fill_y1, group_rows, y1_condition_of};
 use super::{embed, residuals};
-use crate::algorithms::{constraint_kinematics, DynamicsError, Workspace};
+use crate::algorithms::{constraint_kinematics, position_kinematics, DynamicsError, Workspace};
 use crate::linalg::{lu_in_place, solve_least_squares, solve_pivoted_in_place};
 use crate::model::Model;
 use crate::Real;
@@ -53,7 +53,6 @@ pub fn complete_configuration_with<T: Real>(
     q: &mut [T],
     iterations: usize,
 ) -> Result<f64, DynamicsError> {
-    let zeros = core::mem::take(&mut ws.zero_velocity);
     let mut groups = core::mem::take(&mut ws.groups);
     let mut r = core::mem::take(&mut ws.constraint_residual);
     let mut result = Ok(0.0f64);
@@ -61,7 +60,7 @@ pub fn complete_configuration_with<T: Real>(
         let g = &model.groups[gi];
         let mut worst = 0.0;
         for _ in 0..iterations {
-            if let Err(e) = constraint_kinematics(model, ws, q, &zeros) {
+            if let Err(e) = position_kinematics(model, ws, q) {
                 result = Err(e);
                 break 'groups;
             }
@@ -139,7 +138,6 @@ pub fn complete_configuration_with<T: Real>(
         }
     }
     ws.groups = groups;
-    ws.zero_velocity = zeros;
     ws.constraint_residual = r;
     result
 }
@@ -151,10 +149,7 @@ pub fn complete_velocity<T: Real>(
     q: &[T],
     v: &mut [T],
 ) -> Result<(), DynamicsError> {
-    let zeros = core::mem::take(&mut ws.zero_velocity);
-    let kinematics = constraint_kinematics(model, ws, q, &zeros);
-    ws.zero_velocity = zeros;
-    kinematics?;
+    position_kinematics(model, ws, q)?;
     let mut groups = core::mem::take(&mut ws.groups);
     let mut result = Ok(());
     for (gi, gw) in groups.iter_mut().enumerate() {
@@ -184,8 +179,7 @@ pub fn y1_condition<T: Real>(
     q: &[T],
     group: usize,
 ) -> Result<f64, DynamicsError> {
-    let zeros = vec![T::zero(); model.nv()];
-    constraint_kinematics(model, ws, q, &zeros)?;
+    position_kinematics(model, ws, q)?;
     let mut groups = core::mem::take(&mut ws.groups);
     let gw = &mut groups[group];
     group_rows(model, ws, &model.groups[group], gw, false);
