@@ -143,6 +143,22 @@ def main():
         e, k = median_ns("embedded_aba", m), median_ns("kkt_aba", m)
         g = grbda.get(m)
         lines.append(f"| {m} | {spanning[m]} | {fmt(e)} | {fmt(k)} | {ratio(k, e)} | {fmt(g)} | {ratio(g, e)} |")
+    loops_path = os.path.join(ROOT, "bench", "results", "loops_embedyn.jsonl")
+    if os.path.exists(loops_path):
+        lines += ["", "Generated code on the same URDF+ files (`embedyn bench`, same session; the generated `aba` embeds "
+                  "each aggregate link inline, `crba` is XᵀMX over the independent coordinates — `crba_independent` — "
+                  "for both engines). ns per call, f64.", "",
+                  "| model | aba interpreted | aba generated | GRBDA FD / generated | rnea interpreted | rnea generated "
+                  "| XᵀMX interpreted | XᵀMX generated |",
+                  "|---|---:|---:|---:|---:|---:|---:|---:|"]
+        for line in open(loops_path):
+            d = json.loads(line)
+            b, m = d["bench"], d["model"]
+            g = lambda a, e: b.get(a, {}).get(e)
+            lines.append(f"| {m} | {fmt(g('aba', 'interpreted_f64'))} | {fmt(g('aba', 'generated_f64'))} | "
+                         f"{ratio(grbda.get(m), g('aba', 'generated_f64'))} | {fmt(g('rnea', 'interpreted_f64'))} | "
+                         f"{fmt(g('rnea', 'generated_f64'))} | {fmt(g('crba', 'interpreted_f64'))} | "
+                         f"{fmt(g('crba', 'generated_f64'))} |")
     lines.append("<!-- /interpreted-table -->")
     table = "\n".join(lines)
 

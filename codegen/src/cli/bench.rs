@@ -6,7 +6,7 @@ use super::runner::{build_runner, run};
 use super::CliError;
 use crate::{GenerateOptions, Loaded, ModelOptions};
 use embedyn_runtime::constraints::{complete_configuration, complete_velocity};
-use embedyn_runtime::{aba, crba, rnea, JointType, Model, Workspace};
+use embedyn_runtime::{aba, crba, reduced_mass_matrix_in, rnea, JointType, Model, Workspace};
 use serde_json::{json, Value};
 use std::hint::black_box;
 
@@ -105,6 +105,16 @@ pub fn bench(loaded: &Loaded, options: &ModelOptions) -> Result<Value, CliError>
                 black_box(
                     rnea(model, ws, black_box(&st[k].0), &st[k].1, &st[k].2)
                         .map(|x| x[0])
+                        .ok(),
+                );
+            }),
+            // What `eval --algo crba` reports: XᵀMX for a model with constraints (as the generated
+            // engine's `crba_independent`), M otherwise.
+            _ if model.has_constraints() => time(&mut || {
+                k = (k + 1) % st.len();
+                black_box(
+                    reduced_mass_matrix_in(model, ws, black_box(&st[k].0))
+                        .map(|m| m[(0, 0)])
                         .ok(),
                 );
             }),
