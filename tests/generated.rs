@@ -51,6 +51,14 @@ mod six_bar {
 mod parallel_gripper {
     embedyn::robot!("models/loops/parallel_gripper.urdf");
 }
+mod four_bar_aba_only {
+    // Exactly `aba` (no completion, embedding or XᵀMX): what a firmware loop that integrates needs.
+    embedyn::robot!(
+        "models/loops/four_bar_internal.urdf",
+        f64_only,
+        only(aba, kinematics)
+    );
+}
 mod singular_four_bar {
     embedyn::robot!("models/loops/singular_four_bar.urdf", f64_only);
 }
@@ -391,4 +399,40 @@ fn generated_loop_code_pivots_and_reports_singular_configurations() {
         ratio * rows * 1e10 <= 1.0,
         "at the toggle the pivot ratio is {ratio:e}"
     );
+}
+
+/// `only(…)` generates exactly the functions named, and they are the same functions: the four-bar's
+/// `aba` alone matches the full module's (bit for bit: the same trace) and the interpreted solver.
+#[test]
+fn only_generates_the_functions_named_and_the_same_code() {
+    const NQ: usize = four_bar::NQ;
+    let model: Model<f64> = load_model("models/loops/four_bar_internal.urdf", false);
+    let mut ws = Workspace::new(&model);
+    let mut rng = Rng(3);
+    for _ in 0..5 {
+        let mut q = model.neutral_configuration();
+        for (j, joint) in model.joints.iter().enumerate() {
+            if model.is_independent(j) {
+                q[joint.q_index] = rng.uniform(-0.3, 0.3);
+            }
+        }
+        embedyn::constraints::complete_configuration(&model, &mut ws, &mut q).unwrap();
+        let mut v = rng.vec(NQ, -1.0, 1.0);
+        embedyn::constraints::complete_velocity(&model, &mut ws, &q, &mut v).unwrap();
+        let tau = rng.vec(NQ, -1.0, 1.0);
+        let (q, v, tau): ([f64; NQ], [f64; NQ], [f64; NQ]) = (
+            q.try_into().unwrap(),
+            v.try_into().unwrap(),
+            tau.try_into().unwrap(),
+        );
+        let (mut a, mut b) = ([0.0; NQ], [0.0; NQ]);
+        let ra = four_bar_aba_only::f64::aba(&q, &v, &tau, &mut a);
+        let rb = four_bar::f64::aba(&q, &v, &tau, &mut b);
+        assert_eq!((a, ra), (b, rb));
+        let want = aba(&model, &mut ws, &q, &v, &tau).unwrap().to_vec();
+        assert!(relative_error(&a, &want) <= 1e-12);
+        let mut frames = [[0.0; 12]; four_bar_aba_only::FRAMES.len()];
+        four_bar_aba_only::f64::kinematics(&q, &mut frames);
+        assert_eq!(four_bar_aba_only::FRAMES, four_bar::FRAMES);
+    }
 }

@@ -45,6 +45,31 @@ pub enum Algorithm {
 }
 
 impl Algorithm {
+    /// Every algorithm, in the order generated code lists them.
+    pub const ALL: [Algorithm; 8] = [
+        Algorithm::Kinematics,
+        Algorithm::Aba,
+        Algorithm::Rnea,
+        Algorithm::Crba,
+        Algorithm::Minv,
+        Algorithm::Complete,
+        Algorithm::Embedding,
+        Algorithm::CrbaIndependent,
+    ];
+
+    /// The algorithm with this generated function name (`"aba"`, `"crba_independent"`, …).
+    pub fn from_name(name: &str) -> Option<Algorithm> {
+        Algorithm::ALL.into_iter().find(|a| a.name() == name)
+    }
+
+    /// Whether the algorithm exists only for models with loops, couplings or mimic joints.
+    pub fn needs_constraints(self) -> bool {
+        matches!(
+            self,
+            Algorithm::Complete | Algorithm::Embedding | Algorithm::CrbaIndependent
+        )
+    }
+
     pub fn name(self) -> &'static str {
         match self {
             Algorithm::Aba => "aba",
@@ -72,6 +97,10 @@ pub struct GenerateOptions {
     /// Path of the helper module the code calls (`sincos`, `sqrt`); `::embedyn::codegen_support` for
     /// the macro, `crate::helpers` for a standalone crate.
     pub helpers: TokenStream,
+    /// Generate exactly `algorithms` (the user chose them: firmware that needs only `aba` pays only for
+    /// `aba`). When false, a model with constraints also gets `complete`, `embedding` and
+    /// `crba_independent`.
+    pub exact: bool,
 }
 
 impl Default for GenerateOptions {
@@ -87,6 +116,7 @@ impl Default for GenerateOptions {
             f64: true,
             f32: true,
             helpers: quote!(::embedyn::codegen_support),
+            exact: false,
         }
     }
 }
@@ -123,6 +153,19 @@ pub fn generate_tokens(
     options: &GenerateOptions,
 ) -> Result<TokenStream, LoadError> {
     let model64 = loaded.model::<f64>(&options.model)?;
+    if let Some(a) = options
+        .algorithms
+        .iter()
+        .find(|a| a.needs_constraints() && !model64.has_constraints())
+    {
+        return Err(gen_error(
+            loaded,
+            format!(
+                "`{}` exists only for a model with loops, couplings or mimic joints; this one is a tree",
+                a.name()
+            ),
+        ));
+    }
     let model: Model<Sym> = snapped(&model64).cast();
     let (nq, nv) = (model.nq(), model.nv());
     let names: Vec<&str> = model.joints.iter().map(|j| j.name.as_str()).collect();
@@ -134,7 +177,7 @@ pub fn generate_tokens(
         let mut fns = Vec::new();
         let mut algorithms = options.algorithms.clone();
         // A model with constraints also gets its position completion and embedding map.
-        if model.has_constraints() {
+        if model.has_constraints() && !options.exact {
             for extra in [
                 Algorithm::Complete,
                 Algorithm::Embedding,

@@ -70,7 +70,7 @@ pub fn crate_files(
         ver = GENERATOR_VERSION
     );
     let mut listed = options.algorithms.clone();
-    if model.has_constraints() {
+    if model.has_constraints() && !options.exact {
         listed.extend([
             crate::Algorithm::Complete,
             crate::Algorithm::Embedding,

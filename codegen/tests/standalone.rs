@@ -112,3 +112,74 @@ fn standalone_crate_builds_as_no_std() {
         .collect();
     assert_eq!(deps, ["libm = \"0.2\""], "dependencies: {deps:?}");
 }
+
+/// `--only` writes exactly the functions named (and lists exactly those in the README); unknown names and
+/// loop-only functions on a tree are refused with a message naming them.
+#[test]
+fn only_writes_exactly_the_functions_named() {
+    let dir = tmp("only");
+    generate(
+        "models/loops/slider_crank.urdf",
+        &dir,
+        &["--only", "aba,kinematics"],
+    );
+    let src = std::fs::read_to_string(dir.join("src/lib.rs")).unwrap();
+    let readme = std::fs::read_to_string(dir.join("README.md")).unwrap();
+    for f in ["aba", "kinematics"] {
+        assert_eq!(
+            src.matches(&format!("pub fn {f}(")).count(),
+            2,
+            "{f}: f64 and f32"
+        );
+        assert!(readme.contains(&format!("`{f}(")), "README lists {f}");
+    }
+    for f in [
+        "rnea",
+        "crba",
+        "minv",
+        "complete",
+        "embedding",
+        "crba_independent",
+    ] {
+        assert!(
+            !src.contains(&format!("pub fn {f}(")),
+            "{f} was not asked for"
+        );
+        assert!(!readme.contains(&format!("`{f}(")), "README lists {f}");
+    }
+    // Smaller than the default set by the functions left out.
+    let all = tmp("only_all");
+    generate("models/loops/slider_crank.urdf", &all, &[]);
+    let full = std::fs::read_to_string(all.join("src/lib.rs")).unwrap();
+    assert!(
+        src.len() * 2 < full.len(),
+        "{} vs {}",
+        src.len(),
+        full.len()
+    );
+
+    for (model, only, message) in [
+        (
+            "models/arm7.urdf",
+            "aba,forward",
+            "unknown function `forward`",
+        ),
+        (
+            "models/arm7.urdf",
+            "complete",
+            "`complete` exists only for a model with loops",
+        ),
+    ] {
+        let out = Command::new(env!("CARGO_BIN_EXE_embedyn"))
+            .args(["generate", &repo(model).to_string_lossy(), "--out"])
+            .arg(tmp("only_bad"))
+            .args(["--only", only])
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            !out.status.success() && err.contains(message),
+            "{only}: {err}"
+        );
+    }
+}

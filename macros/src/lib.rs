@@ -6,7 +6,7 @@ use quote::quote;
 use syn::parse::{Parse, ParseStream};
 use syn::{Ident, LitStr, Path, Token};
 
-/// `robot!("model.urdf")` or `robot!("model.urdf", floating, minv, crate = ::my_facade)`.
+/// `robot!("model.urdf")` or `robot!("model.urdf", floating, minv, only(aba, kinematics), crate = ::my_facade)`.
 struct Args {
     path: LitStr,
     floating: bool,
@@ -14,6 +14,8 @@ struct Args {
     f64: bool,
     f32: bool,
     krate: Option<Path>,
+    /// `only(aba, kinematics, …)`: exactly these functions.
+    only: Option<Vec<embedyn_codegen::Algorithm>>,
 }
 
 impl Parse for Args {
@@ -26,6 +28,7 @@ impl Parse for Args {
             f64: true,
             f32: true,
             krate: None,
+            only: None,
         };
         while !input.is_empty() {
             input.parse::<Token![,]>()?;
@@ -44,10 +47,33 @@ impl Parse for Args {
                 "minv" => args.minv = true,
                 "f64_only" => args.f32 = false,
                 "f32_only" => args.f64 = false,
+                "only" => {
+                    let content;
+                    syn::parenthesized!(content in input);
+                    let names = content.parse_terminated(Ident::parse, Token![,])?;
+                    let mut list = Vec::new();
+                    for name in names {
+                        let algo = embedyn_codegen::Algorithm::from_name(&name.to_string())
+                            .ok_or_else(|| {
+                                let known: Vec<&str> = embedyn_codegen::Algorithm::ALL
+                                    .iter()
+                                    .map(|a| a.name())
+                                    .collect();
+                                syn::Error::new(
+                                    name.span(),
+                                    format!("unknown function `{name}` (expected {})", known.join(", ")),
+                                )
+                            })?;
+                        if !list.contains(&algo) {
+                            list.push(algo);
+                        }
+                    }
+                    args.only = Some(list);
+                }
                 other => {
                     return Err(syn::Error::new(
                         key.span(),
-                        format!("unknown option `{other}` (expected floating, minv, f64_only, f32_only or crate = path)"),
+                        format!("unknown option `{other}` (expected floating, minv, f64_only, f32_only, only(…) or crate = path)"),
                     ))
                 }
             }
@@ -59,7 +85,8 @@ impl Parse for Args {
 /// Generates straight-line dynamics for a URDF/URDF+ model at compile time.
 ///
 /// The path is relative to the calling crate's `Cargo.toml` (or to `$EMBEDYN_MODEL_DIR` when set). Expands to `NQ`, `NV`, `JOINTS`,
-/// `INDEPENDENT` and modules `f64`/`f32` with `aba`, `rnea`, `crba` (and `minv` with the `minv` option).
+/// `INDEPENDENT`, `FRAMES` and modules `f64`/`f32` with `kinematics`, `aba`, `rnea`, `crba` (and `minv` with the
+/// `minv` option; `only(aba, crba, …)` generates exactly the functions named, nothing else).
 /// Invoke it inside a module of its own (`mod arm { embedyn::robot!("arm.urdf"); }`): the modules are
 /// named after the scalar types. Errors in the model are compile errors that name the element.
 #[proc_macro]
@@ -90,8 +117,11 @@ fn expand(args: &Args) -> Result<proc_macro2::TokenStream, String> {
         .krate
         .clone()
         .map_or_else(|| quote!(::embedyn), |p| quote!(#p));
-    let mut algorithms = embedyn_codegen::GenerateOptions::default().algorithms;
-    if args.minv {
+    let mut algorithms = args
+        .only
+        .clone()
+        .unwrap_or_else(|| embedyn_codegen::GenerateOptions::default().algorithms);
+    if args.minv && !algorithms.contains(&embedyn_codegen::Algorithm::Minv) {
         algorithms.push(embedyn_codegen::Algorithm::Minv);
     }
     let options = embedyn_codegen::GenerateOptions {
@@ -103,6 +133,7 @@ fn expand(args: &Args) -> Result<proc_macro2::TokenStream, String> {
         f64: args.f64,
         f32: args.f32,
         helpers: quote!(#krate::codegen_support),
+        exact: args.only.is_some(),
     };
     let items =
         embedyn_codegen::generate_tokens(&loaded, &options).map_err(|e| format!("embedyn: {e}"))?;

@@ -53,6 +53,11 @@ pub enum Command {
         /// Also generate `minv` (the O(N²) inverse mass matrix of Eq. 6).
         #[arg(long)]
         minv: bool,
+        /// Generate exactly these functions, comma-separated (kinematics, aba, rnea, crba, minv, complete,
+        /// embedding, crba_independent); default: kinematics, aba, rnea, crba and, for a model with
+        /// constraints, complete, embedding and crba_independent.
+        #[arg(long, value_delimiter = ',')]
+        only: Option<Vec<String>>,
     },
     /// Time every algorithm for each engine and scalar (median ns per call, in-process, pre-generated
     /// random states).
@@ -140,13 +145,31 @@ pub fn run(cli: Cli) -> Result<serde_json::Value, CliError> {
             out,
             floating,
             minv,
+            only,
         } => {
             let loaded = load_reporting(&model)?;
             let mut options = crate::GenerateOptions {
                 model: options(floating),
                 ..Default::default()
             };
-            if minv {
+            if let Some(names) = only {
+                options.algorithms = Vec::new();
+                for name in names {
+                    let algo = crate::Algorithm::from_name(name.trim()).ok_or_else(|| {
+                        let known: Vec<&str> =
+                            crate::Algorithm::ALL.iter().map(|a| a.name()).collect();
+                        CliError(format!(
+                            "--only: unknown function `{name}` (expected {})",
+                            known.join(", ")
+                        ))
+                    })?;
+                    if !options.algorithms.contains(&algo) {
+                        options.algorithms.push(algo);
+                    }
+                }
+                options.exact = true;
+            }
+            if minv && !options.algorithms.contains(&crate::Algorithm::Minv) {
                 options.algorithms.push(crate::Algorithm::Minv);
             }
             let files = crate::standalone::write_crate(&loaded, &options, &out)?;

@@ -1,0 +1,4 @@
+mod robot {
+    embedyn::robot!("grbda/double_pendulum.urdf", only(aba, complete));
+}
+fn main() {}
