@@ -122,6 +122,7 @@ pub fn function(
         .collect();
     let order = schedule(nodes, order);
     let (order, batch) = batch_angles(nodes, order, &sin_of, &cos_of);
+    let angles = batch_args(nodes, &batch);
     let chunks: Vec<&[u32]> = if order.is_empty() {
         vec![&order[..]]
     } else {
@@ -261,12 +262,11 @@ pub fn function(
                 }
                 Op::Sin(_) | Op::Cos(_) if batch.contains(&n) => {
                     // All angles that depend on the inputs alone, in one helper call.
-                    let args: Vec<TokenStream> =
-                        batch_args(nodes, &batch).iter().map(&operand).collect();
+                    let args: Vec<TokenStream> = angles.iter().map(&operand).collect();
                     stmts.push(quote!(
                         let (sin_batch, cos_batch) = #helpers::sincos_batch([#(#args),*]);
                     ));
-                    for (k, a) in batch_args(nodes, &batch).iter().enumerate() {
+                    for (k, a) in angles.iter().enumerate() {
                         if let Some(&si) = sin_of.get(a) {
                             let id = node_ident(si);
                             stmts.push(quote!(let #id: S = sin_batch[#k];));
