@@ -1,6 +1,8 @@
 //! The main job: load a bundled robot, print its structure, solve its forward dynamics with the
 //! interpreted O(N) solver, check it against an independent algorithm, then run the straight-line code
-//! `embedyn::robot!` generated for the same model at compile time, compare the two, and time both.
+//! `embedyn::robot!` generated for the same model at compile time, compare the two, and time both; then
+//! the same for a floating biped with geared hips and four-bar knees (constraint embedding), against the
+//! Lagrange-multiplier solution.
 //!
 //! `cargo run --release --example demo [MODEL.urdf] [--floating]` (the generated part uses the bundled
 //! 34-DoF humanoid; another model runs the interpreted part only).
@@ -10,9 +12,17 @@ mod humanoid34 {
     embedyn::robot!("models/humanoid34.urdf");
 }
 
+/// A floating biped whose hips are geared rotors and whose knees are four-bar linkages (URDF+): every
+/// local loop becomes an aggregate link, embedded inline in the generated `aba`.
+mod biped {
+    embedyn::robot!("models/loops/biped_floating.urdf", f64_only);
+}
+
+use embedyn::constraints::{complete_configuration, complete_velocity, constraint_violation};
 use embedyn::linalg::solve_spd;
 use embedyn::{
-    aba, crba, load, mass_matrix_inverse, relative_error, rnea, ModelOptions, Workspace,
+    aba, crba, kkt_forward_dynamics, load, mass_matrix_inverse, relative_error, rnea, ModelOptions,
+    Workspace,
 };
 use std::time::Instant;
 
@@ -165,6 +175,93 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         t_aba / g_aba,
         t_rnea / g_rnea,
         t_crba / g_crba
+    );
+    loops(&time)
+}
+
+/// Constraint embedding: the biped with geared hips and four-bar knees, interpreted and generated, against
+/// the Lagrange-multiplier (KKT) solution of the same dynamics.
+fn loops(time: &dyn Fn(&mut dyn FnMut()) -> f64) -> Result<(), Box<dyn std::error::Error>> {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/models/loops/biped_floating.urdf"
+    );
+    let model = load(path.as_ref())?.model::<f64>(&ModelOptions::default())?;
+    let mut ws = Workspace::new(&model);
+    println!(
+        "
+{}: {} spanning joints, nv = {}, {} independent; aggregate links: {}",
+        model.name,
+        model.joints.len(),
+        model.nv(),
+        model.independent_nv(),
+        model
+            .groups
+            .iter()
+            .map(|g| {
+                let names: Vec<&str> = g
+                    .bodies
+                    .iter()
+                    .map(|&b| model.joints[b].name.as_str())
+                    .collect();
+                format!("[{}]", names.join(", "))
+            })
+            .collect::<Vec<_>>()
+            .join(" ")
+    );
+    // A state on the loops: independent angles chosen, dependent ones completed, v projected.
+    let mut q = model.neutral_configuration();
+    for (j, joint) in model.joints.iter().enumerate() {
+        if joint.nq() == 1 && model.is_independent(j) {
+            q[joint.q_index] = 0.2 * ((j as f64) * 0.7).sin();
+        }
+    }
+    complete_configuration(&model, &mut ws, &mut q)?;
+    let mut v: Vec<f64> = (0..model.nv())
+        .map(|k| 0.5 * ((k as f64) * 1.3).cos())
+        .collect();
+    complete_velocity(&model, &mut ws, &q, &mut v)?;
+    let tau: Vec<f64> = (0..model.nv())
+        .map(|k| 2.0 * ((k as f64) * 0.9).sin())
+        .collect();
+    let (pos, vel) = constraint_violation(&model, &mut ws, &q, &v)?;
+    let qdd = aba(&model, &mut ws, &q, &v, &tau)?.to_vec();
+    let qdd_kkt = kkt_forward_dynamics(&model, &mut ws, &q, &v, &tau)?;
+    const NQ: usize = biped::NQ;
+    const NV: usize = biped::NV;
+    let (qa, va, ta): ([f64; NQ], [f64; NV], [f64; NV]) = (
+        q.clone().try_into().unwrap(),
+        v.clone().try_into().unwrap(),
+        tau.clone().try_into().unwrap(),
+    );
+    let mut qdd_gen = [0.0; NV];
+    let ratio = biped::f64::aba(&qa, &va, &ta, &mut qdd_gen);
+    println!(
+        "loop residuals: position {pos:.1e} m, velocity {vel:.1e}; qdd embedded (O(N)) vs KKT {:.1e}, generated vs embedded {:.1e}; pivot ratio {ratio:.2} (0 = singular)",
+        relative_error(&qdd, &qdd_kkt),
+        relative_error(&qdd_gen, &qdd)
+    );
+    let t_embedded = time(&mut || {
+        std::hint::black_box(aba(&model, &mut ws, std::hint::black_box(&q), &v, &tau).unwrap());
+    });
+    let t_kkt = time(&mut || {
+        std::hint::black_box(
+            kkt_forward_dynamics(&model, &mut ws, std::hint::black_box(&q), &v, &tau).unwrap(),
+        );
+    });
+    let mut out = [0.0; NV];
+    let t_gen = time(&mut || {
+        std::hint::black_box(biped::f64::aba(
+            std::hint::black_box(&qa),
+            &va,
+            &ta,
+            &mut out,
+        ));
+    });
+    println!(
+        "forward dynamics, median ns per call: generated {t_gen:.0}, interpreted embedded {t_embedded:.0}, KKT {t_kkt:.0} ({:.1}× and {:.1}× the generated time)",
+        t_embedded / t_gen,
+        t_kkt / t_gen
     );
     Ok(())
 }
