@@ -384,14 +384,7 @@ fn generated_loop_code_pivots_and_reports_singular_configurations() {
         "the sweep gets close to the toggle: ratio {min_ratio:e}"
     );
     // At the toggle (exact coordinates of the flat parallelogram): a ratio that proves cond₁(Y1) ≥ 1e10.
-    let mut q_at = model.neutral_configuration();
-    for (name, value) in [
-        ("crank_joint", toggle),
-        ("coupler_joint", -toggle),
-        ("rocker_joint", toggle),
-    ] {
-        q_at[model.joints[model.joint_index(name).unwrap()].q_index] = value;
-    }
+    let q_at = common::parallelogram_toggle(&model);
     let mut qdd = [0.0; NQ];
     let ratio =
         singular_four_bar::f64::aba(&q_at.try_into().unwrap(), &[0.0; NQ], &[0.3; NQ], &mut qdd);

@@ -119,17 +119,9 @@ fn parallelogram_toggle_is_solved_near_it_and_refused_at_it() {
         e <= 1e-9,
         "near the toggle the embedded answer is off by {e:e}"
     );
-    // At the toggle: the parallelogram lies flat, crank and rocker at +π/3, coupler at −π/3 (exact
-    // coordinates: Newton converges only linearly into a singular point, so completion cannot place it
-    // there). The call fails with an error quoting cond(Y1), not NaN.
-    let mut q_at = model.neutral_configuration();
-    for (name, value) in [
-        ("crank_joint", toggle),
-        ("coupler_joint", -toggle),
-        ("rocker_joint", toggle),
-    ] {
-        q_at[model.joints[model.joint_index(name).unwrap()].q_index] = value;
-    }
+    // At the toggle (the flat parallelogram, exact coordinates): the call fails with an error quoting
+    // cond(Y1), not NaN.
+    let q_at = common::parallelogram_toggle(&model);
     let (pos, _) = constraint_violation(&model, &mut ws, &q_at, &zero).unwrap();
     assert!(
         pos <= 1e-12,

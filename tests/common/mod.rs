@@ -195,3 +195,19 @@ pub fn chain(n: usize) -> Model<f64> {
     }
     b.build().unwrap()
 }
+
+/// The toggle of models/loops/singular_four_bar.urdf: the parallelogram lying flat, crank and rocker at
+/// +π/3, coupler at −π/3 (exact coordinates: Newton converges only linearly into a singular point, so
+/// completion cannot place it there).
+pub fn parallelogram_toggle(model: &Model<f64>) -> Vec<f64> {
+    let toggle = std::f64::consts::FRAC_PI_3;
+    let mut q = model.neutral_configuration();
+    for (name, value) in [
+        ("crank_joint", toggle),
+        ("coupler_joint", -toggle),
+        ("rocker_joint", toggle),
+    ] {
+        q[model.joints[model.joint_index(name).unwrap()].q_index] = value;
+    }
+    q
+}
