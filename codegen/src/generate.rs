@@ -57,9 +57,16 @@ impl Algorithm {
         Algorithm::CrbaIndependent,
     ];
 
-    /// The algorithm with this generated function name (`"aba"`, `"crba_independent"`, …).
-    pub fn from_name(name: &str) -> Option<Algorithm> {
-        Algorithm::ALL.into_iter().find(|a| a.name() == name)
+    /// The algorithm with this generated function name (`"aba"`, `"crba_independent"`, …); the error
+    /// lists the names there are.
+    pub fn from_name(name: &str) -> Result<Algorithm, String> {
+        Algorithm::ALL
+            .into_iter()
+            .find(|a| a.name() == name)
+            .ok_or_else(|| {
+                let known: Vec<&str> = Algorithm::ALL.iter().map(|a| a.name()).collect();
+                format!("unknown function `{name}` (expected {})", known.join(", "))
+            })
     }
 
     /// Whether the algorithm exists only for models with loops, couplings or mimic joints.

@@ -54,16 +54,7 @@ impl Parse for Args {
                     let mut list = Vec::new();
                     for name in names {
                         let algo = embedyn_codegen::Algorithm::from_name(&name.to_string())
-                            .ok_or_else(|| {
-                                let known: Vec<&str> = embedyn_codegen::Algorithm::ALL
-                                    .iter()
-                                    .map(|a| a.name())
-                                    .collect();
-                                syn::Error::new(
-                                    name.span(),
-                                    format!("unknown function `{name}` (expected {})", known.join(", ")),
-                                )
-                            })?;
+                            .map_err(|e| syn::Error::new(name.span(), e))?;
                         if !list.contains(&algo) {
                             list.push(algo);
                         }

@@ -155,14 +155,8 @@ pub fn run(cli: Cli) -> Result<serde_json::Value, CliError> {
             if let Some(names) = only {
                 options.algorithms = Vec::new();
                 for name in names {
-                    let algo = crate::Algorithm::from_name(name.trim()).ok_or_else(|| {
-                        let known: Vec<&str> =
-                            crate::Algorithm::ALL.iter().map(|a| a.name()).collect();
-                        CliError(format!(
-                            "--only: unknown function `{name}` (expected {})",
-                            known.join(", ")
-                        ))
-                    })?;
+                    let algo = crate::Algorithm::from_name(name.trim())
+                        .map_err(|e| CliError(format!("--only: {e}")))?;
                     if !options.algorithms.contains(&algo) {
                         options.algorithms.push(algo);
                     }

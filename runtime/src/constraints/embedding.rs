@@ -219,11 +219,6 @@ pub(crate) fn embed<T: Real>(
         if cond >= SINGULARITY_THRESHOLD {
             return Err(singular(cond));
         }
-    } else {
-        gw.y1_lu.copy_from(&gw.y1);
-        if lu_in_place(&mut gw.y1_lu, &mut gw.perm).is_err() {
-            return Err(singular(f64::INFINITY));
-        }
     }
     // [Y1 | Y2 | bias] → [· | Y1⁻¹ Y2 | Y1⁻¹ bias], pivoting by selects so that generated code pivots at
     // run time as this code does.
@@ -238,6 +233,11 @@ pub(crate) fn embed<T: Real>(
         gw.aug[(row, r + ni)] = if with_bias { gw.bias[row] } else { T::zero() };
     }
     gw.pivot_ratio = solve_pivoted_in_place(&mut gw.aug, r);
+    // Couplings (constant Y1, checked at load): an exactly zero pivot is the only failure left, and the
+    // elimination reports it (a traced ratio has no value and passes).
+    if !gw.pivot_ratio.is_positive_finite() {
+        return Err(singular(f64::INFINITY));
+    }
     for (d, &bd) in g.dependent.iter().enumerate() {
         let m = member(g, bd).expect("member");
         for k in 0..ni {
