@@ -14,10 +14,12 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 
 struct Counting;
 static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
+static BYTES: AtomicUsize = AtomicUsize::new(0);
 
 unsafe impl GlobalAlloc for Counting {
     unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
         ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
+        BYTES.fetch_add(layout.size(), Ordering::SeqCst);
         System.alloc(layout)
     }
     unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
@@ -25,6 +27,7 @@ unsafe impl GlobalAlloc for Counting {
     }
     unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
         ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
+        BYTES.fetch_add(new_size, Ordering::SeqCst);
         System.realloc(ptr, layout, new_size)
     }
 }
@@ -42,7 +45,7 @@ fn algorithm_calls_do_not_allocate() {
     ] {
         let model = load_model::<f64>(path, floating);
         let mut ws = Workspace::new(&model);
-        ws.reserve_inverse(&model);
+        ws.reserve_all(&model);
         let mut rng = Rng(1);
         let q = rng.configuration(&model);
         let v = rng.vec(model.nv(), -1.0, 1.0);
@@ -73,6 +76,7 @@ fn algorithm_calls_do_not_allocate() {
     ] {
         let model = load_model::<f64>(path, false);
         let mut ws = Workspace::new(&model);
+        ws.reserve_all(&model);
         let mut q = model.neutral_configuration();
         complete_configuration(&model, &mut ws, &mut q).unwrap();
         let mut v = vec![0.3; model.nv()];
@@ -98,4 +102,46 @@ fn algorithm_calls_do_not_allocate() {
             after - before
         );
     }
+    // Memory in proportion to what is called: a 20,000-body chain's workspace is O(N) (an nv × nv mass
+    // matrix alone would be 3.2 GB), and `aba` on it allocates nothing more.
+    let chain = long_chain(20_000);
+    let before = BYTES.load(Ordering::SeqCst);
+    let mut ws = Workspace::new(&chain);
+    let q = vec![0.1; chain.nq()];
+    let zeros = vec![0.0; chain.nv()];
+    let qdd = aba(&chain, &mut ws, &q, &zeros, &zeros).unwrap();
+    assert!(qdd.iter().all(|x| x.is_finite()));
+    let per_body = (BYTES.load(Ordering::SeqCst) - before) / chain.nbodies();
+    assert!(
+        per_body < 2_000,
+        "Workspace::new + aba allocated {per_body} bytes per body"
+    );
+}
+
+/// A chain of `n` bodies hanging from each other by revolute joints about x, y, z in turn.
+fn long_chain(n: usize) -> embedyn::Model<f64> {
+    use embedyn::nalgebra::{Matrix3, Vector3};
+    use embedyn::{JointType, Model, SpatialInertia, Transform};
+    let mut b = Model::<f64>::builder("chain");
+    let axes = [Vector3::x(), Vector3::y(), Vector3::z()];
+    let inertia = SpatialInertia::from_com(
+        0.1,
+        Vector3::new(0.0, 0.0, 0.05),
+        Matrix3::from_diagonal(&Vector3::new(1e-4, 2e-4, 3e-4)),
+    );
+    let step = Transform::from_xyz_rpy([0.0, 0.0, 0.1], [0.0; 3]);
+    for i in 0..n {
+        let parent = i.checked_sub(1);
+        b.add_body(
+            parent,
+            format!("j{i}"),
+            JointType::Revolute,
+            axes[i % 3],
+            step,
+            format!("l{i}"),
+            inertia,
+        )
+        .unwrap();
+    }
+    b.build().unwrap()
 }

@@ -328,6 +328,10 @@ impl Real for Sym {
     fn to_f64(self) -> f64 {
         self.constant().unwrap_or(f64::NAN)
     }
+    /// Known only for constants: checks on runtime values are the generated code's caller's job.
+    fn value(self) -> Option<f64> {
+        self.constant()
+    }
     fn sqrt(self) -> Self {
         match self {
             Sym::Const(x) => Sym::Const(x.sqrt()),

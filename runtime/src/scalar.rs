@@ -49,6 +49,17 @@ pub trait Real:
     fn epsilon() -> Self;
     fn is_finite(self) -> bool;
 
+    /// The value, where one is known: always for numbers; for the code generator's traced scalar only for
+    /// constants (a value computed from the generated function's inputs is unknown until run time).
+    ///
+    /// Every check on a computed value (a singular pivot, a singular loop, a non-finite input) goes through
+    /// this, so that it is explicit what a check does while tracing: nothing — the generated function returns
+    /// the measure (a pivot, a condition number) for its caller to check instead.
+    #[inline(always)]
+    fn value(self) -> Option<f64> {
+        Some(self.to_f64())
+    }
+
     /// `self > 0` and finite: false for zero, negatives, infinities and NaN (a usable pivot).
     #[inline(always)]
     fn is_positive_finite(self) -> bool {

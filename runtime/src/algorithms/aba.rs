@@ -3,13 +3,20 @@
 //! Names follow the paper: `P(k)` articulated inertia, `D(k) = H P H*`, `G(k) = P H* D⁻¹`,
 //! `𝔷(k)` articulated bias force, `ε(k) = 𝒯(k) − H 𝔷(k)`, `ν(k) = D⁻¹ ε(k)`. The paper's tip-to-base
 //! numbering is reversed here: the backward sweep runs from the leaves (high indices) to the root.
+//!
+//! Every joint, whatever its number of velocity coordinates `n` (1 for revolute and prismatic joints, 6 for
+//! a floating joint), takes the same steps on its own storage: `U = P H*` (n force columns), the `n × n`
+//! factor of `D`, and `ε` (n entries). There is no shared "floating root" buffer, so a scene with several
+//! free bodies is as correct as one robot.
 
-use super::{check_len, gravity_in, velocity_sweep, DynamicsError, Workspace};
+use super::{
+    check_configuration, check_input, gravity_in, velocity_sweep, DynamicsError, Workspace,
+};
 use crate::linalg::{cholesky_in_place, cholesky_solve_in_place};
-use crate::model::{JointType, Model};
-use crate::spatial::{ArticulatedInertia, Force, Motion};
+use crate::model::{Joint, Model};
+use crate::spatial::{ArticulatedInertia, Force};
 use crate::Real;
-use nalgebra::Vector3;
+use nalgebra::DMatrixViewMut;
 
 /// Forward dynamics `qdd = M(q)⁻¹ (τ − C(q, v) − g(q))`. The result is also left in `ws.qdd`.
 ///
@@ -35,9 +42,9 @@ pub fn aba<'w, T: Real>(
     v: &[T],
     tau: &[T],
 ) -> Result<&'w [T], DynamicsError> {
-    check_len("q", q.len(), model.nq())?;
-    check_len("v", v.len(), model.nv())?;
-    check_len("tau", tau.len(), model.nv())?;
+    check_configuration(model, q)?;
+    check_input("v", v, model.nv())?;
+    check_input("tau", tau, model.nv())?;
     if model.has_constraints() {
         return super::embedded::aba(model, ws, q, v, tau);
     }
@@ -48,6 +55,30 @@ pub fn aba<'w, T: Real>(
     Ok(&ws.qdd)
 }
 
+/// The joint's block of `ws.d_factor` as an `n × n` matrix.
+#[inline(always)]
+pub(crate) fn d_block<'a, T: Real>(
+    d_factor: &'a mut [T],
+    d_offset: &[usize],
+    i: usize,
+    n: usize,
+) -> DMatrixViewMut<'a, T> {
+    let start = d_offset[i];
+    DMatrixViewMut::from_slice(&mut d_factor[start..start + n * n], n, n)
+}
+
+/// Fails with the joint named where the last factorization of its `D` had a pivot that is not positive
+/// (a value unknown at generation time passes: generated code carries no such check).
+pub(crate) fn check_pivot<T: Real>(joint: &Joint<T>, pivot: T) -> Result<(), DynamicsError> {
+    match pivot.value() {
+        Some(d) if !(d > 0.0 && d.is_finite()) => Err(DynamicsError::SingularJoint {
+            joint: joint.name.clone(),
+            d,
+        }),
+        _ => Ok(()),
+    }
+}
+
 /// The forward step of Eq. 9 for joint `i`: `θ̈ = D⁻¹(ε − Uᵀ a′)`, `a = a′ + H* θ̈`
 /// (the paper's `ν(k) − K*(k+1,k) α(k+1)`).
 pub(crate) fn forward_step<T: Real>(
@@ -56,58 +87,24 @@ pub(crate) fn forward_step<T: Real>(
     i: usize,
 ) -> Result<(), DynamicsError> {
     let joint = &model.joints[i];
+    check_pivot(joint, ws.d_pivot[i])?;
     let x = &ws.parent_placement[i];
     let a_prime = match joint.parent {
         Some(p) => x.inv_act_motion(&ws.acceleration[p]),
         None => gravity_in(&model.gravity, x),
     } + ws.coriolis[i];
-    let a = match joint.joint_type {
-        JointType::Floating => {
-            let pa = ws.inertia[i].mul_motion(&a_prime);
-            let mut rhs = ws.floating_eps;
-            let spa = to_v_order(&pa);
-            for k in 0..6 {
-                rhs[k] -= spa[k];
-            }
-            check_floating(joint, ws)?;
-            cholesky_solve_in_place(&ws.floating_d, &mut rhs);
-            ws.qdd[joint.v_index..joint.v_index + 6].copy_from_slice(&rhs);
-            a_prime
-                + Motion::new(
-                    Vector3::new(rhs[3], rhs[4], rhs[5]),
-                    Vector3::new(rhs[0], rhs[1], rhs[2]),
-                )
-        }
-        _ => {
-            let d_inv = ws.d_inv[i];
-            if !d_inv.is_positive_finite() {
-                return Err(DynamicsError::SingularJoint {
-                    joint: joint.name.clone(),
-                    d: (T::one() / d_inv).to_f64(),
-                });
-            }
-            let qdd = (ws.epsilon[i] - a_prime.dot(&ws.u[i])) * d_inv;
-            ws.qdd[joint.v_index] = qdd;
-            a_prime + joint.subspace_column(0) * qdd
-        }
-    };
+    let (v0, n) = (joint.v_index, joint.nv());
+    let qdd = &mut ws.qdd[v0..v0 + n];
+    for (k, x) in qdd.iter_mut().enumerate() {
+        *x = ws.epsilon[v0 + k] - a_prime.dot(&ws.u[v0 + k]);
+    }
+    cholesky_solve_in_place(&d_block(&mut ws.d_factor, &ws.d_offset, i, n), qdd);
+    let mut a = a_prime;
+    for (k, &x) in qdd.iter().enumerate() {
+        a += joint.subspace_column(k) * x;
+    }
     ws.acceleration[i] = a;
     Ok(())
-}
-
-fn check_floating<T: Real>(
-    joint: &crate::Joint<T>,
-    ws: &Workspace<T>,
-) -> Result<(), DynamicsError> {
-    let d = floating_min_pivot(ws);
-    if d.is_positive_finite() {
-        Ok(())
-    } else {
-        Err(DynamicsError::SingularJoint {
-            joint: joint.name.clone(),
-            d: d.to_f64(),
-        })
-    }
 }
 
 /// The velocity sweep and the backward sweep of Eq. 9: `P(k)`, `D(k)`, `𝔷(k)`, `ε(k)` for every joint.
@@ -135,74 +132,96 @@ pub(crate) fn init_articulated<T: Real>(model: &Model<T>, ws: &mut Workspace<T>)
     }
 }
 
+/// `U = P H*`, the factor of `D = H P H*` and its smallest pivot, for joint `i` with articulated inertia
+/// `p` (shared by the forward dynamics and the operator inverse of Eq. 6).
+pub(crate) fn factor_joint<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, i: usize) {
+    let joint = &model.joints[i];
+    let p = &ws.inertia[i];
+    let (v0, n) = (joint.v_index, joint.nv());
+    for k in 0..n {
+        ws.u[v0 + k] = p.mul_motion(&joint.subspace_column(k));
+    }
+    let mut d = d_block(&mut ws.d_factor, &ws.d_offset, i, n);
+    // The lower triangle is what the factorization reads.
+    for r in 0..n {
+        let h = joint.subspace_column(r);
+        for c in 0..=r {
+            d[(r, c)] = h.dot(&ws.u[v0 + c]);
+        }
+    }
+    ws.d_pivot[i] = cholesky_in_place(&mut d);
+}
+
+/// `P⁺ = τ̄ P = P − U D⁻¹ Uᵀ` for joint `i` (after [`factor_joint`]), and `G ε = U D⁻¹ ε` for the `ε` given
+/// (zeros where only `P⁺` is wanted).
+pub(crate) fn articulated_inertia_plus<T: Real>(
+    model: &Model<T>,
+    ws: &mut Workspace<T>,
+    i: usize,
+    epsilon: &[T],
+) -> (ArticulatedInertia<T>, Force<T>) {
+    let joint = &model.joints[i];
+    let (v0, n) = (joint.v_index, joint.nv());
+    let mut p_plus = ws.inertia[i];
+    if n == 1 {
+        // The common case as a rank-one update (six products per symmetric block).
+        let d_inv = ws.d_factor[ws.d_offset[i]];
+        let u = ws.u[v0];
+        p_plus.sub_rank_one(&u, d_inv);
+        return (p_plus, u * (epsilon[0] * d_inv));
+    }
+    let mut g_eps = Force::zero();
+    let mut unit = [T::zero(); 6];
+    for k in 0..n {
+        // w_k = U D⁻¹ e_k; Σ_k u_k w_kᵀ = U D⁻¹ Uᵀ is symmetric, as `sub_outer` requires.
+        unit[..n].fill(T::zero());
+        unit[k] = T::one();
+        cholesky_solve_in_place(
+            &d_block(&mut ws.d_factor, &ws.d_offset, i, n),
+            &mut unit[..n],
+        );
+        let mut w = Force::zero();
+        for (l, &x) in unit[..n].iter().enumerate() {
+            w += ws.u[v0 + l] * x;
+        }
+        p_plus.sub_outer(&ws.u[v0 + k], &w);
+        g_eps += w * epsilon[k];
+    }
+    (p_plus, g_eps)
+}
+
 /// The backward step of Eq. 9 for joint `i`: `D(k)`, `ε(k)`, and what passes to the parent,
 /// `P(k+1) += φ τ̄ P φ*`, `𝔷(k+1) += φ (𝔷 + P⁺ a(k) + G ε)`.
 pub(crate) fn backward_step<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, i: usize, tau: &[T]) {
+    factor_joint(model, ws, i);
     let joint = &model.joints[i];
-    let p = ws.inertia[i];
-    if joint.joint_type == JointType::Floating {
-        // The floating joint is always a root (checked at build): nothing to pass on.
-        let m = p.to_matrix();
-        // Reorder [ω; v] rows and columns to the order of v = [v_lin; ω].
-        let d = &mut ws.floating_d;
-        for r in 0..6 {
-            for c in 0..6 {
-                d[(r, c)] = m[((r + 3) % 6, (c + 3) % 6)];
-            }
-        }
-        let z = to_v_order(&ws.force[i]);
-        for k in 0..6 {
-            ws.floating_eps[k] = tau[joint.v_index + k] - z[k];
-        }
-        ws.floating_pivot = cholesky_in_place(d);
+    let (v0, n) = (joint.v_index, joint.nv());
+    for k in 0..n {
+        ws.epsilon[v0 + k] = tau[v0 + k] - joint.subspace_column(k).dot(&ws.force[i]);
+    }
+    let Some(parent) = joint.parent else {
         return;
-    }
-    let h = joint.subspace_column(0);
-    let u = p.mul_motion(&h);
-    let d_inv = T::one() / h.dot(&u);
-    let eps = tau[joint.v_index] - h.dot(&ws.force[i]);
-    ws.u[i] = u;
-    ws.d_inv[i] = d_inv;
-    ws.epsilon[i] = eps;
-    if let Some(parent) = joint.parent {
-        // P⁺ = τ̄ P = P − U D⁻¹ Uᵀ;  𝔷⁺ = 𝔷 + P⁺ a(k) + G ε.
-        let mut p_plus = p;
-        p_plus.sub_rank_one(&u, d_inv);
-        let mut z_plus = ws.force[i] + p_plus.mul_motion(&ws.coriolis[i]) + u * (eps * d_inv);
-        // P⁺ H* = 0 and H 𝔷⁺ = 𝒯 exactly (τ̄ removes the joint's own direction). For an axis along a
-        // coordinate axis that makes a row and column of P⁺ zero: set them exactly, which removes
-        // rounding noise and, in generated code, every product with them.
-        if let Some((angular, k)) = joint.coordinate_axis() {
-            p_plus.clear_direction(angular, k);
-            let sign = joint.axis[k];
-            let tau_i = tau[joint.v_index] * sign;
-            if angular {
-                z_plus.angular[k] = tau_i;
-            } else {
-                z_plus.linear[k] = tau_i;
-            }
+    };
+    // P⁺ = τ̄ P = P − U D⁻¹ Uᵀ;  𝔷⁺ = 𝔷 + P⁺ a(k) + G ε with G = U D⁻¹.
+    let mut epsilon = [T::zero(); 6];
+    epsilon[..n].copy_from_slice(&ws.epsilon[v0..v0 + n]);
+    let (mut p_plus, g_eps) = articulated_inertia_plus(model, ws, i, &epsilon[..n]);
+    let mut z_plus = ws.force[i] + p_plus.mul_motion(&ws.coriolis[i]) + g_eps;
+    // P⁺ H* = 0 and H 𝔷⁺ = 𝒯 exactly (τ̄ removes the joint's own direction). For an axis along a
+    // coordinate axis that makes a row and column of P⁺ zero: set them exactly, which removes
+    // rounding noise and, in generated code, every product with them.
+    if let Some((angular, k)) = joint.coordinate_axis() {
+        p_plus.clear_direction(angular, k);
+        let sign = joint.axis[k];
+        let tau_i = tau[v0] * sign;
+        if angular {
+            z_plus.angular[k] = tau_i;
+        } else {
+            z_plus.linear[k] = tau_i;
         }
-        let x = ws.parent_placement[i];
-        ws.inertia[parent] += p_plus.act(&x);
-        let zf = x.act_force(&z_plus);
-        ws.force[parent] += zf;
     }
-}
-
-/// The smallest pivot of the last floating-root `D` factorization (the 6-DoF analogue of `D(k)`).
-pub(crate) fn floating_min_pivot<T: Real>(ws: &Workspace<T>) -> T {
-    ws.floating_pivot
-}
-
-/// A force `[n; f]` in the order of `v` for a floating joint: `Hᵀ f = [f; n]`.
-#[inline(always)]
-fn to_v_order<T: Real>(f: &Force<T>) -> [T; 6] {
-    [
-        f.linear.x,
-        f.linear.y,
-        f.linear.z,
-        f.angular.x,
-        f.angular.y,
-        f.angular.z,
-    ]
+    let x = ws.parent_placement[i];
+    ws.inertia[parent] += p_plus.act(&x);
+    let zf = x.act_force(&z_plus);
+    ws.force[parent] += zf;
 }

@@ -5,7 +5,7 @@
 //! a spatial force, one frame change per ancestor. Body frames keep the zero structure of axis-aligned
 //! joints, which generated code exploits; world frames would fill it in.
 
-use super::{check_len, DynamicsError, Workspace};
+use super::{check_configuration, DynamicsError, Workspace};
 use crate::model::Model;
 use crate::Real;
 use nalgebra::DMatrix;
@@ -16,7 +16,8 @@ pub fn crba<'w, T: Real>(
     ws: &'w mut Workspace<T>,
     q: &[T],
 ) -> Result<&'w DMatrix<T>, DynamicsError> {
-    check_len("q", q.len(), model.nq())?;
+    check_configuration(model, q)?;
+    ws.reserve_mass_matrix(model);
     let n = model.nbodies();
     for (i, joint) in model.joints.iter().enumerate() {
         ws.parent_placement[i] = joint.placement.compose(&joint.joint_transform(q));

@@ -15,7 +15,9 @@
 //!   are tested to give the same motion (tests/constraint_embedding.rs).
 
 use super::aba::{backward_step, forward_step, init_articulated};
-use super::{check_len, crba, forward_kinematics, rnea, DynamicsError, Workspace};
+use super::{
+    check_configuration, check_input, crba, forward_kinematics, rnea, DynamicsError, Workspace,
+};
 use crate::constraints::{embed, Group, GroupWorkspace};
 use crate::linalg::{cholesky_in_place, cholesky_solve_in_place, lu_in_place, lu_solve_in_place};
 use crate::model::Model;
@@ -259,7 +261,7 @@ pub fn embedding_map_in<'w, T: Real>(
     ws: &'w mut Workspace<T>,
     q: &[T],
 ) -> Result<&'w DMatrix<T>, DynamicsError> {
-    check_len("q", q.len(), model.nq())?;
+    check_configuration(model, q)?;
     ws.reserve_embedding(model);
     let mut out = core::mem::take(&mut ws.embedding);
     let result = fill_embedding(model, ws, q, &mut out);
@@ -376,7 +378,7 @@ pub fn kkt_forward_dynamics<T: Real>(
     v: &[T],
     tau: &[T],
 ) -> Result<Vec<T>, DynamicsError> {
-    check_len("tau", tau.len(), model.nv())?;
+    check_input("tau", tau, model.nv())?;
     let nv = model.nv();
     let zeros = vec![T::zero(); nv];
     let nle = rnea(model, ws, q, v, &zeros)?.to_vec();

@@ -1,4 +1,4 @@
-use super::{check_len, velocity_sweep, DynamicsError, Workspace};
+use super::{check_configuration, check_input, velocity_sweep, DynamicsError, Workspace};
 use crate::model::Model;
 use crate::spatial::Transform;
 use crate::Real;
@@ -10,8 +10,8 @@ pub fn forward_kinematics<T: Real>(
     q: &[T],
     v: &[T],
 ) -> Result<(), DynamicsError> {
-    check_len("q", q.len(), model.nq())?;
-    check_len("v", v.len(), model.nv())?;
+    check_configuration(model, q)?;
+    check_input("v", v, model.nv())?;
     velocity_sweep(model, ws, q, v);
     for (i, joint) in model.joints.iter().enumerate() {
         ws.world_placement[i] = match joint.parent {

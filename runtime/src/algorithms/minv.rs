@@ -5,12 +5,13 @@
 //! columns of `k`'s subtree, carried inward as spatial forces. The forward sweep applies
 //! `[I − Hψ𝒦]*`, carrying one spatial acceleration per column outward. Cost O(N · nv).
 
-use super::{check_len, DynamicsError, Workspace};
-use crate::linalg::{cholesky_in_place, cholesky_solve_in_place};
-use crate::model::{JointType, Model};
+use super::aba::{articulated_inertia_plus, check_pivot, d_block, factor_joint};
+use super::{check_configuration, DynamicsError, Workspace};
+use crate::linalg::cholesky_solve_in_place;
+use crate::model::Model;
 use crate::spatial::{ArticulatedInertia, Force, Motion};
 use crate::Real;
-use nalgebra::{DMatrix, Matrix6};
+use nalgebra::DMatrix;
 
 /// `M(q)⁻¹`, symmetric, both triangles filled. Left in `ws.inverse_mass_matrix`.
 pub fn mass_matrix_inverse<'w, T: Real>(
@@ -18,7 +19,7 @@ pub fn mass_matrix_inverse<'w, T: Real>(
     ws: &'w mut Workspace<T>,
     q: &[T],
 ) -> Result<&'w DMatrix<T>, DynamicsError> {
-    check_len("q", q.len(), model.nq())?;
+    check_configuration(model, q)?;
     ws.reserve_inverse(model);
     let nv = model.nv();
     for (i, joint) in model.joints.iter().enumerate() {
@@ -27,107 +28,84 @@ pub fn mass_matrix_inverse<'w, T: Real>(
     }
     ws.minv_force.fill([T::zero(); 6]);
     ws.inverse_mass_matrix.fill(T::zero());
-    let mut d6 = Matrix6::<T>::zeros();
+    let zeros = [T::zero(); 6];
 
-    // Backward sweep: rows of 𝒟⁻¹[I − Hψ𝒦], restricted to each subtree's columns.
+    // Backward sweep: rows of 𝒟⁻¹[I − Hψ𝒦], restricted to each subtree's columns. Each joint works on its
+    // own `n × n` block of `D` (n = 1 or 6), as in the forward dynamics.
     for i in (0..model.nbodies()).rev() {
         let joint = &model.joints[i];
+        let (v0, n) = (joint.v_index, joint.nv());
         let cols = model.subtree_v_range(i);
-        let p = ws.inertia[i];
-        match joint.joint_type {
-            JointType::Floating => {
-                let m = p.to_matrix();
-                for r in 0..6 {
-                    for c in 0..6 {
-                        d6[(r, c)] = m[((r + 3) % 6, (c + 3) % 6)];
-                    }
-                }
-                let pivot = cholesky_in_place(&mut d6);
-                if !pivot.is_positive_finite() {
-                    return Err(DynamicsError::SingularJoint {
-                        joint: joint.name.clone(),
-                        d: pivot.to_f64(),
-                    });
-                }
-                for col in cols {
-                    let f = Force::from_array(ws.minv_force[i * nv + col]);
-                    // e_k − Sᵀ F (identity block on the joint's own columns).
-                    let mut rhs = [
-                        -f.linear.x,
-                        -f.linear.y,
-                        -f.linear.z,
-                        -f.angular.x,
-                        -f.angular.y,
-                        -f.angular.z,
-                    ];
-                    if (joint.v_index..joint.v_index + 6).contains(&col) {
-                        rhs[col - joint.v_index] += T::one();
-                    }
-                    cholesky_solve_in_place(&d6, &mut rhs);
-                    for (k, x) in rhs.iter().enumerate() {
-                        ws.inverse_mass_matrix[(joint.v_index + k, col)] = *x;
-                    }
-                }
-                // A floating joint is a root: nothing to pass on.
+        factor_joint(model, ws, i);
+        check_pivot(joint, ws.d_pivot[i])?;
+        for col in cols.clone() {
+            let f = Force::from_array(ws.minv_force[i * nv + col]);
+            if n == 1 {
+                // The common case, with −D⁻¹ formed once per row: D⁻¹ on the joint's own column,
+                // −D⁻¹ H F on the columns of its descendants.
+                let d_inv = ws.d_factor[ws.d_offset[i]];
+                ws.inverse_mass_matrix[(v0, col)] = if col == v0 {
+                    d_inv
+                } else {
+                    -d_inv * joint.subspace_column(0).dot(&f)
+                };
+                continue;
             }
-            _ => {
-                let h = joint.subspace_column(0);
-                let u = p.mul_motion(&h);
-                let d_inv = T::one() / h.dot(&u);
-                if !d_inv.is_positive_finite() {
-                    return Err(DynamicsError::SingularJoint {
-                        joint: joint.name.clone(),
-                        d: (T::one() / d_inv).to_f64(),
-                    });
-                }
-                let row = joint.v_index;
-                ws.inverse_mass_matrix[(row, row)] = d_inv;
-                for col in cols.start + 1..cols.end {
-                    let f = Force::from_array(ws.minv_force[i * nv + col]);
-                    ws.inverse_mass_matrix[(row, col)] = -d_inv * h.dot(&f);
-                }
-                if let Some(parent) = joint.parent {
-                    let x = ws.parent_placement[i];
-                    for col in cols {
-                        let f = Force::from_array(ws.minv_force[i * nv + col])
-                            + u * ws.inverse_mass_matrix[(row, col)];
-                        let fp =
-                            Force::from_array(ws.minv_force[parent * nv + col]) + x.act_force(&f);
-                        ws.minv_force[parent * nv + col] = fp.to_array();
-                    }
-                    let mut p_plus = p;
-                    p_plus.sub_rank_one(&u, d_inv);
-                    ws.inertia[parent] += p_plus.act(&x);
-                }
-                ws.u[i] = u;
-                ws.d_inv[i] = d_inv;
+            // Row block of the joint: D⁻¹ (e − Hᵀ F), the identity on the joint's own columns.
+            let mut rhs = [T::zero(); 6];
+            for (k, r) in rhs[..n].iter_mut().enumerate() {
+                let e = if col == v0 + k { T::one() } else { T::zero() };
+                *r = e - joint.subspace_column(k).dot(&f);
             }
+            cholesky_solve_in_place(
+                &d_block(&mut ws.d_factor, &ws.d_offset, i, n),
+                &mut rhs[..n],
+            );
+            for (k, x) in rhs[..n].iter().enumerate() {
+                ws.inverse_mass_matrix[(v0 + k, col)] = *x;
+            }
+        }
+        if let Some(parent) = joint.parent {
+            let x = ws.parent_placement[i];
+            for col in cols {
+                let mut f = Force::from_array(ws.minv_force[i * nv + col]);
+                for k in 0..n {
+                    f += ws.u[v0 + k] * ws.inverse_mass_matrix[(v0 + k, col)];
+                }
+                let fp = Force::from_array(ws.minv_force[parent * nv + col]) + x.act_force(&f);
+                ws.minv_force[parent * nv + col] = fp.to_array();
+            }
+            let (p_plus, _) = articulated_inertia_plus(model, ws, i, &zeros[..n]);
+            ws.inertia[parent] += p_plus.act(&x);
         }
     }
 
-    // Forward sweep: multiply by [I − Hψ𝒦]*, filling rows i for columns ≥ v_index(i).
+    // Forward sweep: multiply by [I − Hψ𝒦]*, filling rows of joint i for columns ≥ v_index(i).
     for (i, joint) in model.joints.iter().enumerate() {
-        let start = joint.v_index;
+        let (start, n) = (joint.v_index, joint.nv());
         let x = ws.parent_placement[i];
         for col in start..nv {
             let a_parent = match joint.parent {
                 Some(p) => x.inv_act_motion(&Motion::from_array(ws.minv_accel[p * nv + col])),
                 None => Motion::zero(),
             };
+            if joint.parent.is_some() {
+                // Rows −= D⁻¹ Uᵀ a_parent.
+                let mut y = [T::zero(); 6];
+                for (k, y) in y[..n].iter_mut().enumerate() {
+                    *y = a_parent.dot(&ws.u[start + k]);
+                }
+                cholesky_solve_in_place(
+                    &d_block(&mut ws.d_factor, &ws.d_offset, i, n),
+                    &mut y[..n],
+                );
+                for (k, y) in y[..n].iter().enumerate() {
+                    ws.inverse_mass_matrix[(start + k, col)] -= *y;
+                }
+            }
             let mut a = a_parent;
-            match joint.joint_type {
-                JointType::Floating => {
-                    for k in 0..6 {
-                        a += joint.subspace_column(k) * ws.inverse_mass_matrix[(start + k, col)];
-                    }
-                }
-                _ => {
-                    if joint.parent.is_some() {
-                        ws.inverse_mass_matrix[(start, col)] -=
-                            ws.d_inv[i] * a_parent.dot(&ws.u[i]);
-                    }
-                    a += joint.subspace_column(0) * ws.inverse_mass_matrix[(start, col)];
-                }
+            for k in 0..n {
+                a += joint.subspace_column(k) * ws.inverse_mass_matrix[(start + k, col)];
             }
             ws.minv_accel[i * nv + col] = a.to_array();
         }

@@ -34,6 +34,19 @@ pub enum DynamicsError {
         got: usize,
         expected: usize,
     },
+    #[error("`{name}`[{index}] is not a finite number ({value})")]
+    NonFiniteInput {
+        name: &'static str,
+        index: usize,
+        value: f64,
+    },
+    #[error("joint `{joint}`: its quaternion `q`[{start}..{end}] has norm {norm:e}; it must be a non-zero, finite [qx qy qz qw] (it is normalized before use)")]
+    InvalidQuaternion {
+        joint: String,
+        start: usize,
+        end: usize,
+        norm: f64,
+    },
     #[error("joint `{joint}`: the articulated inertia about its axis is not positive (D = {d:e})")]
     SingularJoint { joint: String, d: f64 },
     #[error("{group}: the loop is at or too near a singular configuration: cond(Y1) = {condition:e} ≥ 1e10 (the dependent joints are not determined by the independent ones here)")]
@@ -56,6 +69,50 @@ pub(crate) fn check_len(
             expected,
         })
     }
+}
+
+/// `x` has the model's length and only finite entries (a NaN in the input is named as such, not reported
+/// later as whatever singularity it causes). Values unknown at generation time pass.
+pub(crate) fn check_input<T: Real>(
+    name: &'static str,
+    x: &[T],
+    expected: usize,
+) -> Result<(), DynamicsError> {
+    check_len(name, x.len(), expected)?;
+    for (index, v) in x.iter().enumerate() {
+        if let Some(value) = v.value() {
+            if !value.is_finite() {
+                return Err(DynamicsError::NonFiniteInput { name, index, value });
+            }
+        }
+    }
+    Ok(())
+}
+
+/// [`check_input`] for a configuration, and every floating joint's quaternion non-zero (any other norm is
+/// normalized away; a zero quaternion is no rotation at all).
+pub(crate) fn check_configuration<T: Real>(model: &Model<T>, q: &[T]) -> Result<(), DynamicsError> {
+    check_input("q", q, model.nq())?;
+    for j in model
+        .joints
+        .iter()
+        .filter(|j| j.joint_type == JointType::Floating)
+    {
+        let s = &q[j.q_index + 3..j.q_index + 7];
+        let norm2 = s.iter().fold(T::zero(), |acc, &x| acc + x * x);
+        if let Some(n2) = norm2.value() {
+            // (Components so small that their squares underflow are as unusable as zeros.)
+            if !(n2 > 0.0 && n2.is_finite()) {
+                return Err(DynamicsError::InvalidQuaternion {
+                    joint: j.name.clone(),
+                    start: j.q_index + 3,
+                    end: j.q_index + 7,
+                    norm: n2.sqrt(),
+                });
+            }
+        }
+    }
+    Ok(())
 }
 
 /// The first forward sweep shared by RNEA and ABA: `ᵖX_i(q)`, `V(k)`, and `a(k) = V(k) ×ₘ H*θ̇(k)`.
@@ -105,14 +162,9 @@ pub(crate) fn check_articulated_inertia<T: Real>(model: &Model<T>) -> Result<(),
     let mut last_d = vec![0.0; model.nbodies()];
     for q in [&q0, &q1] {
         aba::articulate(model, &mut ws, q, &v, &tau);
-        for (i, j) in model.joints.iter().enumerate() {
-            let d = match j.joint_type {
-                JointType::Floating => aba::floating_min_pivot(&ws),
-                _ => {
-                    let h = j.subspace_column(0);
-                    h.dot(&ws.inertia[i].mul_motion(&h))
-                }
-            };
+        for i in 0..model.joints.len() {
+            // The smallest pivot of the joint's D (D itself for a 1-DoF joint).
+            let d = ws.d_pivot[i];
             regular[i] |= d.is_finite() && d > tol;
             last_d[i] = d.to_f64();
         }

@@ -1,7 +1,9 @@
 //! Inverse dynamics by the recursive Newton–Euler algorithm (the paper's Eqs. 1–3).
 
-use super::{check_len, gravity_in, velocity_sweep, DynamicsError, Workspace};
-use crate::model::{JointType, Model};
+use super::{
+    check_configuration, check_input, gravity_in, velocity_sweep, DynamicsError, Workspace,
+};
+use crate::model::Model;
 use crate::Real;
 
 /// Inverse dynamics `τ = M(q) qdd + C(q, v) + g(q)` with the model's gravity. Left in `ws.tau` too.
@@ -24,9 +26,9 @@ pub fn rnea_with_gravity<'w, T: Real>(
     qdd: &[T],
     gravity: bool,
 ) -> Result<&'w [T], DynamicsError> {
-    check_len("q", q.len(), model.nq())?;
-    check_len("v", v.len(), model.nv())?;
-    check_len("qdd", qdd.len(), model.nv())?;
+    check_configuration(model, q)?;
+    check_input("v", v, model.nv())?;
+    check_input("qdd", qdd, model.nv())?;
     velocity_sweep(model, ws, q, v);
     // Outward: α(k) = φ*(k+1,k) α(k+1) + H*(k) θ̈(k) + a(k), with the base accelerating at −g.
     for (i, joint) in model.joints.iter().enumerate() {
@@ -47,13 +49,8 @@ pub fn rnea_with_gravity<'w, T: Real>(
     for i in (0..model.nbodies()).rev() {
         let joint = &model.joints[i];
         let f = ws.force[i];
-        match joint.joint_type {
-            JointType::Floating => {
-                let t = &mut ws.tau[joint.v_index..joint.v_index + 6];
-                t[..3].copy_from_slice(f.linear.as_slice());
-                t[3..].copy_from_slice(f.angular.as_slice());
-            }
-            _ => ws.tau[joint.v_index] = joint.subspace_column(0).dot(&f),
+        for k in 0..joint.nv() {
+            ws.tau[joint.v_index + k] = joint.subspace_column(k).dot(&f);
         }
         if let Some(p) = joint.parent {
             let fp = ws.parent_placement[i].act_force(&f);

@@ -1,7 +1,7 @@
 use crate::model::Model;
 use crate::spatial::{ArticulatedInertia, Force, Motion, SpatialInertia, Transform};
 use crate::Real;
-use nalgebra::{DMatrix, Matrix6};
+use nalgebra::DMatrix;
 
 /// Scratch memory for the algorithms of one model, allocated once by [`Workspace::new`] and reused by
 /// every call, so that no algorithm call touches the heap (what a real-time loop needs).
@@ -25,17 +25,19 @@ pub struct Workspace<T: Real> {
     pub inertia: Vec<ArticulatedInertia<T>>,
     /// CRBA: composite rigid-body inertia of each subtree, in its body frame.
     pub(crate) composite: Vec<SpatialInertia<T>>,
-    /// `P(k) H*(k)` for 1-DoF joints.
+    // Per-joint data of the articulated-body sweeps, sized by each joint's velocity dimension (as
+    // Pinocchio's per-joint data), so that a 1-DoF joint and a 6-DoF floating joint take one code path and
+    // no two joints share storage.
+    /// `U = P(k) H*(k)`: one force column per velocity coordinate (indexed like `v`).
     pub(crate) u: Vec<Force<T>>,
-    /// `D(k)⁻¹` for 1-DoF joints.
-    pub(crate) d_inv: Vec<T>,
-    /// `ε(k) = 𝒯(k) − H(k) 𝔷(k)` for 1-DoF joints.
+    /// `ε(k) = 𝒯(k) − H(k) 𝔷(k)`, per velocity coordinate.
     pub(crate) epsilon: Vec<T>,
-    /// `D` of a floating root (6×6, in the order of `v`), factored in place.
-    pub(crate) floating_d: Matrix6<T>,
-    pub(crate) floating_eps: [T; 6],
-    /// Smallest pivot of the last `floating_d` factorization.
-    pub(crate) floating_pivot: T,
+    /// The LDLᵀ factor of each joint's `D(k) = H P H*` (`nv_j × nv_j`, from `d_offset[joint]`; diagonal
+    /// holds `1 / D_kk`, see [`crate::linalg::cholesky_in_place`]).
+    pub(crate) d_factor: Vec<T>,
+    pub(crate) d_offset: Vec<usize>,
+    /// Smallest pivot of each joint's last `D` factorization (`D` itself for a 1-DoF joint).
+    pub(crate) d_pivot: Vec<T>,
     /// Output of `aba`.
     pub qdd: Vec<T>,
     /// Output of `rnea`.
@@ -62,14 +64,23 @@ pub struct Workspace<T: Real> {
 }
 
 impl<T: Real> Workspace<T> {
-    /// Allocates everything the algorithms need for `model`.
+    /// Allocates the O(N) scratch every algorithm needs for `model`.
     ///
-    /// Memory is O(N) except for the mass matrix (nv²) and the operator inverse's column buffers
-    /// (12 · N · nv scalars), which are allocated on first use by [`Workspace::reserve_inverse`].
+    /// Outputs that grow faster than the model — the mass matrix (nv²), the operator inverse's column
+    /// buffers (12 · N · nv scalars), the embedding map (nv · ni) — are allocated by the algorithm that
+    /// needs them on its first call, so a long chain that only runs `aba` never pays for an nv × nv matrix.
+    /// A real-time loop that must not allocate at all calls [`Workspace::reserve_all`] (or the `reserve_*`
+    /// of the algorithms it uses) once beforehand.
     pub fn new(model: &Model<T>) -> Self {
         let n = model.nbodies();
         let nv = model.nv();
-        let mut ws = Workspace {
+        let mut d_offset = Vec::with_capacity(n);
+        let mut d_len = 0;
+        for joint in &model.joints {
+            d_offset.push(d_len);
+            d_len += joint.nv() * joint.nv();
+        }
+        Workspace {
             parent_placement: vec![Transform::identity(); n],
             world_placement: vec![Transform::identity(); n],
             velocity: vec![Motion::zero(); n],
@@ -78,15 +89,14 @@ impl<T: Real> Workspace<T> {
             force: vec![Force::zero(); n],
             inertia: vec![ArticulatedInertia::zero(); n],
             composite: vec![SpatialInertia::zero(); n],
-            u: vec![Force::zero(); n],
-            d_inv: vec![T::zero(); n],
-            epsilon: vec![T::zero(); n],
-            floating_d: Matrix6::zeros(),
-            floating_eps: [T::zero(); 6],
-            floating_pivot: T::one(),
+            u: vec![Force::zero(); nv],
+            epsilon: vec![T::zero(); nv],
+            d_factor: vec![T::zero(); d_len],
+            d_offset,
+            d_pivot: vec![T::one(); n],
             qdd: vec![T::zero(); nv],
             tau: vec![T::zero(); nv],
-            mass_matrix: DMatrix::zeros(nv, nv),
+            mass_matrix: DMatrix::zeros(0, 0),
             inverse_mass_matrix: DMatrix::zeros(0, 0),
             minv_force: Vec::new(),
             groups: model
@@ -100,15 +110,29 @@ impl<T: Real> Workspace<T> {
             embedding: DMatrix::zeros(0, 0),
             reduced_mass_matrix: DMatrix::zeros(0, 0),
             mass_times_x: DMatrix::zeros(0, 0),
-        };
-        if model.has_constraints() {
-            ws.reserve_embedding(model);
         }
-        ws
     }
 
-    /// Allocates the outputs of [`crate::embedding_map_in`] and [`crate::reduced_mass_matrix_in`] (done
-    /// by [`Workspace::new`] for a model with constraints and on first use otherwise).
+    /// Allocates every output buffer of every algorithm, so that no later call allocates (O(nv²) memory:
+    /// the mass matrix, its inverse and, for a model with constraints, the embedding map).
+    pub fn reserve_all(&mut self, model: &Model<T>) {
+        self.reserve_mass_matrix(model);
+        self.reserve_inverse(model);
+        if model.has_constraints() {
+            self.reserve_embedding(model);
+        }
+    }
+
+    /// Allocates the output of [`crate::crba`] (done on its first call).
+    pub fn reserve_mass_matrix(&mut self, model: &Model<T>) {
+        let nv = model.nv();
+        if self.mass_matrix.shape() != (nv, nv) {
+            self.mass_matrix = DMatrix::zeros(nv, nv);
+        }
+    }
+
+    /// Allocates the outputs of [`crate::embedding_map_in`] and [`crate::reduced_mass_matrix_in`] (done on
+    /// their first call).
     pub fn reserve_embedding(&mut self, model: &Model<T>) {
         let (nv, ni) = (model.nv(), model.independent_nv());
         if self.embedding.shape() != (nv, ni) {
