@@ -235,11 +235,12 @@ fn loops(time: &dyn Fn(&mut dyn FnMut()) -> f64) -> Result<(), Box<dyn std::erro
         tau.clone().try_into().unwrap(),
     );
     let mut qdd_gen = [0.0; NV];
-    let ratio = biped::f64::aba(&qa, &va, &ta, &mut qdd_gen);
+    let cond = biped::f64::aba(&qa, &va, &ta, &mut qdd_gen);
     println!(
-        "loop residuals: position {pos:.1e} m, velocity {vel:.1e}; qdd embedded (O(N)) vs KKT {:.1e}, generated vs embedded {:.1e}; pivot ratio {ratio:.2} (0 = singular)",
+        "loop residuals (relative): position {pos:.1e}, velocity {vel:.1e}; qdd embedded (O(N)) vs KKT {:.1e}, generated vs embedded {:.1e}; cond(Y1) {cond:.1} (singular at {:.0e})",
         relative_error(&qdd, &qdd_kkt),
-        relative_error(&qdd_gen, &qdd)
+        relative_error(&qdd_gen, &qdd),
+        biped::f64::SINGULARITY_THRESHOLD
     );
     let t_embedded = time(&mut || {
         std::hint::black_box(aba(&model, &mut ws, std::hint::black_box(&q), &v, &tau).unwrap());

@@ -7,15 +7,15 @@
 use crate::emit::{function, Arg, Output};
 use crate::trace::{input, record, snap, Sym};
 use crate::{build_model, LoadError, Loaded, Location, ModelOptions};
-use embedyn_runtime::constraints::{complete_configuration_with, constraint_pivot_ratio};
+use embedyn_runtime::constraints::{
+    completion_step, constraint_condition, singularity_threshold, COMPLETION_MAX_STEPS,
+};
 use embedyn_runtime::nalgebra::DMatrix;
 use embedyn_runtime::{
     aba, crba, embedding_map_in, forward_kinematics, link_poses, mass_matrix_inverse,
     reduced_mass_matrix_in, rnea, Model, Workspace,
 };
 
-/// Newton steps of the generated position completion.
-const COMPLETION_STEPS: usize = 5;
 use proc_macro2::TokenStream;
 use quote::{format_ident, quote};
 
@@ -33,8 +33,9 @@ pub enum Algorithm {
     Kinematics,
     /// Inverse mass matrix `minv(q, m_inv)` by the operator factorization of Eq. 6 (O(N²) output).
     Minv,
-    /// Models with loops or couplings: `complete(q, q_out)`, the dependent coordinates solved from the
-    /// independent ones by a fixed number of Newton steps from the given guess.
+    /// Models with loops or couplings: `complete(q, q_out) -> residual`, the dependent coordinates solved
+    /// from the independent ones by Newton's method from the given guess (iterated to 64 ε or at most
+    /// `COMPLETION_MAX_STEPS` steps; `complete_step` is one step).
     Complete,
     /// Models with loops or couplings: `embedding(q, x)`, the map `X` (nv × independent nv) with
     /// `v = X v_independent`; `Xᵀ τ` is the force on the independent coordinates.
@@ -177,7 +178,10 @@ pub fn generate_tokens(
     let (nq, nv) = (model.nq(), model.nv());
     let names: Vec<&str> = model.joints.iter().map(|j| j.name.as_str()).collect();
     let mut modules = Vec::new();
-    for (enabled, scalar) in [(options.f64, quote!(f64)), (options.f32, quote!(f32))] {
+    for (enabled, scalar, threshold) in [
+        (options.f64, quote!(f64), singularity_threshold::<f64>()),
+        (options.f32, quote!(f32), singularity_threshold::<f32>()),
+    ] {
         if !enabled {
             continue;
         }
@@ -200,11 +204,24 @@ pub fn generate_tokens(
         }
         let module = format_ident!("{}", scalar.to_string());
         let doc = format!("The generated dynamics in `{scalar}`.");
+        let threshold = if model.has_constraints() {
+            let value = proc_macro2::Literal::f64_unsuffixed(threshold);
+            quote! {
+                /// cond₁(Y1) at or above which a configuration counts as singular in this scalar type,
+                /// `min(1e10, 10⁻³ / ε)`: where the condition number returned by `aba`, `embedding` or
+                /// `crba_independent` is not below it (`!(cond < SINGULARITY_THRESHOLD)`, which also
+                /// catches NaN), the results are meaningless and the interpreted solver refuses.
+                pub const SINGULARITY_THRESHOLD: S = #value;
+            }
+        } else {
+            quote!()
+        };
         modules.push(quote! {
             #[doc = #doc]
             #[allow(clippy::all, clippy::pedantic, unused_parens, non_snake_case)]
             pub mod #module {
                 type S = #scalar;
+                #threshold
                 #(#fns)*
             }
         });
@@ -245,6 +262,34 @@ pub fn generate_tokens(
     })
 }
 
+/// `complete`: `complete_step` iterated until the relative residual is below 64 ε (or NaN) or the step
+/// budget is spent. The iteration is over Newton steps, not over bodies: the step itself is unrolled.
+fn complete_loop() -> TokenStream {
+    let max_steps = COMPLETION_MAX_STEPS;
+    quote! {
+        /// Position completion: `q_out` is `q` with its dependent coordinates solved from the independent
+        /// ones by Newton's method from `q`'s dependent entries as the guess (it converges to the assembly
+        /// branch nearest the guess), iterated until the largest residual, relative to the magnitudes in
+        /// each equation, is below 64 ε or for at most `COMPLETION_MAX_STEPS` steps. Returns that residual:
+        /// check it — a guess outside the mechanism's range does not converge (or gives NaN).
+        pub fn complete(q: &[S; super::NQ], q_out: &mut [S; super::NQ]) -> S {
+            let tolerance: S = 64.0 * S::EPSILON;
+            *q_out = *q;
+            let mut next = *q;
+            for _ in 0..COMPLETION_MAX_STEPS {
+                let residual = complete_step(q_out, &mut next);
+                if !(residual > tolerance) {
+                    return residual;
+                }
+                *q_out = next;
+            }
+            complete_step(q_out, &mut next)
+        }
+        /// Newton steps `complete` takes at most.
+        pub const COMPLETION_MAX_STEPS: usize = #max_steps;
+    }
+}
+
 /// A matrix result as a row-major output.
 fn matrix_output(name: &'static str, m: &DMatrix<Sym>) -> Output {
     let (rows, cols) = m.shape();
@@ -278,7 +323,7 @@ fn generate_algorithm(
                     values: aba(model, &mut ws, &q, &v, &tau).map_err(fail)?.to_vec(),
                 }];
                 if model.has_constraints() {
-                    out.push(Output::Return(constraint_pivot_ratio(&ws)));
+                    out.push(Output::Return(constraint_condition(&ws)));
                 }
                 out
             }
@@ -319,25 +364,28 @@ fn generate_algorithm(
             }
             Algorithm::Complete => {
                 let mut q_out = q.clone();
-                complete_configuration_with(model, &mut ws, &mut q_out, COMPLETION_STEPS)
-                    .map_err(fail)?;
-                vec![Output::Vector {
-                    name: "q_out",
-                    values: q_out,
-                }]
+                let residual = completion_step(model, &mut ws, &mut q_out).map_err(fail)?;
+                vec![
+                    Output::Vector {
+                        name: "q_out",
+                        values: q_out,
+                    },
+                    Output::Return(residual),
+                ]
             }
             Algorithm::Embedding => {
                 let x = embedding_map_in(model, &mut ws, &q).map_err(fail)?;
                 vec![
                     matrix_output("x", x),
-                    Output::Return(constraint_pivot_ratio(&ws)),
+                    Output::Return(constraint_condition(&ws)),
                 ]
             }
             Algorithm::CrbaIndependent => {
-                vec![matrix_output(
-                    "m",
-                    reduced_mass_matrix_in(model, &mut ws, &q).map_err(fail)?,
-                )]
+                let m = reduced_mass_matrix_in(model, &mut ws, &q).map_err(fail)?;
+                vec![
+                    matrix_output("m", m),
+                    Output::Return(constraint_condition(&ws)),
+                ]
             }
         })
     });
@@ -346,7 +394,7 @@ fn generate_algorithm(
         Algorithm::Aba => (
             vec![Arg { name: "q", len: nq }, Arg { name: "v", len: nv }, Arg { name: "tau", len: nv }],
             if model.has_constraints() {
-                "Forward dynamics with constraint embedding: `qdd` over all spanning coordinates (the O(N) articulated-body algorithm with each aggregate link inline, unrolled); only `Xᵀ τ` acts. Returns the constraint pivot ratio, `min |u_kk| / max |Y1_ij|` over the groups' partial-pivoting eliminations: near 0 at a singular configuration (a toggle), where `qdd` is meaningless; `cond₁(Y1) ≥ 1 / (rows · ratio)`, so below about 1e-11 is where the interpreted solver refuses (cond₁ ≥ 1e10)."
+                "Forward dynamics with constraint embedding: `qdd` over all spanning coordinates (the O(N) articulated-body algorithm with each aggregate link inline, unrolled); only `Xᵀ τ` acts. Returns the singularity measure, the largest condition number cond₁(Y1) over the loops: where it is not below `SINGULARITY_THRESHOLD` (`!(cond < SINGULARITY_THRESHOLD)`, which also catches NaN) the configuration is at or too near a singular one (a toggle) and `qdd` is meaningless — the interpreted solver refuses there."
             } else {
                 "Forward dynamics: `qdd = M(q)⁻¹ (τ − C(q, v) − g(q))` (the O(N) articulated-body algorithm, unrolled)."
             },
@@ -360,11 +408,17 @@ fn generate_algorithm(
         Algorithm::Minv => (vec![Arg { name: "q", len: nq }], "The inverse mass matrix `M(q)⁻¹` by the operator factorization of Eq. 6, unrolled."),
         Algorithm::Complete => (
             vec![Arg { name: "q", len: nq }],
-            "Position completion: `q_out` is `q` with its dependent coordinates solved from the independent ones (5 Newton steps from `q`'s dependent entries as the guess; check the result where the guess may be far).",
+            "One Newton step of the position completion: `q_out` is `q` with its dependent coordinates moved towards the solution of the loop, gear and mimic equations (loop coordinates by at most 0.5 rad or m). Returns the largest residual at `q`, relative to the magnitudes in each equation (`complete` iterates this).",
         ),
-        Algorithm::Embedding => (vec![Arg { name: "q", len: nq }], "The embedding map `X` (rows: all velocity coordinates, columns: independent ones): `v = X v_independent`. Returns the constraint pivot ratio (as `aba` does)."),
-        Algorithm::CrbaIndependent => (vec![Arg { name: "q", len: nq }], "The mass matrix over the independent coordinates, `Xᵀ M(q) X` (the spanning tree's `M` is `crba`)."),
+        Algorithm::Embedding => (vec![Arg { name: "q", len: nq }], "The embedding map `X` (rows: all velocity coordinates, columns: independent ones): `v = X v_independent`. Returns the singularity measure cond₁(Y1) (as `aba` does)."),
+        Algorithm::CrbaIndependent => (vec![Arg { name: "q", len: nq }], "The mass matrix over the independent coordinates, `Xᵀ M(q) X` (the spanning tree's `M` is `crba`). Returns the singularity measure cond₁(Y1) (as `aba` does)."),
     };
+    if algo == Algorithm::Complete {
+        let step = function("complete_step", doc, &args, &outputs, &tape, helpers)
+            .map_err(|e| gen_error(loaded, e.0))?;
+        let wrapper = complete_loop();
+        return Ok(quote! { #step #wrapper });
+    }
     function(algo.name(), doc, &args, &outputs, &tape, helpers).map_err(|e| gen_error(loaded, e.0))
 }
 

@@ -3,7 +3,7 @@
 use super::samples::{vector, Samples};
 use super::{Algo, CliError, Engine, Scalar};
 use crate::{Loaded, ModelOptions};
-use embedyn_runtime::constraints::{constraint_violation, SINGULARITY_THRESHOLD};
+use embedyn_runtime::constraints::{constraint_violation, singularity_threshold};
 use embedyn_runtime::nalgebra;
 use embedyn_runtime::{
     aba, crba, embedding_map, reduced_mass_matrix, rnea, DynamicsError, JointType, Model, Real,
@@ -88,20 +88,17 @@ fn eval_generated(
     for (i, (o, row)) in outputs.iter().zip(&rows).enumerate() {
         let mut o = o.clone();
         if algo == Algo::Aba && model.has_constraints() {
-            // The generated `aba` also returns the pivot ratio (before any NaN the singular solve made
-            // is reported); refuse where it proves cond₁(Y1) ≥ 1e10, as the interpreted engine does.
-            let ratio = o.pop().unwrap_or(0.0);
-            let rows = model
-                .groups
-                .iter()
-                .map(|g| g.rows.len())
-                .max()
-                .unwrap_or(1)
-                .max(1) as f64;
-            if ratio.is_nan() || ratio * rows * SINGULARITY_THRESHOLD <= 1.0 {
+            // The generated `aba` also returns the singularity measure cond₁(Y1); refuse where the
+            // interpreted engine does, by the same threshold for the scalar (NaN counts as singular).
+            let condition = o.pop().unwrap_or(f64::NAN);
+            let threshold = match scalar {
+                Scalar::F64 => singularity_threshold::<f64>(),
+                Scalar::F32 => singularity_threshold::<f32>(),
+            };
+            if !(condition < threshold) {
                 return Err(CliError(format!(
-                    "sample {i}: the loop is at or too near a singular configuration: pivot ratio {ratio:.3e}, so cond(Y1) ≥ {:.3e} ≥ 1e10 (the dependent joints are not determined by the independent ones here)",
-                    1.0 / (rows * ratio)
+                    "sample {i}: the loops are at or too near a singular configuration: cond(Y1) = {condition:.3e} ≥ {threshold:.1e}, the limit in {} (the dependent joints are not determined by the independent ones here)",
+                    scalar_name
                 )));
             }
         }

@@ -18,7 +18,7 @@ use super::aba::{backward_step, forward_step, init_articulated};
 use super::{
     check_configuration, check_input, crba, forward_kinematics, rnea, DynamicsError, Workspace,
 };
-use crate::constraints::{embed, Group, GroupWorkspace};
+use crate::constraints::{embed, group_label, GroupWorkspace};
 use crate::linalg::{cholesky_in_place, cholesky_solve_in_place, lu_in_place, lu_solve_in_place};
 use crate::model::Model;
 use crate::spatial::{Force, Motion};
@@ -54,14 +54,6 @@ pub(crate) fn position_kinematics<T: Real>(
     let result = constraint_kinematics(model, ws, q, &zeros);
     ws.zero_velocity = zeros;
     result
-}
-
-fn group_name<T: Real>(model: &Model<T>, g: &Group) -> String {
-    g.constraints
-        .iter()
-        .map(|&c| model.constraints[c].name.as_str())
-        .collect::<Vec<_>>()
-        .join(", ")
 }
 
 /// Forward dynamics with aggregate links: `qdd` over all spanning joints (consistent with the constraints
@@ -182,7 +174,7 @@ fn group_backward<T: Real>(
     }
     if !cholesky_in_place(&mut gw.d).is_positive_finite() {
         return Err(DynamicsError::SingularGroup {
-            group: group_name(model, g),
+            group: group_label(model, g),
         });
     }
     if let Some(p) = g.parent {
@@ -414,6 +406,7 @@ pub fn kkt_forward_dynamics<T: Real>(
     lu_in_place(&mut kkt, &mut perm).map_err(|_| DynamicsError::SingularConstraint {
         group: "KKT system".into(),
         condition: f64::INFINITY,
+        threshold: crate::constraints::singularity_threshold::<T>(),
     })?;
     lu_solve_in_place(&kkt, &perm, &mut rhs);
     rhs.truncate(nv);

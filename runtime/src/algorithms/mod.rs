@@ -49,8 +49,12 @@ pub enum DynamicsError {
     },
     #[error("joint `{joint}`: the articulated inertia about its axis is not positive (D = {d:e})")]
     SingularJoint { joint: String, d: f64 },
-    #[error("{group}: the loop is at or too near a singular configuration: cond(Y1) = {condition:e} ≥ 1e10 (the dependent joints are not determined by the independent ones here)")]
-    SingularConstraint { group: String, condition: f64 },
+    #[error("{group}: the loop is at or too near a singular configuration: cond(Y1) = {condition:.3e} ≥ {threshold:.1e}, the limit in this scalar type (the dependent joints are not determined by the independent ones here)")]
+    SingularConstraint {
+        group: String,
+        condition: f64,
+        threshold: f64,
+    },
     #[error("{group}: the reduced inertia of the aggregate link is not positive definite")]
     SingularGroup { group: String },
 }

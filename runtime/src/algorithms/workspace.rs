@@ -55,6 +55,8 @@ pub struct Workspace<T: Real> {
     pub(crate) zero_velocity: Vec<T>,
     /// Residuals of every constraint row (position completion).
     pub(crate) constraint_residual: Vec<T>,
+    /// The magnitude each residual is computed from (see [`crate::constraints::residuals_scaled`]).
+    pub(crate) constraint_scale: Vec<T>,
     /// Output of [`crate::embedding_map_in`]: `X`, nv × independent nv.
     pub embedding: DMatrix<T>,
     /// Output of [`crate::reduced_mass_matrix_in`]: `Xᵀ M X`.
@@ -107,6 +109,7 @@ impl<T: Real> Workspace<T> {
             minv_accel: Vec::new(),
             zero_velocity: vec![T::zero(); nv],
             constraint_residual: vec![T::zero(); model.constraint_raw_rows()],
+            constraint_scale: vec![T::zero(); model.constraint_raw_rows()],
             embedding: DMatrix::zeros(0, 0),
             reduced_mass_matrix: DMatrix::zeros(0, 0),
             mass_times_x: DMatrix::zeros(0, 0),

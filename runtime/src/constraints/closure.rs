@@ -168,8 +168,35 @@ impl<T: Real> LoopClosure<T> {
 
     /// Position residual (raw rows), from `ws.world_placement`.
     pub fn residual(&self, ws: &Workspace<T>, out: &mut [T]) {
+        let mut scale = [T::zero(); 6];
+        self.residual_scaled(ws, out, &mut scale[..out.len()]);
+    }
+
+    /// [`Self::residual`] and, per row, the magnitude of the numbers it was computed from (what rounding
+    /// errors scale with): the larger world coordinate of the two frame origins for a position row (m), 1
+    /// for an orientation row. A residual is judged against `max(1, magnitude)` (CONTRACT §2).
+    pub fn residual_scaled(&self, ws: &Workspace<T>, out: &mut [T], scale: &mut [T]) {
         let p = Self::frame(ws, self.predecessor, &self.predecessor_frame, false);
         let s = Self::frame(ws, self.successor, &self.successor_frame, false);
+        let mut reach = T::zero();
+        for x in p.position.iter().chain(s.position.iter()) {
+            let a = x.abs();
+            reach = a.select_gt(reach, a, reach);
+        }
+        let one = T::one();
+        let position_rows = match self.kind {
+            LoopType::Revolute => 2..5,
+            LoopType::Prismatic => 3..5,
+            LoopType::Spherical => 0..3,
+            LoopType::Fixed => 3..6,
+        };
+        for (k, m) in scale.iter_mut().enumerate() {
+            *m = if position_rows.contains(&k) {
+                reach
+            } else {
+                one
+            };
+        }
         let d = p.rotation.tr_mul(&(s.position - p.position));
         let rel = p.rotation.tr_mul(&s.rotation);
         let half = T::from_f64(0.5);

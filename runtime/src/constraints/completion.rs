@@ -1,15 +1,25 @@
 //! Completing a state: the dependent coordinates from the independent ones, at position level (Newton's
 //! method from the given guess, so it stays on that assembly branch) and at velocity level (`X_G`).
+//!
+//! Residuals are judged relative to the magnitudes they are computed from (CONTRACT §2): a loop far from
+//! the world origin, or a gear ratio of 1000, has rounding errors in proportion, and an absolute tolerance
+//! would either reject its exact states or accept wrong ones.
 
-use super::embedding::{fill_y1, group_rows, y1_condition_of};
-use super::{embed, residuals};
+use super::embedding::{fill_y1, group_rows, member, y1_condition_of};
+use super::{embed, jacobian, relative_residual, residuals_scaled};
 use crate::algorithms::{constraint_kinematics, position_kinematics, DynamicsError, Workspace};
-use crate::linalg::{lu_in_place, solve_least_squares, solve_pivoted_in_place};
+use crate::linalg::{solve_least_squares, solve_pivoted_in_place};
 use crate::model::Model;
 use crate::Real;
 
-/// Largest absolute constraint residual at position level (all equations, redundant ones included) and
-/// at velocity level (`|J v|∞`), for checking that a state is consistent (CONTRACT §2: 1e-9).
+/// Newton steps per group at most (it converges quadratically near an assembly; the bound keeps a
+/// guess that never converges — an independent coordinate outside the mechanism's range — from spinning).
+pub const COMPLETION_MAX_STEPS: usize = 50;
+
+/// Largest constraint residual at position level (all equations, redundant ones included) and at velocity
+/// level (`J v`), each relative to the magnitudes in its equation: `|r| / max(1, magnitude)` (CONTRACT §2,
+/// so 1e-9 means 1e-9 relative, and at least 1e-9 absolute in m, rad, m/s, rad/s). NaN where a residual is
+/// not a number.
 pub fn constraint_violation<T: Real>(
     model: &Model<T>,
     ws: &mut Workspace<T>,
@@ -20,126 +30,158 @@ pub fn constraint_violation<T: Real>(
         return Ok((0.0, 0.0));
     }
     constraint_kinematics(model, ws, q, v)?;
-    let mut r = vec![T::zero(); model.constraint_raw_rows()];
-    residuals(model, ws, q, &mut r);
-    let pos = r.iter().fold(0.0f64, |m, x| m.max(x.to_f64().abs()));
-    let mut jac = nalgebra::DMatrix::zeros(model.constraint_raw_rows(), model.nv());
-    super::jacobian(model, ws, &mut jac);
+    let rows = model.constraint_raw_rows();
+    let mut r = vec![T::zero(); rows];
+    let mut scale = vec![T::zero(); rows];
+    residuals_scaled(model, ws, q, &mut r, &mut scale);
+    let pos = r.iter().zip(&scale).fold(0.0, |m, (&x, &s)| {
+        max_nan(m, relative_residual(x, s).to_f64())
+    });
+    let mut jac = nalgebra::DMatrix::zeros(rows, model.nv());
+    jacobian(model, ws, &mut jac);
     let mut vel = 0.0f64;
-    for row in 0..jac.nrows() {
-        let s = (0..model.nv()).fold(T::zero(), |s, c| s + jac[(row, c)] * v[c]);
-        vel = vel.max(s.to_f64().abs());
+    for row in 0..rows {
+        let (mut sum, mut magnitude) = (T::zero(), T::zero());
+        for c in 0..model.nv() {
+            let term = jac[(row, c)] * v[c];
+            sum += term;
+            magnitude += term.abs();
+        }
+        vel = max_nan(vel, relative_residual(sum, magnitude).to_f64());
     }
     Ok((pos, vel))
 }
 
+/// `max` that keeps a NaN (f64::max would drop it): an unknown residual never reads as satisfied.
+fn max_nan(a: f64, b: f64) -> f64 {
+    if a.is_nan() || b.is_nan() {
+        f64::NAN
+    } else {
+        a.max(b)
+    }
+}
+
 /// Solves the dependent entries of `q` from its independent entries (the dependent entries are the
 /// starting guess: Newton's method converges to the assembly branch nearest it). Returns the largest
-/// remaining residual of the kept equations.
+/// remaining relative residual of the kept equations (see [`constraint_violation`]): at most 64 ε of the
+/// scalar where it converged, larger (or NaN) where it did not — the caller decides.
 pub fn complete_configuration<T: Real>(
     model: &Model<T>,
     ws: &mut Workspace<T>,
     q: &mut [T],
 ) -> Result<f64, DynamicsError> {
-    complete_configuration_with(model, ws, q, 50)
+    complete_configuration_with(model, ws, q, COMPLETION_MAX_STEPS)
 }
 
-/// [`complete_configuration`] with at most `iterations` Newton steps per group (stopping earlier once the
-/// residual is below 1e-14). Generated code uses a fixed count: Newton converges quadratically from a
-/// guess near the assembly, so a few steps reach machine precision.
+/// [`complete_configuration`] with at most `iterations` Newton steps per group, stopping once the relative
+/// residual is below 64 ε.
 pub fn complete_configuration_with<T: Real>(
     model: &Model<T>,
     ws: &mut Workspace<T>,
     q: &mut [T],
     iterations: usize,
 ) -> Result<f64, DynamicsError> {
-    let mut groups = core::mem::take(&mut ws.groups);
-    let mut r = core::mem::take(&mut ws.constraint_residual);
-    let mut result = Ok(0.0f64);
-    'groups: for (gi, gw) in groups.iter_mut().enumerate() {
-        let g = &model.groups[gi];
-        let mut worst = 0.0;
-        for _ in 0..iterations {
-            if let Err(e) = position_kinematics(model, ws, q) {
-                result = Err(e);
-                break 'groups;
-            }
-            residuals(model, ws, q, &mut r);
-            // NaN propagates (f64::max would drop it): an unknown residual never reads as converged, so
-            // a traced completion (whose residuals have no value yet) runs every step.
-            worst = g.rows.iter().fold(0.0f64, |m, &i| {
-                let x = r[i].to_f64().abs();
-                if m.is_nan() || x.is_nan() {
-                    f64::NAN
-                } else {
-                    m.max(x)
-                }
-            });
-            if worst <= 1e-14 {
+    let tolerance = 64.0 * T::epsilon().to_f64();
+    let mut worst_overall = 0.0f64;
+    for gi in 0..model.groups.len() {
+        let mut worst = f64::NAN;
+        for step in 0..=iterations {
+            let take_step = step < iterations;
+            let r = newton_step(model, ws, gi, q, take_step)?;
+            worst = r.to_f64();
+            // NaN never reads as converged (nor does a traced residual, which has no value yet).
+            if worst <= tolerance || !take_step {
                 break;
             }
-            // Newton step on the dependent coordinates, Y1 Δ = −r; where Y1 is singular (a guess at a
-            // toggle), the minimum-norm least-squares step instead.
-            group_rows(model, ws, g, gw, false);
-            fill_y1(g, gw);
-            for (k, &row) in g.rows.iter().enumerate() {
-                gw.col[k] = -r[row];
+        }
+        worst_overall = max_nan(worst_overall, worst);
+    }
+    Ok(worst_overall)
+}
+
+/// One Newton step on every group (what generated `complete` iterates): returns the largest relative
+/// residual *before* the step, so that the caller stops when it is small enough.
+pub fn completion_step<T: Real>(
+    model: &Model<T>,
+    ws: &mut Workspace<T>,
+    q: &mut [T],
+) -> Result<T, DynamicsError> {
+    let mut worst = T::zero();
+    for gi in 0..model.groups.len() {
+        let r = newton_step(model, ws, gi, q, true)?;
+        // NaN wins (select: if r > worst or r is NaN, r).
+        worst = worst.select_gt(r, worst, r);
+    }
+    Ok(worst)
+}
+
+/// The relative residual of group `gi` at `q` and, with `take_step`, one Newton step on its dependent
+/// coordinates: `Y1 Δ = −r`, solved with run-time pivoting (the least-squares step where `Y1` is exactly
+/// singular, a guess at a toggle). Loop coordinates move at most 0.5 rad (m) per step so that Newton stays
+/// near the branch it starts on; coordinates only linear equations (gears, mimic joints) involve are not
+/// limited, so a group of linear equations is solved exactly in one step and a 20:1 rotor on a four-bar's
+/// crank does not crawl after it.
+fn newton_step<T: Real>(
+    model: &Model<T>,
+    ws: &mut Workspace<T>,
+    gi: usize,
+    q: &mut [T],
+    take_step: bool,
+) -> Result<T, DynamicsError> {
+    position_kinematics(model, ws, q)?;
+    let g = &model.groups[gi];
+    let mut gw = core::mem::take(&mut ws.groups[gi]);
+    let mut r = core::mem::take(&mut ws.constraint_residual);
+    let mut scale = core::mem::take(&mut ws.constraint_scale);
+    residuals_scaled(model, ws, q, &mut r, &mut scale);
+    let mut worst = T::zero();
+    for &row in &g.rows {
+        let e = relative_residual(r[row], scale[row]);
+        worst = worst.select_gt(e, worst, e);
+    }
+    if take_step && !g.rows.is_empty() {
+        group_rows(model, ws, g, &mut gw, false);
+        fill_y1(g, &mut gw);
+        let n = g.rows.len();
+        for (k, &row) in g.rows.iter().enumerate() {
+            for col in 0..n {
+                gw.newton[(k, col)] = gw.y1[(k, col)];
             }
-            gw.y1_lu.copy_from(&gw.y1);
-            let mut solved = false;
-            if lu_in_place(&mut gw.y1_lu, &mut gw.perm).is_ok() {
-                // Solved with select pivoting, so that generated completion pivots at run time too.
-                let n = g.rows.len();
-                for row in 0..n {
-                    for col in 0..n {
-                        gw.newton[(row, col)] = gw.y1[(row, col)];
-                    }
-                    gw.newton[(row, n)] = gw.col[row];
-                }
-                // An exactly zero pivot in this elimination (where the LU's rounding left a tiny one)
-                // is as singular: least squares then. (A traced ratio has no value: always solved.)
-                if solve_pivoted_in_place(&mut gw.newton, n).is_positive_finite()
-                    && (0..n).all(|row| gw.newton[(row, n)].is_finite())
-                {
-                    for row in 0..n {
-                        gw.col[row] = gw.newton[(row, n)];
-                    }
-                    solved = true;
-                }
-            }
-            if !solved {
-                let step = solve_least_squares(&gw.y1, &gw.col);
-                gw.col.copy_from_slice(&step);
-            }
-            // Limit loop steps so that Newton stays near the branch it starts on (linear equations are
-            // solved in one full step).
-            // (Selects rather than branches: generated completion limits its steps the same way.)
-            let big = gw.col.iter().fold(T::zero(), |m, x| {
-                let a = x.abs();
-                a.select_gt(m, a, m)
-            });
-            let half = T::from_f64(0.5);
-            let scale = if gw.has_loop {
-                big.select_gt(half, half / big, T::one())
-            } else {
-                T::one()
-            };
-            for (d, &b) in g.dependent.iter().enumerate() {
-                q[model.joints[b].q_index] += gw.col[d] * scale;
+            gw.newton[(k, n)] = -r[row];
+        }
+        let ratio = solve_pivoted_in_place(&mut gw.newton, n);
+        for k in 0..n {
+            gw.col[k] = gw.newton[(k, n)];
+        }
+        // An exactly singular Y1 (known only for numbers): the minimum-norm least-squares step.
+        let singular = ratio.value().is_some_and(|x| !(x > 0.0 && x.is_finite()))
+            || gw
+                .col
+                .iter()
+                .any(|x| x.value().is_some_and(|v| !v.is_finite()));
+        if singular {
+            let rhs: Vec<T> = g.rows.iter().map(|&row| -r[row]).collect();
+            let step = solve_least_squares(&gw.y1, &rhs);
+            gw.col.copy_from_slice(&step);
+        }
+        // (Selects rather than branches: generated completion limits its steps the same way.)
+        let mut big = T::zero();
+        for (d, &is_loop) in gw.loop_dependent.iter().enumerate() {
+            if is_loop {
+                let a = gw.col[d].abs();
+                big = a.select_gt(big, a, big);
             }
         }
-        if let Ok(w) = &mut result {
-            // NaN (a configuration that left the representable range) is reported, not dropped.
-            *w = if w.is_nan() || worst.is_nan() {
-                f64::NAN
-            } else {
-                w.max(worst)
-            };
+        let half = T::from_f64(0.5);
+        let limit = big.select_gt(half, half / big, T::one());
+        for (d, &b) in g.dependent.iter().enumerate() {
+            q[model.joints[b].q_index] += gw.col[d] * limit;
         }
     }
-    ws.groups = groups;
+    ws.groups[gi] = gw;
     ws.constraint_residual = r;
-    result
+    ws.constraint_scale = scale;
+    Ok(worst)
 }
 
 /// Replaces the dependent entries of `v` by `X_G` times the independent ones (the velocity projection).
@@ -158,21 +200,21 @@ pub fn complete_velocity<T: Real>(
             break;
         }
         let g = &model.groups[gi];
-        for (m, &b) in g.bodies.iter().enumerate() {
-            if g.dependent.contains(&b) {
-                let mut s = T::zero();
-                for (k, &ib) in g.independent.iter().enumerate() {
-                    s += gw.x[(m, k)] * v[model.joints[ib].v_index];
-                }
-                v[model.joints[b].v_index] = s;
+        for &b in &g.dependent {
+            let m = member(g, b).expect("dependent joints are members");
+            let mut s = T::zero();
+            for (k, &ib) in g.independent.iter().enumerate() {
+                s += gw.x[(m, k)] * v[model.joints[ib].v_index];
             }
+            v[model.joints[b].v_index] = s;
         }
     }
     ws.groups = groups;
     result
 }
 
-/// cond₁(Y1) of group `group` at `q` (the number the singularity threshold is compared with).
+/// cond₁(Y1) of group `group` at `q` (by an LU factorization: an independent check of the condition
+/// number the embedding computes and compares with [`super::singularity_threshold`]).
 pub fn y1_condition<T: Real>(
     model: &Model<T>,
     ws: &mut Workspace<T>,

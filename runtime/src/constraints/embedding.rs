@@ -11,8 +11,19 @@ use crate::spatial::{ArticulatedInertia, Force, Motion, Transform};
 use crate::Real;
 use nalgebra::DMatrix;
 
-/// cond₁(Y1) at or beyond which a call fails instead of returning an inaccurate answer.
-pub const SINGULARITY_THRESHOLD: f64 = 1e10;
+/// cond₁(Y1) at or beyond which a call in scalar `T` fails instead of returning an inaccurate answer:
+/// `min(1e10, 10⁻³ / ε)` with ε the scalar's unit roundoff — 1e10 in `f64` (and wider types), about 8.4e3 in
+/// `f32`. Below it the dependent accelerations keep about three correct digits or more (the solve loses up
+/// to cond · ε of relative accuracy); at or above it the dependent joints are not determined by the
+/// independent ones to any useful accuracy (CONTRACT §2, "Singular loops"). One rule for every engine.
+pub fn singularity_threshold<T: Real>() -> f64 {
+    (1e-3 / T::epsilon().to_f64()).min(1e10)
+}
+
+/// The condition number reported for a configuration where it is not a finite number (a NaN from an
+/// exactly singular or non-finite `Y1`): large enough to exceed every threshold, finite so that generated
+/// code can carry it as a literal in any scalar type.
+const SINGULAR_CONDITION: f64 = 1e30;
 
 /// Scratch memory of one group, sized at workspace creation.
 #[derive(Clone, Debug)]
@@ -28,19 +39,21 @@ pub struct GroupWorkspace<T: Real> {
     pub(crate) perm: Vec<usize>,
     pub(crate) scratch: DMatrix<T>,
     pub(crate) col: Vec<T>,
-    /// `[Y1 | Y2 | bias]`, solved in place by [`solve_pivoted_in_place`].
+    /// `[Y1 | Y2 | bias | I]`, solved in place by [`solve_pivoted_in_place`] (the last block becomes
+    /// `Y1⁻¹`, whose norm gives the condition number).
     pub(crate) aug: DMatrix<T>,
     /// `[Y1 | −residual]` of a completion Newton step.
     pub(crate) newton: DMatrix<T>,
-    /// The pivot ratio of the last [`embed`] (see [`solve_pivoted_in_place`]; 1 for a group without
-    /// rows): near 0 at a singular configuration.
-    pub pivot_ratio: T,
+    /// cond₁(Y1) at the last [`embed`] (1 for a group without rows; [`SINGULAR_CONDITION`] where it is
+    /// not a number): the group's singularity measure.
+    pub condition: T,
     /// `X_G`: members × independent.
     pub x: DMatrix<T>,
     /// `κ_G`: members.
     pub kappa: Vec<T>,
-    /// Whether any constraint of the group is a loop (then `X_G` depends on the configuration).
-    pub(crate) has_loop: bool,
+    /// Per dependent coordinate (in `Group::dependent` order): whether a loop of the group moves it
+    /// (completion limits the Newton steps of those, not of coordinates only gears and mimics drive).
+    pub(crate) loop_dependent: Vec<bool>,
     // Articulated-body quantities, all in the parent body's frame.
     pub(crate) to_parent: Vec<Transform<T>>,
     /// Per member, `J_b` (independent columns).
@@ -56,6 +69,40 @@ pub struct GroupWorkspace<T: Real> {
     pub(crate) eps: Vec<T>,
     pub(crate) ydd: Vec<T>,
     pub(crate) unit: Vec<T>,
+}
+
+/// An empty workspace (what a group's slot holds while completion borrows it).
+impl<T: Real> Default for GroupWorkspace<T> {
+    fn default() -> Self {
+        let m = || DMatrix::zeros(0, 0);
+        GroupWorkspace {
+            rows: Vec::new(),
+            k: m(),
+            bias: Vec::new(),
+            y1: m(),
+            y1_lu: m(),
+            perm: Vec::new(),
+            scratch: m(),
+            col: Vec::new(),
+            aug: m(),
+            newton: m(),
+            condition: T::one(),
+            x: m(),
+            kappa: Vec::new(),
+            loop_dependent: Vec::new(),
+            to_parent: Vec::new(),
+            jac: Vec::new(),
+            c: Vec::new(),
+            inertia: Vec::new(),
+            bias_force: Vec::new(),
+            u: Vec::new(),
+            u_sum: Vec::new(),
+            d: m(),
+            eps: Vec::new(),
+            ydd: Vec::new(),
+            unit: Vec::new(),
+        }
+    }
 }
 
 impl<T: Real> GroupWorkspace<T> {
@@ -78,10 +125,16 @@ impl<T: Real> GroupWorkspace<T> {
             rows.push((c, r - offsets[c]));
         }
         let (m, r, ni) = (g.bodies.len(), g.rows.len(), g.independent.len());
-        let has_loop = g
-            .constraints
-            .iter()
-            .any(|&c| model.constraints[c].is_loop());
+        // Bodies on a loop's two paths up to their common ancestor.
+        let mut in_loop = vec![false; model.nbodies()];
+        for &c in &g.constraints {
+            if let super::ConstraintKind::Loop(l) = &model.constraints[c].kind {
+                for b in super::grouping::loop_path(model, l) {
+                    in_loop[b] = true;
+                }
+            }
+        }
+        let loop_dependent = g.dependent.iter().map(|&b| in_loop[b]).collect();
         GroupWorkspace {
             rows,
             k: DMatrix::zeros(r, m),
@@ -91,12 +144,12 @@ impl<T: Real> GroupWorkspace<T> {
             perm: vec![0; r],
             scratch: DMatrix::zeros(r, r),
             col: vec![T::zero(); r],
-            aug: DMatrix::zeros(r, r + ni + 1),
+            aug: DMatrix::zeros(r, r + ni + 1 + r),
             newton: DMatrix::zeros(r, r + 1),
-            pivot_ratio: T::one(),
+            condition: T::one(),
             x: DMatrix::zeros(m, ni),
             kappa: vec![T::zero(); m],
-            has_loop,
+            loop_dependent,
             to_parent: vec![Transform::identity(); m],
             jac: vec![Motion::zero(); m * ni],
             c: vec![Motion::zero(); m],
@@ -112,7 +165,7 @@ impl<T: Real> GroupWorkspace<T> {
     }
 }
 
-fn member(g: &Group, body: usize) -> Option<usize> {
+pub(crate) fn member(g: &Group, body: usize) -> Option<usize> {
     g.bodies.binary_search(&body).ok()
 }
 
@@ -199,44 +252,40 @@ pub(crate) fn embed<T: Real>(
         gw.x[(member(g, b).expect("member"), k)] = T::one();
     }
     gw.kappa.fill(T::zero());
-    gw.pivot_ratio = T::one();
+    gw.condition = T::one();
     if r == 0 {
         return Ok(());
     }
-    let singular = |condition: f64| DynamicsError::SingularConstraint {
-        group: g
-            .constraints
-            .iter()
-            .map(|&c| model.constraints[c].name.as_str())
-            .collect::<Vec<_>>()
-            .join(", "),
-        condition,
-    };
-    if gw.has_loop {
-        // Loops: Y1 depends on the configuration, so its conditioning is checked on every call (a NaN
-        // in Y1 fails the factorization and reads as infinite).
-        let cond = y1_condition_of(gw);
-        if cond >= SINGULARITY_THRESHOLD {
-            return Err(singular(cond));
-        }
-    }
-    // [Y1 | Y2 | bias] → [· | Y1⁻¹ Y2 | Y1⁻¹ bias], pivoting by selects so that generated code pivots at
-    // run time as this code does.
+    // [Y1 | Y2 | bias | I] → [· | Y1⁻¹ Y2 | Y1⁻¹ bias | Y1⁻¹], pivoting by selects so that generated code
+    // pivots at run time as this code does, and computes the same condition number.
     let ni = g.independent.len();
     for row in 0..r {
         for col in 0..r {
             gw.aug[(row, col)] = gw.y1[(row, col)];
+            gw.aug[(row, r + ni + 1 + col)] = if row == col { T::one() } else { T::zero() };
         }
         for (k, &b) in g.independent.iter().enumerate() {
             gw.aug[(row, r + k)] = gw.k[(row, member(g, b).expect("member"))];
         }
         gw.aug[(row, r + ni)] = if with_bias { gw.bias[row] } else { T::zero() };
     }
-    gw.pivot_ratio = solve_pivoted_in_place(&mut gw.aug, r);
-    // Couplings (constant Y1, checked at load): an exactly zero pivot is the only failure left, and the
-    // elimination reports it (a traced ratio has no value and passes).
-    if !gw.pivot_ratio.is_positive_finite() {
-        return Err(singular(f64::INFINITY));
+    solve_pivoted_in_place(&mut gw.aug, r);
+    // cond₁(Y1) = ‖Y1‖₁ ‖Y1⁻¹‖₁: one singularity measure for every engine and scalar (traced, it is the
+    // generated code's own; for couplings, whose Y1 is constant, it folds to a constant).
+    let inverse_norm = max_column_sum(r, |i, j| gw.aug[(i, r + ni + 1 + j)]);
+    let cond = max_column_sum(r, |i, j| gw.y1[(i, j)]) * inverse_norm;
+    // NaN (an exactly zero pivot, a non-finite Y1) and ∞ read as singular.
+    let huge = T::from_f64(SINGULAR_CONDITION);
+    let cond = huge.select_gt(cond, cond, huge);
+    gw.condition = cond;
+    if let Some(c) = cond.value() {
+        if !(c < singularity_threshold::<T>()) {
+            return Err(DynamicsError::SingularConstraint {
+                group: group_label(model, g),
+                condition: c,
+                threshold: singularity_threshold::<T>(),
+            });
+        }
     }
     for (d, &bd) in g.dependent.iter().enumerate() {
         let m = member(g, bd).expect("member");
@@ -250,13 +299,34 @@ pub(crate) fn embed<T: Real>(
     Ok(())
 }
 
-/// The smallest pivot ratio over the groups after the last call that embedded them (embedded `aba`,
-/// `embedding_map`, velocity completion): a cheap singularity measure, near 0 at a toggle, 1 for a
-/// model without groups. `cond₁(Y1) ≥ 1 / (rows · ratio)` for every group, so a ratio below
-/// `1 / (rows · SINGULARITY_THRESHOLD)` means a configuration the interpreted solver refuses.
-/// Generated code returns it from `aba` and `embedding` of models with constraints.
-pub fn constraint_pivot_ratio<T: Real>(ws: &Workspace<T>) -> T {
-    ws.groups.iter().fold(T::one(), |m, gw| {
-        m.select_gt(gw.pivot_ratio, gw.pivot_ratio, m)
-    })
+/// The largest cond₁(Y1) over the groups after the last call that embedded them (embedded `aba`,
+/// `embedding_map`, the reduced mass matrix, velocity completion): 1 for a model without groups, and at or
+/// above [`singularity_threshold`] where the interpreted solver refuses. Generated code returns it from
+/// `aba`, `embedding` and `crba_independent` of models with constraints, for its caller to compare.
+pub fn constraint_condition<T: Real>(ws: &Workspace<T>) -> T {
+    ws.groups
+        .iter()
+        .fold(T::one(), |m, gw| gw.condition.select_gt(m, gw.condition, m))
+}
+
+/// `max_j Σ_i |a(i, j)|` over an `n × n` matrix (branch-free, for tracing).
+fn max_column_sum<T: Real>(n: usize, a: impl Fn(usize, usize) -> T) -> T {
+    let mut norm = T::zero();
+    for j in 0..n {
+        let mut s = T::zero();
+        for i in 0..n {
+            s += a(i, j).abs();
+        }
+        norm = s.select_gt(norm, s, norm);
+    }
+    norm
+}
+
+/// How messages name a group: its constraints' names.
+pub(crate) fn group_label<T: Real>(model: &Model<T>, g: &Group) -> String {
+    g.constraints
+        .iter()
+        .map(|&c| model.constraints[c].name.as_str())
+        .collect::<Vec<_>>()
+        .join(", ")
 }

@@ -3,7 +3,7 @@
 //! independent.
 
 use super::embedding::{fill_y1, group_rows, y1_condition_of, GroupWorkspace};
-use super::{jacobian, residuals, ConstraintKind};
+use super::{jacobian, residuals, residuals_scaled, ConstraintKind};
 use crate::algorithms::{forward_kinematics, Workspace};
 use crate::linalg::{independent_columns, independent_rows, solve_least_squares};
 use crate::model::{JointType, Model, ModelError};
@@ -58,6 +58,16 @@ fn path_to<T: Real>(model: &Model<T>, b: Option<usize>, top: Option<usize>, out:
     }
 }
 
+/// The bodies whose joints a loop's equations involve: the paths from its two frames' bodies up to their
+/// common ancestor.
+pub(crate) fn loop_path<T: Real>(model: &Model<T>, l: &super::LoopClosure<T>) -> Vec<usize> {
+    let top = lca(model, l.predecessor, l.successor);
+    let mut v = Vec::new();
+    path_to(model, l.predecessor, top, &mut v);
+    path_to(model, l.successor, top, &mut v);
+    v
+}
+
 /// Closes a set of bodies under "all members hang from one common body": adds every body between each
 /// member and the members' common ancestor. Returns that ancestor.
 fn close<T: Real>(model: &Model<T>, bodies: &mut Vec<usize>) -> Option<usize> {
@@ -87,13 +97,7 @@ pub(crate) fn build_groups<T: Real>(
     for (ci, c) in model.constraints.iter().enumerate() {
         let mut bodies = match &c.kind {
             ConstraintKind::Linear { terms, .. } => terms.iter().map(|&(j, _)| j).collect(),
-            ConstraintKind::Loop(l) => {
-                let top = lca(model, l.predecessor, l.successor);
-                let mut v = Vec::new();
-                path_to(model, l.predecessor, top, &mut v);
-                path_to(model, l.successor, top, &mut v);
-                v
-            }
+            ConstraintKind::Loop(l) => loop_path(model, l),
         };
         if bodies.is_empty() {
             return Err(ModelError::EmptyConstraint {
@@ -227,7 +231,7 @@ pub(crate) fn build_groups<T: Real>(
         };
         group.condition_at_load = y1_condition(model, &mut ws, &q, &group);
         if (group.condition_at_load.is_nan()
-            || group.condition_at_load >= super::SINGULARITY_THRESHOLD)
+            || group.condition_at_load >= super::singularity_threshold::<T>())
             && rank > 0
         {
             return Err(ModelError::SingularDependentChoice {
@@ -268,13 +272,19 @@ pub(crate) fn assemble<T: Real>(
 ) -> bool {
     let cols: Vec<usize> = bodies.iter().map(|&b| model.joints[b].v_index).collect();
     let mut r = vec![T::zero(); model.constraint_raw_rows()];
+    let mut scale = r.clone();
     let zeros = vec![T::zero(); model.nv()];
+    // Relative to the magnitudes of each equation (CONTRACT §2), and reachable in the scalar at hand.
+    let tolerance = (64.0 * T::epsilon().to_f64()).max(1e-12);
     for _ in 0..iterations {
         forward_kinematics(model, ws, q, &zeros).expect("sizes match");
-        residuals(model, ws, q, &mut r);
+        residuals_scaled(model, ws, q, &mut r, &mut scale);
         let rr: Vec<T> = rows.iter().map(|&i| -r[i]).collect();
-        let worst = rr.iter().fold(T::zero(), |m, x| m.max(x.abs()));
-        if worst.to_f64() <= 1e-12 {
+        // A NaN residual (a configuration outside the representable range) never converges.
+        let converged = rows
+            .iter()
+            .all(|&i| super::relative_residual(r[i], scale[i]).to_f64() <= tolerance);
+        if converged {
             return true;
         }
         let k = group_jacobian(model, ws, q, rows, &cols);

@@ -13,10 +13,11 @@ mod grouping;
 
 pub use closure::{LoopClosure, LoopType};
 pub use completion::{
-    complete_configuration, complete_configuration_with, complete_velocity, constraint_violation,
-    y1_condition,
+    complete_configuration, complete_configuration_with, complete_velocity, completion_step,
+    constraint_violation, y1_condition, COMPLETION_MAX_STEPS,
 };
-pub use embedding::{constraint_pivot_ratio, SINGULARITY_THRESHOLD};
+pub(crate) use embedding::group_label;
+pub use embedding::{constraint_condition, singularity_threshold};
 pub(crate) use embedding::{embed, GroupWorkspace};
 pub(crate) use grouping::build_groups;
 pub use grouping::Group;
@@ -76,18 +77,69 @@ use nalgebra::DMatrix;
 /// (run [`crate::forward_kinematics`] first) and `q` (for the linear ones).
 pub fn residuals<T: Real>(model: &Model<T>, ws: &Workspace<T>, q: &[T], out: &mut [T]) {
     let mut row = 0;
+    let mut scale = [T::zero(); 6];
     for c in &model.constraints {
         let n = c.raw_rows();
-        match &c.kind {
-            ConstraintKind::Linear { terms, offset } => {
-                out[row] = terms
-                    .iter()
-                    .fold(*offset, |s, &(j, k)| s + k * q[model.joints[j].q_index]);
-            }
-            ConstraintKind::Loop(l) => l.residual(ws, &mut out[row..row + n]),
-        }
+        residual_of(model, ws, q, c, &mut out[row..row + n], &mut scale[..n]);
         row += n;
     }
+}
+
+/// [`residuals`] and the magnitude each row was computed from (see [`LoopClosure::residual_scaled`]; for
+/// a linear row the largest of its terms and its offset): a row is satisfied to tolerance `tol` when
+/// `|r| ≤ tol · max(1, magnitude)` (CONTRACT §2).
+pub fn residuals_scaled<T: Real>(
+    model: &Model<T>,
+    ws: &Workspace<T>,
+    q: &[T],
+    out: &mut [T],
+    scale: &mut [T],
+) {
+    let mut row = 0;
+    for c in &model.constraints {
+        let n = c.raw_rows();
+        residual_of(
+            model,
+            ws,
+            q,
+            c,
+            &mut out[row..row + n],
+            &mut scale[row..row + n],
+        );
+        row += n;
+    }
+}
+
+fn residual_of<T: Real>(
+    model: &Model<T>,
+    ws: &Workspace<T>,
+    q: &[T],
+    c: &Constraint<T>,
+    out: &mut [T],
+    scale: &mut [T],
+) {
+    match &c.kind {
+        ConstraintKind::Linear { terms, offset } => {
+            let mut sum = *offset;
+            let mut magnitude = offset.abs();
+            for &(j, k) in terms {
+                let term = k * q[model.joints[j].q_index];
+                sum += term;
+                let a = term.abs();
+                magnitude = a.select_gt(magnitude, a, magnitude);
+            }
+            out[0] = sum;
+            scale[0] = magnitude;
+        }
+        ConstraintKind::Loop(l) => l.residual_scaled(ws, out, scale),
+    }
+}
+
+/// `|r| / max(1, magnitude)`: a residual relative to the numbers it came from (NaN stays NaN).
+#[inline(always)]
+pub(crate) fn relative_residual<T: Real>(r: T, magnitude: T) -> T {
+    let one = T::one();
+    r.abs() / magnitude.select_gt(one, magnitude, one)
 }
 
 /// The constraint Jacobian over all spanning velocities (raw rows × nv), from `ws.world_placement`.
