@@ -406,13 +406,13 @@ fn generated_loop_code_pivots_and_reports_singular_configurations() {
         &[0.3; NQ],
         &mut qdd,
     );
-    assert!(!(cond < singularity_threshold::<f64>()), "cond {cond:e}");
-    assert!(!(cond < singular_four_bar::f64::SINGULARITY_THRESHOLD));
+    assert!(cond >= singularity_threshold::<f64>(), "cond {cond:e}");
+    assert!(cond >= singular_four_bar::f64::SINGULARITY_THRESHOLD);
     let q32: Vec<f32> = q_at.iter().map(|&x| x as f32).collect();
     let mut qdd32 = [0.0f32; NQ];
     let cond32 =
         singular_four_bar::f32::aba(&q32.try_into().unwrap(), &[0.0; NQ], &[0.3; NQ], &mut qdd32);
-    assert!(!(cond32 < singular_four_bar::f32::SINGULARITY_THRESHOLD));
+    assert!(cond32 >= singular_four_bar::f32::SINGULARITY_THRESHOLD);
 }
 
 /// One singularity verdict in every engine and scalar (CONTRACT §2 "Singular loops"): approaching the
@@ -452,12 +452,14 @@ fn the_singularity_verdict_is_the_same_in_every_engine_and_scalar() {
         let clear = |thr: f64| (lu / thr).ln().abs() > 0.05;
         let interpreted64 = aba(&model, &mut ws, &q, &v, &tau).is_err();
         let mut qdd = [0.0; NQ];
-        let generated64 = !(singular_four_bar::f64::aba(
+        let cond64 = singular_four_bar::f64::aba(
             &q.clone().try_into().unwrap(),
             &v.clone().try_into().unwrap(),
             &tau,
             &mut qdd,
-        ) < singular_four_bar::f64::SINGULARITY_THRESHOLD);
+        );
+        let generated64 =
+            cond64.is_nan() || cond64 >= singular_four_bar::f64::SINGULARITY_THRESHOLD;
         let (q32, v32): (Vec<f32>, Vec<f32>) = (
             q.iter().map(|&x| x as f32).collect(),
             v.iter().map(|&x| x as f32).collect(),
@@ -465,12 +467,14 @@ fn the_singularity_verdict_is_the_same_in_every_engine_and_scalar() {
         let tau32 = [0.3f32; NQ];
         let interpreted32 = aba(&model32, &mut ws32, &q32, &v32, &tau32).is_err();
         let mut qdd32 = [0.0f32; NQ];
-        let generated32 = !(singular_four_bar::f32::aba(
+        let cond32 = singular_four_bar::f32::aba(
             &q32.clone().try_into().unwrap(),
             &v32.clone().try_into().unwrap(),
             &tau32,
             &mut qdd32,
-        ) < singular_four_bar::f32::SINGULARITY_THRESHOLD);
+        );
+        let generated32 =
+            cond32.is_nan() || cond32 >= singular_four_bar::f32::SINGULARITY_THRESHOLD;
         if clear(thr64) {
             assert_eq!(
                 interpreted64,

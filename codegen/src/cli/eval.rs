@@ -95,7 +95,7 @@ fn eval_generated(
                 Scalar::F64 => singularity_threshold::<f64>(),
                 Scalar::F32 => singularity_threshold::<f32>(),
             };
-            if !(condition < threshold) {
+            if condition.is_nan() || condition >= threshold {
                 return Err(CliError(format!(
                     "sample {i}: the loops are at or too near a singular configuration: cond(Y1) = {condition:.3e} ≥ {threshold:.1e}, the limit in {} (the dependent joints are not determined by the independent ones here)",
                     scalar_name

@@ -279,7 +279,7 @@ pub(crate) fn embed<T: Real>(
     let cond = huge.select_gt(cond, cond, huge);
     gw.condition = cond;
     if let Some(c) = cond.value() {
-        if !(c < singularity_threshold::<T>()) {
+        if c.is_nan() || c >= singularity_threshold::<T>() {
             return Err(DynamicsError::SingularConstraint {
                 group: group_label(model, g),
                 condition: c,
