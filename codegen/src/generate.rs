@@ -393,7 +393,16 @@ pub fn generate_file(
     options: &GenerateOptions,
     out: &std::path::Path,
 ) -> Result<(), LoadError> {
-    println!("cargo:rerun-if-changed={}", model_path.display());
+    // The path goes into cargo's line-based build-script protocol: a line break in it would add a
+    // directive of its own.
+    let shown_path = model_path.display().to_string();
+    if shown_path.contains(['\n', '\r']) {
+        return Err(LoadError::new(
+            Location::new(model_path, None, ""),
+            "a model path with a line break cannot be given to cargo (cargo:rerun-if-changed)",
+        ));
+    }
+    println!("cargo:rerun-if-changed={shown_path}");
     let loaded = crate::load(model_path)?;
     let tokens = generate_tokens(&loaded, options)?;
     let text = format_tokens(&tokens).map_err(|e| gen_error(&loaded, e))?;
