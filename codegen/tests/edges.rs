@@ -244,11 +244,20 @@ fn hostile_names_generate_a_crate_that_builds_and_means_what_the_model_says() {
 
 /// `--engine generated` on a model with a hostile name: the runner (its own Cargo.toml with a `[[bin]]` and a
 /// generated main.rs) builds and answers as the interpreted solver does; the cache entry is private,
-/// checked before each use, and rebuilt when its binary is truncated, its manifest corrupt or stale.
-/// Two runs on an empty cache at once both succeed.
+/// checked before each use, and rebuilt when its binary is truncated, its manifest corrupt or stale;
+/// cargo reads no configuration planted above the cache. Two runs on an empty cache at once both succeed.
 #[test]
 fn the_runner_cache_is_private_checked_and_rebuilt() {
-    let cache = tmp("private-cache");
+    // A cargo configuration planted above the cache (as another user could in a shared folder) names a
+    // compiler wrapper that does not exist: the build fails if cargo reads it.
+    let parent = tmp("private-cache-parent");
+    std::fs::create_dir_all(parent.join(".cargo")).unwrap();
+    std::fs::write(
+        parent.join(".cargo/config.toml"),
+        "[build]\nrustc-wrapper = \"/nonexistent/planted-wrapper\"\n",
+    )
+    .unwrap();
+    let cache = parent.join("cache");
     // Issue 8's reproducer: its robot name would add `build = "evil.rs"` to an unescaped Cargo.toml.
     let model = repo("tests/data/evil_robot_name.urdf");
     let input = json!({"samples": [{"q": [0.3], "v": [0.2], "tau": [0.5]}]}).to_string();

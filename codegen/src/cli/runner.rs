@@ -39,6 +39,12 @@ pub fn cache_dir() -> Result<PathBuf, CliError> {
     }
 }
 
+/// The cache folder as an absolute path (cargo runs in another working folder).
+fn absolute_cache_dir() -> Result<PathBuf, CliError> {
+    let dir = cache_dir()?;
+    std::path::absolute(&dir).map_err(|e| CliError(format!("{}: {e}", dir.display())))
+}
+
 /// Creates `dir` and any missing parents with mode 0700 (Unix).
 fn create_private_dir(dir: &Path) -> Result<(), CliError> {
     let mut builder = std::fs::DirBuilder::new();
@@ -56,7 +62,7 @@ fn create_private_dir(dir: &Path) -> Result<(), CliError> {
 /// The cache root, created if needed, after checking that no other user can write to it (a binary found
 /// there is executed).
 fn cache_root() -> Result<PathBuf, CliError> {
-    let root = cache_dir()?;
+    let root = absolute_cache_dir()?;
     create_private_dir(&root)?;
     #[cfg(unix)]
     {
@@ -256,15 +262,30 @@ pub fn build_runner(loaded: &Loaded, options: &GenerateOptions) -> Result<PathBu
 
 /// `cargo build --release` of the runner: offline first (the usual case: libm is in cargo's cache), then
 /// online once.
+///
+/// Cargo reads `.cargo/config.toml` in its working folder and in every folder above it, so it runs in the
+/// file system's root (writable by the administrator only), never inside the cache: with the cache under
+/// a shared folder (`EMBEDYN_CACHE_DIR=/tmp/mine`), another user could otherwise plant `/tmp/.cargo/config.toml`
+/// and have cargo run a program of theirs. The crate is its own workspace, so nothing above it is read.
 fn cargo_build(dir: &Path, target: &Path, bin_name: &str) -> Result<(), CliError> {
     let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
+    let manifest = dir.join("Cargo.toml");
+    let cwd = if cfg!(unix) { Path::new("/") } else { dir };
     let build = |offline: bool| {
         let mut cmd = Command::new(&cargo);
-        cmd.args(["build", "--release", "--quiet", "--bin", bin_name]);
+        cmd.args([
+            "build",
+            "--release",
+            "--quiet",
+            "--bin",
+            bin_name,
+            "--manifest-path",
+        ])
+        .arg(&manifest);
         if offline {
             cmd.arg("--offline");
         }
-        cmd.current_dir(dir)
+        cmd.current_dir(cwd)
             .env("CARGO_TARGET_DIR", target)
             .stdin(Stdio::null())
             .output()
