@@ -18,6 +18,8 @@ mod emit;
 mod error;
 mod generate;
 pub mod ir;
+pub mod names;
+pub mod sampling;
 pub mod standalone;
 pub mod trace;
 mod urdf;

@@ -6,7 +6,7 @@ use crate::{Loaded, ModelOptions};
 use embedyn_runtime::constraints::{
     complete_configuration, complete_velocity, constraint_violation,
 };
-use embedyn_runtime::Workspace;
+use embedyn_runtime::{JointType, Model, Workspace};
 use serde_json::{json, Value};
 
 pub fn complete(loaded: &Loaded, options: &ModelOptions, input: &str) -> Result<Value, CliError> {
@@ -18,7 +18,7 @@ pub fn complete(loaded: &Loaded, options: &ModelOptions, input: &str) -> Result<
         let at = |e: embedyn_runtime::DynamicsError| CliError(format!("sample {i}: {e}"));
         let mut q = vector(s, i, "q", model.nq())?;
         let mut v = vector(s, i, "v", model.nv())?;
-        model.normalize_configuration(&mut q);
+        normalize_quaternions(&model, &mut q, i)?;
         complete_configuration(&model, &mut ws, &mut q).map_err(at)?;
         complete_velocity(&model, &mut ws, &q, &mut v).map_err(at)?;
         let (pos, vel) = constraint_violation(&model, &mut ws, &q, &v).map_err(at)?;
@@ -31,4 +31,31 @@ pub fn complete(loaded: &Loaded, options: &ModelOptions, input: &str) -> Result<
         out.push(json!({ "q": q, "v": v, "residual": residual }));
     }
     Ok(json!({ "samples": out }))
+}
+
+/// Rescales every free joint's quaternion to unit length (`complete` accepts any non-zero one); a zero
+/// quaternion is no orientation at all and is refused, naming the sample and the joint.
+fn normalize_quaternions(model: &Model<f64>, q: &mut [f64], sample: usize) -> Result<(), CliError> {
+    for j in model
+        .joints
+        .iter()
+        .filter(|j| j.joint_type == JointType::Floating)
+    {
+        let range = j.q_index + 3..j.q_index + 7;
+        let s = &mut q[range.clone()];
+        // Scaled by the largest entry first, so that a tiny but non-zero quaternion does not underflow.
+        let largest = s.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        if !(largest > 0.0 && largest.is_finite()) {
+            return Err(CliError(format!(
+                "sample {sample}: field `q`[{}..{}]: the quaternion of joint `{}` is {s:?}; it must be a non-zero quaternion [qx qy qz qw] (it is normalized)",
+                range.start,
+                range.end,
+                j.name.escape_debug()
+            )));
+        }
+        s.iter_mut().for_each(|x| *x /= largest);
+        let norm = s.iter().map(|x| x * x).sum::<f64>().sqrt();
+        s.iter_mut().for_each(|x| *x /= norm);
+    }
+    Ok(())
 }

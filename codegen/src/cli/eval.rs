@@ -1,5 +1,6 @@
 //! `embedyn eval`: ABA, RNEA or CRBA on every sample.
 
+use super::runner::RowShape;
 use super::samples::{vector, Samples};
 use super::{Algo, CliError, Engine, Scalar};
 use crate::{Loaded, ModelOptions};
@@ -81,7 +82,14 @@ fn eval_generated(
         Scalar::F64 => "f64",
         Scalar::F32 => "f32",
     };
-    let outputs = super::runner::run(&binary, name, scalar_name, "eval", &rows)?;
+    // What one output row holds; the runner's output is checked against it (count and length).
+    let len = match algo {
+        Algo::Aba if model.has_constraints() => nv + 1,
+        Algo::Aba | Algo::Rnea => nv,
+        Algo::Crba if model.has_constraints() => model.independent_nv().pow(2),
+        Algo::Crba => nv * nv,
+    };
+    let outputs = super::runner::run(&binary, name, scalar_name, RowShape::Eval { len }, &rows)?;
     let mut ws = Workspace::new(model);
     let independent = independent_indices(model);
     let mut out = Vec::with_capacity(outputs.len());
@@ -115,6 +123,7 @@ fn eval_generated(
                 } else {
                     o.clone()
                 };
+                let tau_independent = finite(&tau_independent, i, "tau_independent")?;
                 json!({ "tau": o, "tau_independent": tau_independent })
             }
             Algo::Crba => {
@@ -165,7 +174,7 @@ fn eval_in<T: Real>(model: &Model<T>, algo: Algo, samples: &Samples) -> Result<V
             Algo::Rnea => {
                 let qdd = cast::<T>(&vector(s, i, "qdd", nv)?);
                 let tau = finite(rnea(model, &mut ws, &q, &v, &qdd).map_err(at)?, i, "tau")?;
-                let tau_independent = if model.has_constraints() {
+                let tau_independent: Vec<f64> = if model.has_constraints() {
                     // Only Xᵀ τ acts on the independent coordinates.
                     let x = embedding_map(model, &mut ws, &q).map_err(at)?;
                     (0..x.ncols())
@@ -174,6 +183,7 @@ fn eval_in<T: Real>(model: &Model<T>, algo: Algo, samples: &Samples) -> Result<V
                 } else {
                     tau.clone()
                 };
+                let tau_independent = finite(&tau_independent, i, "tau_independent")?;
                 json!({ "tau": tau, "tau_independent": tau_independent })
             }
             Algo::Crba => {

@@ -4,12 +4,41 @@ mod bench;
 mod complete;
 mod eval;
 mod info;
+mod output;
 mod runner;
 mod samples;
 
 use crate::{load, LoadError, Loaded, ModelOptions};
 use clap::{Parser, Subcommand, ValueEnum};
 use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+/// The program: parses the command line, runs the command and writes its result or error through the
+/// one output module. Every way out is an exit status (CONTRACT §3): 0, 1 for an error, 2 for a bad
+/// command line, never a panic's 101 or a signal.
+pub fn main() -> ExitCode {
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => {
+            // Help and version go to stdout, usage errors to stderr; a closed pipe is ignored.
+            let _ = e.print();
+            return ExitCode::from(u8::try_from(e.exit_code()).unwrap_or(output::FAILURE));
+        }
+    };
+    // The last line of defence: a panic (a bug) still ends with a clear status, not 101.
+    match std::panic::catch_unwind(|| run(cli)) {
+        Ok(Ok(serde_json::Value::String(text))) => output::document(&text),
+        Ok(Ok(json)) => output::document(&format!("{json}\n")),
+        Ok(Err(e)) => {
+            output::note(&format!("error: {}", e.0));
+            ExitCode::from(output::FAILURE)
+        }
+        Err(_) => {
+            output::note("error: internal error in embedyn (a bug; please report it with the command and the model)");
+            ExitCode::from(output::INTERNAL_ERROR)
+        }
+    }
+}
 
 #[derive(Parser, Debug)]
 #[command(
@@ -208,7 +237,7 @@ fn options(floating: bool) -> ModelOptions {
 fn load_reporting(path: &Path) -> Result<Loaded, CliError> {
     let loaded = load(path)?;
     for w in &loaded.warnings {
-        eprintln!("{w}");
+        output::note(&w.to_string());
     }
     Ok(loaded)
 }

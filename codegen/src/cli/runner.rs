@@ -1,92 +1,293 @@
 //! The compiled form of `--engine generated` and `embedyn bench`: the model's standalone crate plus a
-//! small binary that evaluates or times its functions, built once with cargo into a per-user cache keyed
-//! by the generated source itself (so a stale build can never be used).
+//! small binary that evaluates or times its functions, built once with cargo into a per-user cache.
+//!
+//! A cache entry is trusted only after a check before each use: its manifest (`entry.json`) names the
+//! generator version, the SHA-256 of the source the entry was built from and that of the built binary;
+//! an entry whose manifest is missing, unreadable, stale or does not match the binary on disk is rebuilt,
+//! never used and never a permanent failure. Every file is written to a temporary name and renamed into
+//! place, so concurrent runs never see half a file.
 
 use super::CliError;
-use crate::generate::GenerateOptions;
-use crate::standalone::{crate_files, crate_name};
+use crate::generate::{format_tokens, GenerateOptions, GENERATOR_VERSION};
+use crate::standalone::{crate_files, crate_name, Binary, Manifest};
 use crate::{Algorithm, Loaded};
+use proc_macro2::TokenStream;
+use quote::{format_ident, quote};
+use sha2::{Digest, Sha256};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 
-/// The cache folder: `$EMBEDYN_CACHE_DIR`, else `$XDG_CACHE_HOME/embedyn`, else `~/.cache/embedyn`.
-pub fn cache_dir() -> PathBuf {
-    if let Some(d) = std::env::var_os("EMBEDYN_CACHE_DIR") {
-        return PathBuf::from(d);
+/// The cache folder: `$EMBEDYN_CACHE_DIR`, else `$XDG_CACHE_HOME/embedyn`, else `$HOME/.cache/embedyn`.
+/// Never a shared folder such as the temporary directory: other users could plant a binary there.
+pub fn cache_dir() -> Result<PathBuf, CliError> {
+    let var = |name: &str| std::env::var_os(name).filter(|v| !v.is_empty());
+    if let Some(d) = var("EMBEDYN_CACHE_DIR") {
+        return Ok(PathBuf::from(d));
     }
-    if let Some(d) = std::env::var_os("XDG_CACHE_HOME") {
-        return PathBuf::from(d).join("embedyn");
+    // The XDG base directory specification ignores a relative path.
+    if let Some(d) = var("XDG_CACHE_HOME").filter(|d| Path::new(d).is_absolute()) {
+        return Ok(PathBuf::from(d).join("embedyn"));
     }
-    let home = std::env::var_os("HOME").map_or_else(std::env::temp_dir, PathBuf::from);
-    home.join(".cache").join("embedyn")
+    match var("HOME") {
+        Some(home) => Ok(PathBuf::from(home).join(".cache").join("embedyn")),
+        None => Err(CliError(
+            "the generated engine needs a cache folder of your own to build in, and HOME is not set: set \
+             EMBEDYN_CACHE_DIR (or XDG_CACHE_HOME) to a folder that only you can write"
+                .into(),
+        )),
+    }
 }
 
-/// FNV-1a, 64 bits: a stable content hash for cache keys.
-fn fnv1a(parts: &[&[u8]]) -> u64 {
-    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
-    for p in parts {
-        for &b in *p {
-            h ^= b as u64;
-            h = h.wrapping_mul(0x0100_0000_01b3);
+/// The cache folder as an absolute path (cargo runs in another working folder).
+fn absolute_cache_dir() -> Result<PathBuf, CliError> {
+    let dir = cache_dir()?;
+    std::path::absolute(&dir).map_err(|e| CliError(format!("{}: {e}", dir.display())))
+}
+
+/// Creates `dir` and any missing parents with mode 0700 (Unix).
+fn create_private_dir(dir: &Path) -> Result<(), CliError> {
+    let mut builder = std::fs::DirBuilder::new();
+    builder.recursive(true);
+    #[cfg(unix)]
+    std::os::unix::fs::DirBuilderExt::mode(&mut builder, 0o700);
+    builder.create(dir).map_err(|e| {
+        CliError(format!(
+            "{}: cannot create the cache folder: {e}",
+            dir.display()
+        ))
+    })
+}
+
+/// The cache root, created if needed, after checking that no other user can write to it (a binary found
+/// there is executed).
+fn cache_root() -> Result<PathBuf, CliError> {
+    let root = absolute_cache_dir()?;
+    create_private_dir(&root)?;
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        let meta =
+            std::fs::metadata(&root).map_err(|e| CliError(format!("{}: {e}", root.display())))?;
+        // SAFETY: geteuid has no preconditions and cannot fail.
+        let me = unsafe { libc::geteuid() };
+        if meta.uid() != me {
+            return Err(CliError(format!(
+                "{}: the cache folder belongs to another user (uid {}); set EMBEDYN_CACHE_DIR to a folder of your own",
+                root.display(),
+                meta.uid()
+            )));
         }
-        h ^= 0xff;
-        h = h.wrapping_mul(0x0100_0000_01b3);
+        if meta.mode() & 0o022 != 0 {
+            return Err(CliError(format!(
+                "{}: the cache folder is writable by other users (mode {:o}); `chmod 700` it or set EMBEDYN_CACHE_DIR to a folder of your own",
+                root.display(),
+                meta.mode() & 0o7777
+            )));
+        }
     }
-    h
+    Ok(root)
 }
 
-/// Writes (or reuses) the runner crate for `loaded` and returns the path of its built binary.
+/// Writes `bytes` to `path` atomically: a fresh temporary file in the same folder, renamed into place.
+fn write_atomic(path: &Path, bytes: &[u8], executable: bool) -> Result<(), CliError> {
+    use std::sync::atomic::{AtomicU64, Ordering};
+    static COUNTER: AtomicU64 = AtomicU64::new(0);
+    let err = |e: std::io::Error| CliError(format!("{}: cannot write: {e}", path.display()));
+    let dir = path.parent().unwrap_or(Path::new("."));
+    let name = path
+        .file_name()
+        .map_or_else(Default::default, |n| n.to_string_lossy());
+    let tmp = dir.join(format!(
+        ".{name}.tmp-{}-{}",
+        std::process::id(),
+        COUNTER.fetch_add(1, Ordering::Relaxed)
+    ));
+    let mut options = std::fs::OpenOptions::new();
+    options.write(true).create_new(true);
+    #[cfg(unix)]
+    std::os::unix::fs::OpenOptionsExt::mode(&mut options, if executable { 0o700 } else { 0o600 });
+    #[cfg(not(unix))]
+    let _ = executable;
+    let result = options.open(&tmp).and_then(|mut f| {
+        f.write_all(bytes)?;
+        f.sync_all()
+    });
+    if let Err(e) = result.and_then(|()| std::fs::rename(&tmp, path)) {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(err(e));
+    }
+    Ok(())
+}
+
+fn sha256_hex(parts: &[&[u8]]) -> String {
+    let mut h = Sha256::new();
+    for p in parts {
+        // Length-prefixed, so that moving bytes between parts changes the hash.
+        h.update((p.len() as u64).to_le_bytes());
+        h.update(p);
+    }
+    h.finalize().iter().map(|b| format!("{b:02x}")).collect()
+}
+
+/// The manifest of a cache entry.
+#[derive(serde::Serialize, serde::Deserialize, PartialEq, Debug)]
+struct EntryManifest {
+    generator: String,
+    source_sha256: String,
+    binary_sha256: String,
+}
+
+const MANIFEST: &str = "entry.json";
+
+fn runner_path(entry: &Path) -> PathBuf {
+    entry.join(format!("runner{}", std::env::consts::EXE_SUFFIX))
+}
+
+/// Why a cache entry cannot be used as it is.
+#[derive(Debug, PartialEq)]
+enum EntryState {
+    Valid,
+    Missing,
+    Invalid(String),
+}
+
+/// Checks a cache entry against the source it must have been built from.
+fn check_entry(entry: &Path, source_sha256: &str) -> EntryState {
+    let text = match std::fs::read(entry.join(MANIFEST)) {
+        Ok(t) => t,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return EntryState::Missing,
+        Err(e) => return EntryState::Invalid(format!("its manifest cannot be read ({e})")),
+    };
+    let manifest: EntryManifest = match serde_json::from_slice(&text) {
+        Ok(m) => m,
+        Err(e) => return EntryState::Invalid(format!("its manifest is corrupt ({e})")),
+    };
+    if manifest.generator != GENERATOR_VERSION || manifest.source_sha256 != source_sha256 {
+        return EntryState::Invalid("it was built from other source (stale)".into());
+    }
+    match std::fs::read(runner_path(entry)) {
+        Ok(binary) if sha256_hex(&[&binary]) == manifest.binary_sha256 => EntryState::Valid,
+        Ok(_) => EntryState::Invalid("its binary does not match the manifest's hash".into()),
+        Err(e) => EntryState::Invalid(format!("its binary cannot be read ({e})")),
+    }
+}
+
+/// Writes (or reuses, after checking it) the runner for `loaded` and returns the path of its binary.
 pub fn build_runner(loaded: &Loaded, options: &GenerateOptions) -> Result<PathBuf, CliError> {
-    let files = crate_files(loaded, options)?;
+    let mut files = crate_files(loaded, options)?;
     let krate = crate_name(&loaded.robot.name);
     let constrained = loaded.model::<f64>(&options.model)?.has_constraints();
-    let main = runner_main(&krate, &options.algorithms, constrained);
-    let parts: Vec<&[u8]> = files
-        .iter()
-        .map(|(_, t)| t.as_bytes())
-        .chain(std::iter::once(main.as_bytes()))
+    let main = runner_main(&krate, &options.algorithms, constrained).map_err(CliError)?;
+    files.push((PathBuf::from("src/main.rs"), main));
+    let key_parts: Vec<&[u8]> = std::iter::once(GENERATOR_VERSION.as_bytes())
+        .chain(
+            files
+                .iter()
+                .flat_map(|(p, t)| [p.as_os_str().as_encoded_bytes(), t.as_bytes()]),
+        )
         .collect();
-    let hash = format!("{:016x}", fnv1a(&parts));
-    let key = format!("{krate}-{hash}");
-    let root = cache_dir();
-    let dir = root.join(&key);
-    // One target folder for every model (libm is built once); the binary's name carries the key, so a
-    // binary built from other source is never picked up.
+    let key = sha256_hex(&key_parts)[..16].to_string();
+    // The crate builds the runner as a `[[bin]]` beside its library; the binary's name carries the key,
+    // so the shared target folder never hands one model's runner to another.
+    let bin_name = format!("run_{key}");
+    let mut manifest = Manifest::standalone(&krate, &loaded.robot.name);
+    manifest.bins.push(Binary {
+        name: bin_name.clone(),
+        path: "src/main.rs".into(),
+    });
+    let cargo_toml = manifest.to_toml().map_err(CliError)?;
+    for (path, text) in &mut files {
+        if path == Path::new("Cargo.toml") {
+            *text = cargo_toml.clone();
+        }
+    }
+    let source_parts: Vec<&[u8]> = files
+        .iter()
+        .flat_map(|(p, t)| [p.as_os_str().as_encoded_bytes(), t.as_bytes()])
+        .collect();
+    let source_sha256 = sha256_hex(&source_parts);
+
+    let root = cache_root()?;
+    let entry = root.join(format!("{krate}-{key}"));
+    match check_entry(&entry, &source_sha256) {
+        EntryState::Valid => return Ok(runner_path(&entry)),
+        EntryState::Missing => {}
+        EntryState::Invalid(why) => super::output::note(&format!(
+            "embedyn: the cached runner in {} is not usable: {why}; rebuilding it",
+            entry.display()
+        )),
+    }
+    for (rel, text) in &files {
+        let path = entry.join(rel);
+        create_private_dir(path.parent().unwrap_or(&entry))?;
+        write_atomic(&path, text.as_bytes(), false)?;
+    }
+    super::output::note(&format!(
+        "embedyn: compiling the generated code of {} (once; cached in {})",
+        crate::names::code_span(&loaded.robot.name),
+        entry.display()
+    ));
     let target = root.join("target");
-    let bin_name = format!("run_{hash}");
-    let binary = target
+    create_private_dir(&target)?;
+    cargo_build(&entry, &target, &bin_name)?;
+    let built = target
         .join("release")
         .join(format!("{bin_name}{}", std::env::consts::EXE_SUFFIX));
-    if binary.exists() {
-        return Ok(binary);
+    let binary = std::fs::read(&built).map_err(|e| {
+        CliError(format!(
+            "{}: the built runner cannot be read: {e}",
+            built.display()
+        ))
+    })?;
+    write_atomic(&runner_path(&entry), &binary, true)?;
+    let record = EntryManifest {
+        generator: GENERATOR_VERSION.into(),
+        source_sha256: source_sha256.clone(),
+        binary_sha256: sha256_hex(&[&binary]),
+    };
+    let json = serde_json::to_vec_pretty(&record)
+        .map_err(|e| CliError(format!("cannot write the cache manifest: {e}")))?;
+    write_atomic(&entry.join(MANIFEST), &json, false)?;
+    match check_entry(&entry, &source_sha256) {
+        EntryState::Valid => Ok(runner_path(&entry)),
+        // Another run replaced the entry between our write and this check with a different binary;
+        // never run what was not checked.
+        EntryState::Missing | EntryState::Invalid(_) => Err(CliError(format!(
+            "{}: the cache entry changed while it was being written (another embedyn run?); try again",
+            entry.display()
+        ))),
     }
-    let io = |e: std::io::Error, p: &Path| CliError(format!("{}: {e}", p.display()));
-    for (rel, text) in &files {
-        let p = dir.join(rel);
-        std::fs::create_dir_all(p.parent().unwrap()).map_err(|e| io(e, &p))?;
-        std::fs::write(&p, text).map_err(|e| io(e, &p))?;
-    }
-    let cargo_toml = files.iter().find(|(p, _)| p == Path::new("Cargo.toml")).unwrap().1.replace(
-        "# Standalone: not part of any enclosing workspace.",
-        &format!("[[bin]]\nname = \"{bin_name}\"\npath = \"src/main.rs\"\n\n# Standalone: not part of any enclosing workspace."),
-    );
-    std::fs::write(dir.join("Cargo.toml"), cargo_toml).map_err(|e| io(e, &dir))?;
-    std::fs::write(dir.join("src/main.rs"), &main).map_err(|e| io(e, &dir))?;
-    eprintln!(
-        "embedyn: compiling the generated code of `{}` (first use; cached in {})",
-        loaded.robot.name,
-        dir.display()
-    );
+}
+
+/// `cargo build --release` of the runner: offline first (the usual case: libm is in cargo's cache), then
+/// online once.
+///
+/// Cargo reads `.cargo/config.toml` in its working folder and in every folder above it, so it runs in the
+/// file system's root (writable by the administrator only), never inside the cache: with the cache under
+/// a shared folder (`EMBEDYN_CACHE_DIR=/tmp/mine`), another user could otherwise plant `/tmp/.cargo/config.toml`
+/// and have cargo run a program of theirs. The crate is its own workspace, so nothing above it is read.
+fn cargo_build(dir: &Path, target: &Path, bin_name: &str) -> Result<(), CliError> {
     let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
+    let manifest = dir.join("Cargo.toml");
+    let cwd = if cfg!(unix) { Path::new("/") } else { dir };
     let build = |offline: bool| {
         let mut cmd = Command::new(&cargo);
-        cmd.args(["build", "--release", "--quiet", "--bin", &bin_name]);
+        cmd.args([
+            "build",
+            "--release",
+            "--quiet",
+            "--bin",
+            bin_name,
+            "--manifest-path",
+        ])
+        .arg(&manifest);
         if offline {
             cmd.arg("--offline");
         }
-        cmd.current_dir(&dir)
-            .env("CARGO_TARGET_DIR", &target)
+        cmd.current_dir(cwd)
+            .env("CARGO_TARGET_DIR", target)
+            .stdin(Stdio::null())
             .output()
             .map_err(|e| {
                 CliError(format!(
@@ -95,105 +296,187 @@ pub fn build_runner(loaded: &Loaded, options: &GenerateOptions) -> Result<PathBu
                 ))
             })
     };
-    // Offline first (the usual case: libm is in cargo's cache); online once if that fails.
-    if !build(true)?.status.success() {
-        let retry = build(false)?;
-        if !retry.status.success() {
-            return Err(CliError(format!(
-                "compiling the generated code failed:\n{}",
-                String::from_utf8_lossy(&retry.stderr)
-            )));
-        }
+    if build(true)?.status.success() {
+        return Ok(());
     }
-    Ok(binary)
+    let retry = build(false)?;
+    if retry.status.success() {
+        Ok(())
+    } else {
+        Err(CliError(format!(
+            "compiling the generated code failed:\n{}",
+            String::from_utf8_lossy(&retry.stderr)
+        )))
+    }
 }
 
-/// Runs the runner: `rows` are the samples (q ‖ a ‖ b). Returns one output row per sample, or in bench
-/// mode one line with the median ns per call.
+/// What the runner prints per sample.
+pub enum RowShape {
+    /// One row of `len` numbers per input row (`eval`).
+    Eval { len: usize },
+    /// One row holding one positive number, the median ns per call (`bench`).
+    Bench,
+}
+
+/// Runs the runner on `rows` (each q ‖ a ‖ b) and returns its output rows, each checked: as many rows as
+/// asked for, each of the expected length, every entry a number.
 pub fn run(
     binary: &Path,
     algo: &str,
     scalar: &str,
-    mode: &str,
+    shape: RowShape,
     rows: &[Vec<f64>],
 ) -> Result<Vec<Vec<f64>>, CliError> {
+    let mode = match shape {
+        RowShape::Eval { .. } => "eval",
+        RowShape::Bench => "bench",
+    };
+    let mut text = format!("{algo} {scalar} {mode}\n");
+    for r in rows {
+        // `{:?}` prints the shortest decimal that reads back as the same double.
+        let line: Vec<String> = r.iter().map(|x| format!("{x:?}")).collect();
+        text.push_str(&line.join(" "));
+        text.push('\n');
+    }
     let mut child = Command::new(binary)
         .stdin(Stdio::piped())
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
         .map_err(|e| CliError(format!("cannot run {}: {e}", binary.display())))?;
-    {
-        let mut stdin = child.stdin.take().unwrap();
-        let mut text = format!("{algo} {scalar} {mode}\n");
-        for r in rows {
-            let line: Vec<String> = r.iter().map(|x| format!("{x:?}")).collect();
-            text.push_str(&line.join(" "));
-            text.push('\n');
-        }
-        stdin
-            .write_all(text.as_bytes())
-            .map_err(|e| CliError(format!("runner input: {e}")))?;
-    }
-    let out = child
-        .wait_with_output()
-        .map_err(|e| CliError(format!("runner: {e}")))?;
+    let stdin = child.stdin.take();
+    // Fed from another thread, so that a runner writing before it has read everything cannot deadlock.
+    let (written, out) = std::thread::scope(|s| {
+        let feeder = s.spawn(move || match stdin {
+            Some(mut w) => w.write_all(text.as_bytes()),
+            None => Ok(()),
+        });
+        let out = child.wait_with_output();
+        (feeder.join(), out)
+    });
+    let out = out.map_err(|e| CliError(format!("the generated code's runner: {e}")))?;
     if !out.status.success() {
         return Err(CliError(format!(
-            "the generated code's runner failed: {}",
-            String::from_utf8_lossy(&out.stderr)
+            "the generated code's runner failed ({}): {}",
+            out.status,
+            String::from_utf8_lossy(&out.stderr).trim()
         )));
     }
-    Ok(String::from_utf8_lossy(&out.stdout)
-        .lines()
-        .filter(|l| !l.trim().is_empty())
-        .map(|l| {
-            l.split_whitespace()
-                .map(|x| x.parse::<f64>().unwrap_or(f64::NAN))
-                .collect()
-        })
-        .collect())
+    match written {
+        Ok(Ok(())) => {}
+        Ok(Err(e)) => {
+            return Err(CliError(format!(
+                "the generated code's runner did not read its input: {e}"
+            )))
+        }
+        Err(_) => {
+            return Err(CliError(
+                "the generated code's runner input could not be written".into(),
+            ))
+        }
+    }
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    parse_rows(&stdout, rows.len(), &shape)
 }
 
-/// The runner's `main.rs`.
+/// The runner's output as rows of numbers, checked against what was asked for.
+fn parse_rows(stdout: &str, inputs: usize, shape: &RowShape) -> Result<Vec<Vec<f64>>, CliError> {
+    let fail = |what: String| CliError(format!("the generated code's runner {what}"));
+    let (count, len) = match shape {
+        RowShape::Eval { len } => (inputs, *len),
+        RowShape::Bench => (1, 1),
+    };
+    let lines: Vec<&str> = stdout.split_terminator('\n').collect();
+    if lines.len() != count {
+        return Err(fail(format!(
+            "printed {} rows for {count} expected",
+            lines.len()
+        )));
+    }
+    let mut out = Vec::with_capacity(count);
+    for (i, line) in lines.iter().enumerate() {
+        let row = line
+            .split_whitespace()
+            .map(|x| {
+                x.parse::<f64>()
+                    .map_err(|_| fail(format!("printed {x:?} in row {i}, not a number")))
+            })
+            .collect::<Result<Vec<f64>, _>>()?;
+        if row.len() != len {
+            return Err(fail(format!(
+                "printed {} numbers in row {i}, expected {len}",
+                row.len()
+            )));
+        }
+        if matches!(shape, RowShape::Bench) && !(row[0].is_finite() && row[0] > 0.0) {
+            return Err(fail(format!("reported a time of {} ns", row[0])));
+        }
+        out.push(row);
+    }
+    Ok(out)
+}
+
+/// The runner's `main.rs`, generated through `quote` and formatted like all generated code.
 ///
+/// Protocol on stdin: a line `ALGO SCALAR eval|bench`, then one sample per line (q, then two vectors of
+/// length NV, numbers separated by spaces; an empty line for a model without coordinates). Output: one
+/// line per sample (eval), or one line with the median ns per call (bench); every number printed as an
+/// f64 that reads back exactly. Bad input is an error on stderr with exit status 2, never a panic.
 /// For a model with constraints, `aba` prints the pivot ratio after `qdd` and `crba` is
 /// `crba_independent` (`Xᵀ M X`, what the CLI reports).
-fn runner_main(krate: &str, algorithms: &[Algorithm], constrained: bool) -> String {
-    let mut eval_arms = String::new();
-    let mut bench_arms = String::new();
+fn runner_main(krate: &str, algorithms: &[Algorithm], constrained: bool) -> Result<String, String> {
+    let krate: syn::Ident =
+        syn::parse_str(krate).map_err(|e| format!("`{krate}` is not an identifier: {e}"))?;
+    let mut names = Vec::new();
+    let mut eval_calls = Vec::new();
+    let mut bench_calls = Vec::new();
+    let widen = |m: TokenStream| quote!(#m.iter().map(|&x| f64::from(x)));
     for a in algorithms {
-        let name = a.name();
-        let (call, bench_call, emit) = match a {
-            Algorithm::Aba if constrained => (
-                "let ratio = m::aba(&q, &a, &b, &mut out)",
-                "black_box(m::aba(black_box(&s.0), &s.1, &s.2, &mut out))",
-                "let mut o = out.to_vec(); o.push(ratio); emit(&o)",
-            ),
+        let (eval, bench) = match a {
+            Algorithm::Aba if constrained => {
+                let values = widen(quote!(out));
+                (
+                    quote! {
+                        let ratio = m::aba(q, a, b, &mut out);
+                        emit(text, #values.chain([f64::from(ratio)]));
+                    },
+                    quote!(black_box(m::aba(black_box(&s.0), &s.1, &s.2, &mut out));),
+                )
+            }
             Algorithm::Aba => (
-                "m::aba(&q, &a, &b, &mut out)",
-                "m::aba(black_box(&s.0), &s.1, &s.2, &mut out)",
-                "emit(&out)",
-            ),
-            Algorithm::Crba if constrained => (
-                "m::crba_independent(&q, &mut mat_i)",
-                "m::crba_independent(black_box(&s.0), &mut mat_i)",
-                "emit(mat_i.as_flattened())",
+                {
+                    let values = widen(quote!(out));
+                    quote! { m::aba(q, a, b, &mut out); emit(text, #values); }
+                },
+                quote!(m::aba(black_box(&s.0), &s.1, &s.2, &mut out);),
             ),
             Algorithm::Rnea => (
-                "m::rnea(&q, &a, &b, &mut out)",
-                "m::rnea(black_box(&s.0), &s.1, &s.2, &mut out)",
-                "emit(&out)",
+                {
+                    let values = widen(quote!(out));
+                    quote! { m::rnea(q, a, b, &mut out); emit(text, #values); }
+                },
+                quote!(m::rnea(black_box(&s.0), &s.1, &s.2, &mut out);),
+            ),
+            Algorithm::Crba if constrained => (
+                {
+                    let values = widen(quote!(mat_i.as_flattened()));
+                    quote! { m::crba_independent(q, &mut mat_i); emit(text, #values); }
+                },
+                quote!(m::crba_independent(black_box(&s.0), &mut mat_i);),
             ),
             Algorithm::Crba => (
-                "m::crba(&q, &mut mat)",
-                "m::crba(black_box(&s.0), &mut mat)",
-                "emit(mat.as_flattened())",
+                {
+                    let values = widen(quote!(mat.as_flattened()));
+                    quote! { m::crba(q, &mut mat); emit(text, #values); }
+                },
+                quote!(m::crba(black_box(&s.0), &mut mat);),
             ),
             Algorithm::Minv => (
-                "m::minv(&q, &mut mat)",
-                "m::minv(black_box(&s.0), &mut mat)",
-                "emit(mat.as_flattened())",
+                {
+                    let values = widen(quote!(mat.as_flattened()));
+                    quote! { m::minv(q, &mut mat); emit(text, #values); }
+                },
+                quote!(m::minv(black_box(&s.0), &mut mat);),
             ),
             // Not evaluated through the runner (the CLI completes states with the interpreted solver).
             Algorithm::Complete
@@ -201,87 +484,243 @@ fn runner_main(krate: &str, algorithms: &[Algorithm], constrained: bool) -> Stri
             | Algorithm::CrbaIndependent
             | Algorithm::Kinematics => continue,
         };
-        eval_arms.push_str(&format!(
-            "                \"{name}\" => {{ {call}; {emit}; }}\n"
-        ));
-        bench_arms.push_str(&format!("                \"{name}\" => time(&mut || {{ k = (k + 1) % n; let s = &states[k]; {bench_call}; black_box((&out, &mat, &mat_i)); }}),\n"));
+        names.push(a.name());
+        eval_calls.push(eval);
+        bench_calls.push(bench);
     }
-    format!(
-        r#"// Evaluates or times the generated functions of `{krate}` for `embedyn eval --engine generated` and
-// `embedyn bench`. Protocol on stdin: a line `ALGO SCALAR eval|bench`, then one sample per line (q, then
-// two vectors of length NV), numbers separated by spaces. Output: one line per sample (eval) or the
-// median ns per call (bench).
-use std::hint::black_box;
-use std::io::BufRead;
-use {krate}::{{NI, NQ, NV}};
+    let per_scalar = [("f64", quote!(f64)), ("f32", quote!(f32))].map(|(name, scalar)| {
+        let function = format_ident!("run_{}", name);
+        let module = format_ident!("{}", name);
+        quote! {
+            /// Evaluates or times the functions of one scalar module; output is appended to `text`.
+            fn #function(algo: &str, bench: bool, rows: &[Vec<f64>], text: &mut String) -> Result<(), String> {
+                use #krate::#module as m;
+                type S = #scalar;
+                let states: Vec<([S; NQ], [S; NV], [S; NV])> = rows
+                    .iter()
+                    .map(|r| {
+                        (
+                            core::array::from_fn(|i| r[i] as S),
+                            core::array::from_fn(|i| r[NQ + i] as S),
+                            core::array::from_fn(|i| r[NQ + NV + i] as S),
+                        )
+                    })
+                    .collect();
+                let mut out = [0.0 as S; NV];
+                let mut mat = [[0.0 as S; NV]; NV];
+                let mut mat_i = [[0.0 as S; NI]; NI];
+                let _ = (&mut out, &mut mat, &mut mat_i);
+                if bench {
+                    let n = states.len();
+                    if n == 0 {
+                        return Err("bench needs at least one state".into());
+                    }
+                    let mut k = 0usize;
+                    let ns = match algo {
+                        #(#names => time(&mut || {
+                            k = (k + 1) % n;
+                            let s = &states[k];
+                            #bench_calls
+                            black_box((&out, &mat, &mat_i));
+                        }),)*
+                        other => return Err(format!("unknown algorithm {other:?}")),
+                    };
+                    text.push_str(&format!("{ns:?}\n"));
+                } else {
+                    for (q, a, b) in &states {
+                        let _ = (q, a, b);
+                        match algo {
+                            #(#names => { #eval_calls })*
+                            other => return Err(format!("unknown algorithm {other:?}")),
+                        }
+                    }
+                }
+                Ok(())
+            }
+        }
+    });
+    let file = quote! {
+        //! Evaluates or times the generated functions for `embedyn eval --engine generated` and
+        //! `embedyn bench` (protocol: see embedyn's `cli/runner.rs`).
+        use std::hint::black_box;
+        use std::io::{Read, Write};
+        use #krate::{NI, NQ, NV};
 
-fn emit<T: std::fmt::Debug>(x: &[T]) {{
-    let s: Vec<String> = x.iter().map(|v| format!("{{v:?}}")).collect();
-    println!("{{}}", s.join(" "));
-}}
+        /// Appends one output line: every number as the f64 that reads back exactly.
+        fn emit(text: &mut String, values: impl Iterator<Item = f64>) {
+            let line: Vec<String> = values.map(|v| format!("{v:?}")).collect();
+            text.push_str(&line.join(" "));
+            text.push('\n');
+        }
 
-fn time(f: &mut dyn FnMut()) -> f64 {{
-    let mut calls = 1usize;
-    loop {{
-        let t = std::time::Instant::now();
-        for _ in 0..calls {{ f(); }}
-        if t.elapsed().as_micros() >= 200 {{ break; }}
-        calls *= 2;
-    }}
-    let mut runs: Vec<f64> = (0..101).map(|_| {{
-        let t = std::time::Instant::now();
-        for _ in 0..calls {{ f(); }}
-        t.elapsed().as_nanos() as f64 / calls as f64
-    }}).collect();
-    runs.sort_by(|a, b| a.partial_cmp(b).unwrap());
-    runs[50]
-}}
+        /// Median ns per call over 101 batches, each sized to last about 0.2 ms.
+        fn time(f: &mut dyn FnMut()) -> f64 {
+            let mut calls = 1usize;
+            loop {
+                let t = std::time::Instant::now();
+                for _ in 0..calls {
+                    f();
+                }
+                if t.elapsed().as_micros() >= 200 {
+                    break;
+                }
+                calls *= 2;
+            }
+            let mut runs: Vec<f64> = (0..101)
+                .map(|_| {
+                    let t = std::time::Instant::now();
+                    for _ in 0..calls {
+                        f();
+                    }
+                    t.elapsed().as_nanos() as f64 / calls as f64
+                })
+                .collect();
+            runs.sort_by(f64::total_cmp);
+            runs[50]
+        }
 
-macro_rules! run {{
-    ($m:ident, $S:ty, $algo:expr, $bench:expr, $rows:expr) => {{{{
-        use {krate}::$m as m;
-        let states: Vec<([$S; NQ], [$S; NV], [$S; NV])> = $rows
-            .iter()
-            .map(|r: &Vec<f64>| {{
-                let c = |k: usize| r[k] as $S;
-                (core::array::from_fn(|i| c(i)), core::array::from_fn(|i| c(NQ + i)), core::array::from_fn(|i| c(NQ + NV + i)))
-            }})
+        #(#per_scalar)*
+
+        fn run() -> Result<(), String> {
+            let mut input = String::new();
+            std::io::stdin()
+                .read_to_string(&mut input)
+                .map_err(|e| format!("cannot read stdin: {e}"))?;
+            let mut lines = input.split_terminator('\n');
+            let header: Vec<&str> = lines.next().unwrap_or("").split_whitespace().collect();
+            let [algo, scalar, mode] = header[..] else {
+                return Err(format!("bad header {header:?}, expected `ALGO SCALAR eval|bench`"));
+            };
+            let bench = match mode {
+                "bench" => true,
+                "eval" => false,
+                other => return Err(format!("unknown mode {other:?}")),
+            };
+            let mut rows = Vec::new();
+            for (i, line) in lines.enumerate() {
+                let row = line
+                    .split_whitespace()
+                    .map(|x| x.parse::<f64>().map_err(|e| format!("row {i}: {x:?}: {e}")))
+                    .collect::<Result<Vec<f64>, String>>()?;
+                if row.len() != NQ + 2 * NV {
+                    return Err(format!("row {i} has {} numbers, expected {}", row.len(), NQ + 2 * NV));
+                }
+                rows.push(row);
+            }
+            let mut text = String::new();
+            match scalar {
+                "f64" => run_f64(algo, bench, &rows, &mut text)?,
+                "f32" => run_f32(algo, bench, &rows, &mut text)?,
+                other => return Err(format!("unknown scalar {other:?}")),
+            }
+            std::io::stdout()
+                .write_all(text.as_bytes())
+                .map_err(|e| format!("cannot write stdout: {e}"))
+        }
+
+        fn main() -> std::process::ExitCode {
+            match run() {
+                Ok(()) => std::process::ExitCode::SUCCESS,
+                Err(e) => {
+                    let _ = writeln!(std::io::stderr(), "runner: {e}");
+                    std::process::ExitCode::from(2)
+                }
+            }
+        }
+    };
+    format_tokens(&file)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn runner_rows_are_checked() {
+        let eval = |s: &str, n: usize, len: usize| parse_rows(s, n, &RowShape::Eval { len });
+        assert_eq!(
+            eval("1 2\n3 4\n", 2, 2).unwrap(),
+            vec![vec![1.0, 2.0], vec![3.0, 4.0]]
+        );
+        // No coordinates: one empty row per sample.
+        assert_eq!(eval("\n\n", 2, 0).unwrap(), vec![Vec::<f64>::new(); 2]);
+        for (out, message) in [
+            ("", "printed 0 rows for 2 expected"),
+            ("1 2\n", "printed 1 rows for 2 expected"),
+            ("1 2\n3\n", "printed 1 numbers in row 1, expected 2"),
+            ("1 2\n3 4 5\n", "printed 3 numbers in row 1, expected 2"),
+            ("1 2\n3 x\n", "printed \"x\" in row 1, not a number"),
+            ("1 2\n3 4\n5 6\n", "printed 3 rows for 2 expected"),
+        ] {
+            let e = eval(out, 2, 2).unwrap_err().0;
+            assert!(e.contains(message), "{out:?}: {e}");
+        }
+        assert_eq!(
+            parse_rows("12.5\n", 64, &RowShape::Bench).unwrap(),
+            vec![vec![12.5]]
+        );
+        for out in ["", "NaN\n", "0\n", "1 2\n", "1\n2\n"] {
+            assert!(parse_rows(out, 64, &RowShape::Bench).is_err(), "{out:?}");
+        }
+    }
+
+    #[test]
+    fn cache_entries_are_checked_before_use() {
+        let dir = std::env::temp_dir().join(format!("embedyn-entry-test-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        create_private_dir(&dir).unwrap();
+        assert_eq!(check_entry(&dir, "abc"), EntryState::Missing);
+        let binary = b"\x7fELF pretend binary".to_vec();
+        write_atomic(&runner_path(&dir), &binary, true).unwrap();
+        let good = EntryManifest {
+            generator: GENERATOR_VERSION.into(),
+            source_sha256: "abc".into(),
+            binary_sha256: sha256_hex(&[&binary]),
+        };
+        let write_manifest = |m: &[u8]| write_atomic(&dir.join(MANIFEST), m, false).unwrap();
+        write_manifest(&serde_json::to_vec(&good).unwrap());
+        assert_eq!(check_entry(&dir, "abc"), EntryState::Valid);
+        // Stale: built from other source.
+        assert!(matches!(check_entry(&dir, "abd"), EntryState::Invalid(w) if w.contains("stale")));
+        // Truncated binary.
+        write_atomic(&runner_path(&dir), &binary[..4], true).unwrap();
+        assert!(matches!(check_entry(&dir, "abc"), EntryState::Invalid(w) if w.contains("hash")));
+        write_atomic(&runner_path(&dir), &binary, true).unwrap();
+        // Corrupt and truncated manifests.
+        let json = serde_json::to_vec(&good).unwrap();
+        write_manifest(&json[..json.len() / 2]);
+        assert!(
+            matches!(check_entry(&dir, "abc"), EntryState::Invalid(w) if w.contains("corrupt"))
+        );
+        write_manifest(b"\xff\xfe garbage");
+        assert!(matches!(check_entry(&dir, "abc"), EntryState::Invalid(_)));
+        // No temporary files are left behind.
+        let names: Vec<String> = std::fs::read_dir(&dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
             .collect();
-        let mut out = [0.0 as $S; NV];
-        let mut mat = [[0.0 as $S; NV]; NV];
-        let mut mat_i = [[0.0 as $S; NI]; NI];
-        let n = states.len().max(1);
-        let mut k = 0usize;
-        if $bench {{
-            let ns = match $algo {{
-{bench_arms}                other => panic!("unknown algorithm {{other}}"),
-            }};
-            println!("{{ns}}");
-        }} else {{
-            for (q, a, b) in &states {{
-                let _ = (a, b, &mut mat, &mut mat_i);
-                match $algo {{
-{eval_arms}                    other => panic!("unknown algorithm {{other}}"),
-                }}
-            }}
-        }}
-        let _ = (&mut k, n);
-    }}}};
-}}
+        assert!(names.iter().all(|n| !n.contains(".tmp-")), "{names:?}");
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::PermissionsExt;
+            let mode = |p: &Path| std::fs::metadata(p).unwrap().permissions().mode() & 0o777;
+            assert_eq!(mode(&dir), 0o700);
+            assert_eq!(mode(&runner_path(&dir)), 0o700);
+            assert_eq!(mode(&dir.join(MANIFEST)), 0o600);
+        }
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 
-fn main() {{
-    let mut lines = std::io::stdin().lock().lines();
-    let header = lines.next().expect("a header line").expect("stdin");
-    let h: Vec<String> = header.split_whitespace().map(String::from).collect();
-    let rows: Vec<Vec<f64>> = lines
-        .map(|l| l.expect("stdin").split_whitespace().map(|x| x.parse::<f64>().expect("a number")).collect())
-        .collect();
-    let bench = h[2] == "bench";
-    match h[1].as_str() {{
-        "f64" => run!(f64, f64, h[0].as_str(), bench, rows),
-        _ => run!(f32, f32, h[0].as_str(), bench, rows),
-    }}
-}}
-"#
-    )
+    #[test]
+    fn runner_source_parses_for_every_algorithm() {
+        for constrained in [false, true] {
+            let src = runner_main("arm_dynamics", &Algorithm::ALL, constrained).unwrap();
+            assert!(src.contains("use arm_dynamics::{NI, NQ, NV};"), "{src}");
+            assert!(
+                !src.contains("unwrap()") && !src.contains("panic!"),
+                "{src}"
+            );
+        }
+        assert!(runner_main("not an identifier", &Algorithm::ALL, false).is_err());
+    }
 }

@@ -1,0 +1,34 @@
+//! The one place the command line writes: the JSON document on stdout, warnings, progress and errors on
+//! stderr (CONTRACT §3). Nothing here panics: output into a closed pipe ends the program quietly, as Unix
+//! tools do, and a closed stderr never stops the work.
+
+use std::io::{ErrorKind, Write};
+use std::process::ExitCode;
+
+/// Exit status of an error (CONTRACT §3: non-zero, below 128).
+pub const FAILURE: u8 = 1;
+
+/// Exit status of a bug caught at the last line of defence (EX_SOFTWARE of sysexits.h).
+pub const INTERNAL_ERROR: u8 = 70;
+
+/// Writes a line to stderr; a failure to write is ignored (stderr is for people, not for the result).
+pub fn note(text: &str) {
+    let mut err = std::io::stderr().lock();
+    let _ = err.write_all(text.as_bytes());
+    let _ = err.write_all(b"\n");
+}
+
+/// Writes the result to stdout and says how the program ends: quietly with success where the reader
+/// closed the pipe early (`embedyn info M | head -c 10`), with an error message for any other failure
+/// (a full disk).
+pub fn document(text: &str) -> ExitCode {
+    let mut out = std::io::stdout().lock();
+    match out.write_all(text.as_bytes()).and_then(|()| out.flush()) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) if e.kind() == ErrorKind::BrokenPipe => ExitCode::SUCCESS,
+        Err(e) => {
+            note(&format!("error: cannot write the output: {e}"));
+            ExitCode::from(FAILURE)
+        }
+    }
+}

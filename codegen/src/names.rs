@@ -1,0 +1,210 @@
+//! Model strings (robot, link, joint and file names) are data, never code (CONTRACT §1 "Strings are data").
+//!
+//! Everything generated from a name goes through this module: the one sanitizer that derives Rust
+//! identifiers and crate names, and the escaping of names shown in doc comments and Markdown. (TOML goes
+//! through the `toml` serializer and Rust string literals through `quote`, which escape for themselves.)
+
+use sha2::{Digest, Sha256};
+
+/// Identifiers longer than this are shortened (and made distinct by the hash suffix): a crate name
+/// becomes a folder name in the cache, and file systems limit those to 255 bytes.
+const MAX_IDENTIFIER: usize = 48;
+
+/// Hex digits of the suffix that keeps sanitized names distinct.
+const SUFFIX_DIGITS: usize = 8;
+
+/// Words Rust reserves (strict, reserved and edition-dependent keywords); the sanitizer never returns
+/// one (lowercase only: its results are lowercase).
+const KEYWORDS: &[&str] = &[
+    "abstract", "as", "async", "await", "become", "box", "break", "const", "continue", "crate",
+    "do", "dyn", "else", "enum", "extern", "false", "final", "fn", "for", "gen", "if", "impl",
+    "in", "let", "loop", "macro", "match", "mod", "move", "mut", "override", "priv", "pub", "ref",
+    "return", "self", "static", "struct", "super", "trait", "true", "try", "type", "typeof",
+    "union", "unsafe", "unsized", "use", "virtual", "where", "while", "yield",
+];
+
+/// The sanitizer: a snake_case Rust identifier derived from `name`, starting with `prefix` where the
+/// name does not start with a letter.
+///
+/// The result is lowercase ASCII letters, digits and single underscores, never a keyword, never empty,
+/// never starting with a digit or an underscore, at most about [`MAX_IDENTIFIER`] characters. A name that
+/// is already such an identifier (up to ASCII case) is kept as it is; any other name is transliterated
+/// (every other character becomes `_`) and gets `_` and 8 hex digits of the SHA-256 of the original name,
+/// so that names which sanitize alike (`a-b`, `a.b`, `a b`) still give distinct identifiers. Results of
+/// the two kinds cannot meet: a kept name never ends in `_` and 8 hex digits (such names are suffixed
+/// too). Names that differ only in ASCII case give the same identifier (cargo's registry also treats
+/// crate names case-insensitively).
+pub fn identifier(name: &str, prefix: &str) -> String {
+    let mut base = String::with_capacity(name.len());
+    for c in name.chars() {
+        let c = if c.is_ascii_alphanumeric() {
+            c.to_ascii_lowercase()
+        } else {
+            '_'
+        };
+        // Single underscores, none leading: rustc's snake_case lint warns on `__` inside a name.
+        if c == '_' && (base.is_empty() || base.ends_with('_')) {
+            continue;
+        }
+        base.push(c);
+    }
+    while base.ends_with('_') {
+        base.pop();
+    }
+    let kept_as_is = base == name.to_ascii_lowercase()
+        && !KEYWORDS.contains(&base.as_str())
+        && !ends_in_suffix(&base)
+        && base.len() <= MAX_IDENTIFIER
+        && base.starts_with(|c: char| c.is_ascii_alphabetic());
+    if kept_as_is {
+        return base;
+    }
+    base.truncate(MAX_IDENTIFIER);
+    while base.ends_with('_') {
+        base.pop();
+    }
+    if !base.starts_with(|c: char| c.is_ascii_alphabetic()) {
+        base = if base.is_empty() {
+            prefix.to_string()
+        } else {
+            format!("{prefix}_{base}")
+        };
+    }
+    let digest = Sha256::digest(name.as_bytes());
+    let hex: String = digest
+        .iter()
+        .flat_map(|b| [b >> 4, b & 0xf])
+        .take(SUFFIX_DIGITS)
+        .map(|d| char::from_digit(u32::from(d), 16).unwrap_or('0'))
+        .collect();
+    format!("{base}_{hex}")
+}
+
+/// Whether `s` ends in `_` and [`SUFFIX_DIGITS`] lowercase hex digits (the shape of the suffix).
+fn ends_in_suffix(s: &str) -> bool {
+    let b = s.as_bytes();
+    b.len() > SUFFIX_DIGITS
+        && b[b.len() - SUFFIX_DIGITS - 1] == b'_'
+        && b[b.len() - SUFFIX_DIGITS..]
+            .iter()
+            .all(|c| c.is_ascii_digit() || (b'a'..=b'f').contains(c))
+}
+
+/// The crate name of a robot's generated code: its [`identifier`] followed by `_dynamics` (a valid
+/// package name, library name and Rust path segment, in snake_case).
+pub fn crate_name(robot: &str) -> String {
+    format!("{}_dynamics", identifier(robot, "robot"))
+}
+
+/// A name as a reader should see it in generated docs and Markdown: control characters, quotes and
+/// backslashes shown as Rust escapes (`\n`, `\"`, `\u{7}`), so nothing in it can end a comment line or
+/// look like another name; every other character (letters of any script) as it is.
+pub fn shown(name: &str) -> String {
+    name.escape_debug().to_string()
+}
+
+/// A Markdown code span of a name ([`shown`]); safe in doc comments and README text.
+pub fn code_span(name: &str) -> String {
+    let text = shown(name);
+    // The fence is one backtick longer than the longest run of backticks inside.
+    let mut longest = 0;
+    let mut run = 0;
+    for c in text.chars() {
+        run = if c == '`' { run + 1 } else { 0 };
+        longest = longest.max(run);
+    }
+    let fence = "`".repeat(longest + 1);
+    // A space keeps a backtick at either end from joining the fence (Markdown strips one space each side).
+    let pad = if text.starts_with('`') || text.ends_with('`') || text.is_empty() {
+        " "
+    } else {
+        ""
+    };
+    format!("{fence}{pad}{text}{pad}{fence}")
+}
+
+/// A name in a Markdown table cell: a [`code_span`] with its pipes escaped (GitHub tables split cells on
+/// `|` even inside code spans).
+pub fn table_cell(name: &str) -> String {
+    code_span(name).replace('|', "\\|")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// What rustc accepts as a crate name without a warning: ASCII, snake_case, not a keyword.
+    fn is_clean_identifier(s: &str) -> bool {
+        s.starts_with(|c: char| c.is_ascii_lowercase())
+            && s.chars()
+                .all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '_')
+            && !s.contains("__")
+            && !s.ends_with('_')
+            && !KEYWORDS.contains(&s)
+    }
+
+    #[test]
+    fn clean_names_are_kept() {
+        for (name, id) in [("arm7", "arm7"), ("UR5", "ur5"), ("left_leg", "left_leg")] {
+            assert_eq!(identifier(name, "robot"), id);
+        }
+        assert_eq!(crate_name("arm7"), "arm7_dynamics");
+    }
+
+    #[test]
+    fn hostile_names_give_valid_distinct_identifiers() {
+        let names = [
+            "x\"\nbuild = \"evil.rs\"\n#",
+            "a\\b",
+            "*/ compile_error!(\"boom\") /*",
+            "fn",
+            "self",
+            "Self",
+            "crate",
+            "_",
+            "",
+            "2dof",
+            "robot_2dof",
+            "ロボット",
+            "ロボ",
+            "a-b",
+            "a.b",
+            "a b",
+            "a_b",
+            "a__b",
+            "_a_b_",
+            "x_0123abcd",
+            &"long".repeat(100),
+            &"long".repeat(101),
+        ];
+        let ids: Vec<String> = names.iter().map(|n| identifier(n, "robot")).collect();
+        for (n, id) in names.iter().zip(&ids) {
+            assert!(is_clean_identifier(id), "{n:?} -> {id:?}");
+            assert!(id.len() <= MAX_IDENTIFIER + 1 + SUFFIX_DIGITS + 6, "{id}");
+            assert!(syn::parse_str::<syn::Ident>(id).is_ok(), "{id}");
+            assert!(is_clean_identifier(&crate_name(n)));
+        }
+        for i in 0..ids.len() {
+            for k in 0..i {
+                assert_ne!(ids[i], ids[k], "{:?} and {:?}", names[i], names[k]);
+            }
+        }
+        // Deterministic.
+        assert_eq!(identifier("a.b", "robot"), identifier("a.b", "robot"));
+    }
+
+    #[test]
+    fn shown_names_cannot_break_a_comment_line() {
+        for name in ["a\nb", "a\rb", "*/", "`x`", "a|b", "\u{7}", "a\\nb"] {
+            let s = code_span(name);
+            assert!(
+                !s.contains('\n') && !s.contains('\r') && !s.contains('\u{7}'),
+                "{s}"
+            );
+        }
+        assert_ne!(shown("a\nb"), shown("a\\nb"));
+        assert_eq!(code_span("`x`"), "`` `x` ``");
+        assert_eq!(table_cell("a|b"), "`a\\|b`");
+        assert_eq!(code_span("ロボット"), "`ロボット`");
+    }
+}

@@ -1,0 +1,67 @@
+//! Names are data through the `robot!` macro too (CONTRACT §1 "Strings are data"): a model whose robot,
+//! link and joint names carry quotes, backslashes, newlines, `*/`, `compile_error!`, Rust keywords,
+//! unicode and names that collide after sanitizing expands to code that compiles without a warning (this
+//! file denies warnings), lists the names exactly, and computes what the interpreted solver computes.
+#![deny(warnings)]
+
+mod common;
+
+use common::{load_model, Rng};
+use embedyn::{aba, relative_error, Model, Workspace};
+
+mod hostile {
+    embedyn::robot!("tests/data/hostile_names.urdf", f64_only);
+}
+
+/// The names as tests/data/hostile_names.urdf means them (XML entities resolved), written here
+/// independently of the loader.
+const JOINTS: [&str; 12] = [
+    "q\"uote",
+    "back\\slash",
+    "new\nline\rbuild = \"evil.rs\"",
+    "*/ compile_error!(\"boom\") /*",
+    "fn",
+    "self",
+    "Self",
+    "crate",
+    "肩 joint ✓",
+    "a-b",
+    "a.b",
+    "a b",
+];
+const FRAMES: [&str; 13] = [
+    "l\\1",
+    "</robot>",
+    "r#type",
+    "_",
+    "ロボット",
+    "tab\tbed",
+    "back`tick|pipe",
+    "super",
+    "1st",
+    "x-y",
+    "x.y",
+    "x y",
+    "merged \"*/\"",
+];
+
+#[test]
+fn hostile_names_through_the_macro_mean_what_the_model_says() {
+    assert_eq!(hostile::JOINTS, JOINTS);
+    assert_eq!(hostile::FRAMES, FRAMES);
+    let model: Model<f64> = load_model("tests/data/hostile_names.urdf", false);
+    let names: Vec<&str> = model.joints.iter().map(|j| j.name.as_str()).collect();
+    assert_eq!(names, JOINTS);
+    let mut ws = Workspace::new(&model);
+    let mut rng = Rng(8);
+    for _ in 0..5 {
+        let q: [f64; 12] = rng.configuration(&model).try_into().unwrap();
+        let v: [f64; 12] = rng.vec(12, -2.0, 2.0).try_into().unwrap();
+        let tau: [f64; 12] = rng.vec(12, -1.0, 1.0).try_into().unwrap();
+        let want = aba(&model, &mut ws, &q, &v, &tau).unwrap().to_vec();
+        let mut qdd = [0.0; 12];
+        hostile::f64::aba(&q, &v, &tau, &mut qdd);
+        let e = relative_error(&qdd, &want);
+        assert!(e <= 1e-12, "generated vs interpreted: {e:e}");
+    }
+}
