@@ -128,11 +128,19 @@ fn add_linkage(
         let d = pin_in_attach.translation - crank_pose.translation;
         let along = plane.rotation.transpose() * d;
         let angle = (-along.z).atan2(along.x);
-        (plane.compose(&about_y(angle)), JointType::Prismatic, Vector3::x())
+        (
+            plane.compose(&about_y(angle)),
+            JointType::Prismatic,
+            Vector3::x(),
+        )
     } else {
         // Rocker pivot elsewhere in the plane, towards the pin.
         let pivot = plane.compose(&at(rng.uniform(0.15, 0.3), rng.uniform(-0.1, 0.1)));
-        (pivot.compose(&about_y(rng.uniform(-3.0, 3.0))), JointType::Revolute, y)
+        (
+            pivot.compose(&about_y(rng.uniform(-3.0, 3.0))),
+            JointType::Revolute,
+            y,
+        )
     };
     let last = b
         .add_body(
@@ -340,7 +348,9 @@ fn embedded_dynamics_equals_kkt_or_refuses_on_random_loop_topologies() {
     let t = totals.into_inner();
     regular += t.0;
     refused += t.1;
-    eprintln!("random loop topologies: {regular} regular states checked against KKT, {refused} refused");
+    eprintln!(
+        "random loop topologies: {regular} regular states checked against KKT, {refused} refused"
+    );
     assert!(
         regular > 3 * refused && regular > 300,
         "too few regular cases: {regular} checked, {refused} refused"

@@ -423,24 +423,44 @@ fn generated_engine_agrees_with_interpreted() {
     }
 }
 
-/// At a loop's toggle both engines refuse with an error naming the singularity instead of printing a
-/// meaningless answer (the generated engine reads the pivot ratio its `aba` returns); 0.1 rad away both
-/// answer and agree.
+/// At a loop's toggle every engine and scalar refuses, in every algorithm that uses the embedding map
+/// (`aba`, `crba` = XᵀMX, `rnea`'s `tau_independent`), with an error naming the singularity instead of
+/// printing a meaningless answer (the generated engine reads the condition number its functions return);
+/// where cond(Y1) ≈ 7e4, f32 (limit 8.4e3) refuses and f64 (limit 1e10) answers; 0.1 rad away every
+/// engine answers and they agree.
 #[test]
 fn both_engines_refuse_a_singular_loop_configuration() {
     let model = repo("models/loops/singular_four_bar.urdf");
     let t = std::f64::consts::FRAC_PI_3;
     // crank, coupler, rocker: the flat parallelogram.
-    let at = json!({"samples": [{"q": [t, -t, t], "v": [0.0, 0.0, 0.0], "tau": [0.3, 0.0, 0.0]}]})
+    let at = json!({"samples": [{"q": [t, -t, t], "v": [0.0, 0.0, 0.0], "tau": [0.3, 0.0, 0.0], "qdd": [0.0, 0.0, 0.0]}]})
+        .to_string();
+    // 4.5e-5 rad from the toggle (completed in f64): cond₁(Y1) = 6.7e4.
+    let close = json!({"samples": [{"q": [1.0471528828373828, -1.0471528828367584, 1.0471528828386318], "v": [0.0, 0.0, 0.0], "tau": [0.3, 0.0, 0.0], "qdd": [0.0, 0.0, 0.0]}]})
         .to_string();
     for engine in ["interpreted", "generated"] {
-        let (ok, _, err) =
-            embedyn_cached(&["eval", &model, "--algo", "aba", "--engine", engine], &at);
-        assert!(!ok, "{engine}: accepted the toggle");
-        assert!(
-            err.contains("singular configuration") && err.contains("cond(Y1)"),
-            "{engine}: {err}"
-        );
+        for algo in ["aba", "crba", "rnea"] {
+            for scalar in ["f64", "f32"] {
+                let args = [
+                    "eval", &model, "--algo", algo, "--engine", engine, "--scalar", scalar,
+                ];
+                let (ok, _, err) = embedyn_cached(&args, &at);
+                assert!(!ok, "{engine} {algo} {scalar}: accepted the toggle");
+                assert!(
+                    err.contains("singular configuration") && err.contains("cond(Y1)"),
+                    "{engine} {algo} {scalar}: {err}"
+                );
+                let (ok, _, err) = embedyn_cached(&args, &close);
+                if scalar == "f32" {
+                    assert!(
+                        !ok && err.contains("≥ 8.4e3"),
+                        "{engine} {algo} f32 at cond 6.7e4: {err}"
+                    );
+                } else {
+                    assert!(ok, "{engine} {algo} f64 at cond 6.7e4: {err}");
+                }
+            }
+        }
     }
     let near = json!({"samples": [{"q": [t - 0.1, -(t - 0.1), t - 0.1], "v": [0.0, 0.0, 0.0], "tau": [0.3, 0.0, 0.0]}]}).to_string();
     let interp = json_of(&["eval", &model, "--algo", "aba"], &near);

@@ -86,18 +86,27 @@ fn eval_generated(
     let len = match algo {
         Algo::Aba if model.has_constraints() => nv + 1,
         Algo::Aba | Algo::Rnea => nv,
-        Algo::Crba if model.has_constraints() => model.independent_nv().pow(2),
+        Algo::Crba if model.has_constraints() => model.independent_nv().pow(2) + 1,
         Algo::Crba => nv * nv,
     };
     let outputs = super::runner::run(&binary, name, scalar_name, RowShape::Eval { len }, &rows)?;
     let mut ws = Workspace::new(model);
+    let mut model32 = match scalar {
+        Scalar::F32 if algo == Algo::Rnea && model.has_constraints() => {
+            let m32 = loaded.model::<f32>(options)?;
+            let ws32 = Workspace::new(&m32);
+            Some((m32, ws32))
+        }
+        _ => None,
+    };
     let independent = independent_indices(model);
     let mut out = Vec::with_capacity(outputs.len());
     for (i, (o, row)) in outputs.iter().zip(&rows).enumerate() {
         let mut o = o.clone();
-        if algo == Algo::Aba && model.has_constraints() {
-            // The generated `aba` also returns the singularity measure cond₁(Y1); refuse where the
-            // interpreted engine does, by the same threshold for the scalar (NaN counts as singular).
+        if algo != Algo::Rnea && model.has_constraints() {
+            // The generated `aba` and `crba_independent` also return the singularity measure cond₁(Y1);
+            // refuse where the interpreted engine does, by the same threshold for the scalar (NaN counts
+            // as singular).
             let condition = o.pop().unwrap_or(f64::NAN);
             let threshold = match scalar {
                 Scalar::F64 => singularity_threshold::<f64>(),
@@ -105,8 +114,7 @@ fn eval_generated(
             };
             if condition.is_nan() || condition >= threshold {
                 return Err(CliError(format!(
-                    "sample {i}: the loops are at or too near a singular configuration: cond(Y1) = {condition:.3e} ≥ {threshold:.1e}, the limit in {} (the dependent joints are not determined by the independent ones here)",
-                    scalar_name
+                    "sample {i}: the loops are at or too near a singular configuration: cond(Y1) = {condition:.3e} ≥ {threshold:.1e}, the limit in {scalar_name} (the dependent joints are not determined by the independent ones here)"
                 )));
             }
         }
@@ -117,11 +125,11 @@ fn eval_generated(
                 json!({ "qdd": o, "qdd_independent": independent.iter().map(|&k| o[k]).collect::<Vec<_>>() })
             }
             Algo::Rnea => {
-                let tau_independent: Vec<f64> = if model.has_constraints() {
-                    let x = embedding_map(model, &mut ws, q).map_err(|e| CliError(format!("sample {i}: {e}")))?;
-                    (0..x.ncols()).map(|c| (0..nv).map(|r| x[(r, c)] * o[r]).sum()).collect()
-                } else {
-                    o.clone()
+                // Xᵀ τ with X in the scalar asked for, so that the singularity verdict is that scalar's.
+                let tau_independent: Vec<f64> = match model32.as_mut() {
+                    Some((m32, ws32)) if model.has_constraints() => project(m32, ws32, q, &o, i)?,
+                    _ if model.has_constraints() => project(model, &mut ws, q, &o, i)?,
+                    _ => o.clone(),
                 };
                 let tau_independent = finite(&tau_independent, i, "tau_independent")?;
                 json!({ "tau": o, "tau_independent": tau_independent })
@@ -136,6 +144,21 @@ fn eval_generated(
     }
     let joints: Vec<&str> = model.joints.iter().map(|j| j.name.as_str()).collect();
     Ok(json!({ "joints": joints, "samples": out }))
+}
+
+/// `Xᵀ τ` (the generalized force on the independent coordinates) with `X` of `model` at `q`.
+fn project<T: Real>(
+    model: &Model<T>,
+    ws: &mut Workspace<T>,
+    q: &[f64],
+    tau: &[f64],
+    sample: usize,
+) -> Result<Vec<f64>, CliError> {
+    let q = cast::<T>(q);
+    let x = embedding_map(model, ws, &q).map_err(|e| CliError(format!("sample {sample}: {e}")))?;
+    Ok((0..x.ncols())
+        .map(|c| (0..tau.len()).map(|r| x[(r, c)].to_f64() * tau[r]).sum())
+        .collect())
 }
 
 /// v indices of the independent joints, in joint order.

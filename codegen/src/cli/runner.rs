@@ -422,8 +422,8 @@ fn parse_rows(stdout: &str, inputs: usize, shape: &RowShape) -> Result<Vec<Vec<f
 /// length NV, numbers separated by spaces; an empty line for a model without coordinates). Output: one
 /// line per sample (eval), or one line with the median ns per call (bench); every number printed as an
 /// f64 that reads back exactly. Bad input is an error on stderr with exit status 2, never a panic.
-/// For a model with constraints, `aba` prints the pivot ratio after `qdd` and `crba` is
-/// `crba_independent` (`Xᵀ M X`, what the CLI reports).
+/// For a model with constraints, `crba` is `crba_independent` (`Xᵀ M X`, what the CLI reports), and
+/// `aba` and `crba` print the singularity measure cond₁(Y1) after their values.
 fn runner_main(krate: &str, algorithms: &[Algorithm], constrained: bool) -> Result<String, String> {
     let krate: syn::Ident =
         syn::parse_str(krate).map_err(|e| format!("`{krate}` is not an identifier: {e}"))?;
@@ -437,8 +437,8 @@ fn runner_main(krate: &str, algorithms: &[Algorithm], constrained: bool) -> Resu
                 let values = widen(quote!(out));
                 (
                     quote! {
-                        let ratio = m::aba(q, a, b, &mut out);
-                        emit(text, #values.chain([f64::from(ratio)]));
+                        let condition = m::aba(q, a, b, &mut out);
+                        emit(text, #values.chain([f64::from(condition)]));
                     },
                     quote!(black_box(m::aba(black_box(&s.0), &s.1, &s.2, &mut out));),
                 )
@@ -460,9 +460,12 @@ fn runner_main(krate: &str, algorithms: &[Algorithm], constrained: bool) -> Resu
             Algorithm::Crba if constrained => (
                 {
                     let values = widen(quote!(mat_i.as_flattened()));
-                    quote! { m::crba_independent(q, &mut mat_i); emit(text, #values); }
+                    quote! {
+                        let condition = m::crba_independent(q, &mut mat_i);
+                        emit(text, #values.chain([f64::from(condition)]));
+                    }
                 },
-                quote!(m::crba_independent(black_box(&s.0), &mut mat_i);),
+                quote!(black_box(m::crba_independent(black_box(&s.0), &mut mat_i));),
             ),
             Algorithm::Crba => (
                 {
