@@ -409,3 +409,33 @@ bad!(
     "coupling_without_name.urdf",
     [":11:", "<coupling>", "missing attribute `name`"]
 );
+bad!(
+    inertia_overflow,
+    "inertia_overflow.urdf",
+    [
+        ":6:",
+        "link \"link2\" <inertial>",
+        "overflows f64",
+        "mass 1e308"
+    ]
+);
+bad!(
+    inertia_overflow_merged,
+    "inertia_overflow_merged.urdf",
+    [
+        ":7:",
+        "link \"link2\" <inertial>",
+        "fixed to (link \"link1\") overflows f64"
+    ]
+);
+bad!(
+    inertia_overflow_combined,
+    "inertia_overflow_combined.urdf",
+    [
+        ":7:",
+        "link \"link2\"",
+        "joint `joint1`",
+        "overflow",
+        "largest is body `link2`'s"
+    ]
+);

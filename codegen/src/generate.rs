@@ -162,6 +162,10 @@ pub fn generate_tokens(
     options: &GenerateOptions,
 ) -> Result<TokenStream, LoadError> {
     let model64 = loaded.model::<f64>(&options.model)?;
+    if options.f32 {
+        // The f32 functions fold the same constants as f32 literals: each must fit f32.
+        crate::assemble::convert_model::<f32>(&loaded.robot, &model64)?;
+    }
     if let Some(a) = options
         .algorithms
         .iter()
