@@ -292,7 +292,7 @@ fn model_build_error(robot: &Robot, e: ModelError, scalar: &str) -> LoadError {
                 format!(" at the precision of {scalar}")
             };
             format!(
-                "the links this joint moves have no inertia about its axis{precision} (D = {d:e}, no more than rounding of the inertia they have), so its acceleration is undetermined; give the child link an <inertial> or make the joint fixed"
+                "the links this joint moves have no inertia about its axis beyond rounding{precision} (D = {d:e}), so its acceleration is undetermined; give the child link an <inertial> or make the joint fixed"
             )
         }
         other => other.to_string(),
