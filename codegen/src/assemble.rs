@@ -1,10 +1,17 @@
 //! From the IR to the runtime's [`Model`]: depth-first numbering, fixed joints merged into their parent
-//! body (inertias combined exactly, in the target scalar), the optional free-flyer root.
+//! body (inertias combined exactly), the optional free-flyer root.
+//!
+//! The model is built and validated in f64, whatever scalar is asked for, and then converted: the
+//! structure (redundant loop equations, independent coordinates, which joints determine their
+//! accelerations) is decided once, in f64, so that every scalar type gets the same model, and a
+//! constant that does not fit the narrower type is an error rather than another model.
 
 use crate::error::{LoadError, Location};
 use crate::ir::{Inertial, JointKind, LoopKind, Origin, Robot};
 use embedyn_runtime::nalgebra::{Matrix3, Vector3};
-use embedyn_runtime::{JointType, Model, ModelError, Real, SpatialInertia, Transform};
+use embedyn_runtime::{
+    JointType, Model, ModelElement, ModelError, Real, SpatialInertia, Transform,
+};
 
 /// Choices made when turning a file into a model.
 #[derive(Clone, Debug, PartialEq)]
@@ -51,8 +58,29 @@ pub fn inertial_about_link<T: Real>(i: &Inertial) -> SpatialInertia<T> {
     SpatialInertia::from_com(f(i.mass), frame.translation, ic_link)
 }
 
-/// Builds the model in scalar `T`.
+fn is_finite(i: &SpatialInertia<f64>) -> bool {
+    i.mass.is_finite()
+        && i.first_moment.iter().all(|x| x.is_finite())
+        && i.rotational.iter().all(|x| x.is_finite())
+}
+
+/// Builds the model in scalar `T`: built and validated in f64, then converted by [`Model::try_cast`].
 pub fn build_model<T: Real>(robot: &Robot, options: &ModelOptions) -> Result<Model<T>, LoadError> {
+    convert_model(robot, &build_model_f64(robot, options)?)
+}
+
+/// The f64 model converted to `U`, or an error naming the element whose constant does not fit `U` or
+/// the joint whose acceleration `U` cannot resolve.
+pub(crate) fn convert_model<U: Real>(
+    robot: &Robot,
+    model: &Model<f64>,
+) -> Result<Model<U>, LoadError> {
+    model
+        .try_cast::<U>()
+        .map_err(|e| model_build_error(robot, e, U::NAME))
+}
+
+fn build_model_f64(robot: &Robot, options: &ModelOptions) -> Result<Model<f64>, LoadError> {
     let path = &robot.source;
     let joint_loc = |j: usize| {
         let joint = &robot.joints[j];
@@ -77,16 +105,16 @@ pub fn build_model<T: Real>(robot: &Robot, options: &ModelOptions) -> Result<Mod
 
     // Depth-first walk over links. Each link gets a body (None: fixed to the world) and its pose in that
     // body's frame.
-    struct Pending<T: Real> {
+    struct Pending {
         parent: Option<usize>,
         joint: Option<usize>, // None: the --floating root joint
-        placement: Transform<T>,
+        placement: Transform<f64>,
         link: usize,
-        inertia: SpatialInertia<T>,
-        links: Vec<(String, Transform<T>)>,
+        inertia: SpatialInertia<f64>,
+        links: Vec<(String, Transform<f64>)>,
     }
-    let mut bodies: Vec<Pending<T>> = Vec::new();
-    let mut link_body: Vec<Option<(Option<usize>, Transform<T>)>> = vec![None; robot.links.len()];
+    let mut bodies: Vec<Pending> = Vec::new();
+    let mut link_body: Vec<Option<(Option<usize>, Transform<f64>)>> = vec![None; robot.links.len()];
     let root_body = if options.floating {
         bodies.push(Pending {
             parent: None,
@@ -135,18 +163,35 @@ pub fn build_model<T: Real>(robot: &Robot, options: &ModelOptions) -> Result<Mod
         if let Some(b) = body {
             bodies[b].links.push((link.name.clone(), pose));
             if let Some(inertial) = &link.inertial {
-                let i = inertial_about_link::<T>(inertial).act(&pose);
-                bodies[b].inertia = bodies[b].inertia + i;
+                let i = inertial_about_link::<f64>(inertial).act(&pose);
+                let at = Location::new(
+                    path,
+                    link.line,
+                    format!("link \"{}\" <inertial>", link.name),
+                );
+                if !is_finite(&i) {
+                    return Err(LoadError::new(at, format!(
+                        "the link's inertia about its body frame overflows f64 (mass {:e} kg, centre of mass {:e} m from the frame, rotational inertia up to {:e} kg·m²): the numbers are too large to combine",
+                        inertial.mass,
+                        pose.act_point(&Vector3::from(inertial.origin.xyz)).norm(),
+                        inertial.inertia.iter().fold(0.0f64, |m, x| m.max(x.abs())),
+                    )));
+                }
+                let merged = bodies[b].inertia + i;
+                if !is_finite(&merged) {
+                    let body_link = &robot.links[bodies[b].link].name;
+                    return Err(LoadError::new(at, format!(
+                        "adding this link's inertia to the body it is fixed to (link \"{body_link}\") overflows f64: the numbers are too large to combine"
+                    )));
+                }
+                bodies[b].inertia = merged;
             }
         }
     }
 
     let g = options.gravity;
-    let mut builder = Model::<T>::builder(robot.name.clone()).gravity(Vector3::new(
-        T::from_f64(g[0]),
-        T::from_f64(g[1]),
-        T::from_f64(g[2]),
-    ));
+    let mut builder =
+        Model::<f64>::builder(robot.name.clone()).gravity(Vector3::new(g[0], g[1], g[2]));
     for (b, pending) in bodies.iter().enumerate() {
         let (name, jtype, axis) = match pending.joint {
             None => (ROOT_JOINT.to_string(), JointType::Floating, [0.0; 3]),
@@ -162,11 +207,7 @@ pub fn build_model<T: Real>(robot: &Robot, options: &ModelOptions) -> Result<Mod
                 (joint.name.clone(), t, joint.axis)
             }
         };
-        let axis = Vector3::new(
-            T::from_f64(axis[0]),
-            T::from_f64(axis[1]),
-            T::from_f64(axis[2]),
-        );
+        let axis = Vector3::new(axis[0], axis[1], axis[2]);
         let index = builder
             .add_body(
                 pending.parent,
@@ -177,7 +218,12 @@ pub fn build_model<T: Real>(robot: &Robot, options: &ModelOptions) -> Result<Mod
                 robot.links[pending.link].name.clone(),
                 pending.inertia,
             )
-            .map_err(|e| model_error(robot, &bodies_joint(&bodies, b), e))?;
+            .map_err(|e| {
+                LoadError::new(
+                    joint_location(robot, bodies_joint(&bodies, b)),
+                    e.to_string(),
+                )
+            })?;
         let mut links = pending.links.clone();
         // The body's own link first.
         if let Some(k) = links
@@ -189,7 +235,7 @@ pub fn build_model<T: Real>(robot: &Robot, options: &ModelOptions) -> Result<Mod
         let (names, placements) = links.into_iter().unzip();
         builder.set_merged_links(index, names, placements);
     }
-    fn bodies_joint<T: Real>(bodies: &[Pending<T>], b: usize) -> Option<usize> {
+    fn bodies_joint(bodies: &[Pending], b: usize) -> Option<usize> {
         bodies[b].joint
     }
     let mut joint_body = vec![None; robot.joints.len()];
@@ -200,29 +246,68 @@ pub fn build_model<T: Real>(robot: &Robot, options: &ModelOptions) -> Result<Mod
         }
         body_parent.push(p.parent);
     }
-    let link_frames: Vec<(Option<usize>, Transform<T>)> =
+    let link_frames: Vec<(Option<usize>, Transform<f64>)> =
         link_body.iter().map(|x| x.expect("reachable")).collect();
     add_constraints(robot, &link_frames, &joint_body, &body_parent, &mut builder)?;
-    builder.build().map_err(|e| {
-        let joint = match &e {
-            ModelError::NoInertiaAboutAxis { joint, .. } => {
-                robot.joints.iter().position(|j| &j.name == joint)
-            }
-            ModelError::LoopNeverCloses { group, .. }
-            | ModelError::DependentMismatch { group, .. }
-            | ModelError::SingularDependentChoice { group, .. } => {
-                return LoadError::new(constraint_location(robot, group), e.to_string());
-            }
-            ModelError::EmptyConstraint { constraint } => {
-                return LoadError::new(constraint_location(robot, constraint), e.to_string());
-            }
-            ModelError::FloatingInGroup { joint } => {
-                robot.joints.iter().position(|j| &j.name == joint)
-            }
-            _ => None,
-        };
-        model_error(robot, &joint, e)
-    })
+    builder
+        .build()
+        .map_err(|e| model_build_error(robot, e, f64::NAME))
+}
+
+/// A [`ModelError`] of building or converting the model, located at the element it names.
+fn model_build_error(robot: &Robot, e: ModelError, scalar: &str) -> LoadError {
+    let joint_named = |name: &str| robot.joints.iter().position(|j| j.name == name);
+    let joint = match &e {
+        ModelError::LoopNeverCloses { group, .. }
+        | ModelError::DependentMismatch { group, .. }
+        | ModelError::SingularDependentChoice { group, .. } => {
+            return LoadError::new(constraint_location(robot, group), e.to_string());
+        }
+        ModelError::EmptyConstraint { constraint } => {
+            return LoadError::new(constraint_location(robot, constraint), e.to_string());
+        }
+        ModelError::ConstantDoesNotFit { element, .. } => {
+            let location = match element {
+                ModelElement::Body(link) => link_location(robot, link),
+                ModelElement::Joint(name) => joint_location(robot, joint_named(name)),
+                ModelElement::Constraint(name) => constraint_location(robot, name),
+                ModelElement::Gravity => Location::new(&robot.source, None, "gravity"),
+            };
+            return LoadError::new(location, e.to_string());
+        }
+        ModelError::InertiaOverflow { body, .. } => {
+            return LoadError::new(link_location(robot, body), e.to_string());
+        }
+        ModelError::NoInertiaAboutAxis { joint, .. }
+        | ModelError::FloatingInGroup { joint }
+        | ModelError::BadAxis { joint }
+        | ModelError::FloatingNotRoot { joint }
+        | ModelError::ParentNotYetAdded { joint, .. } => joint_named(joint),
+    };
+    let message = match e {
+        ModelError::NoInertiaAboutAxis { d, .. } => {
+            let precision = if scalar == f64::NAME {
+                String::new()
+            } else {
+                format!(" at the precision of {scalar}")
+            };
+            format!(
+                "the links this joint moves have no inertia about its axis beyond rounding{precision} (D = {d:e}), so its acceleration is undetermined; give the child link an <inertial> or make the joint fixed"
+            )
+        }
+        other => other.to_string(),
+    };
+    LoadError::new(joint_location(robot, joint), message)
+}
+
+/// Where link `name` is written.
+fn link_location(robot: &Robot, name: &str) -> Location {
+    let line = robot
+        .links
+        .iter()
+        .find(|l| l.name == name)
+        .and_then(|l| l.line);
+    Location::new(&robot.source, line, format!("link \"{name}\""))
 }
 
 /// Where the first constraint named in `names` (a comma-separated list) is written.
@@ -278,12 +363,12 @@ fn common_ancestor(
 }
 
 /// URDF+ loops and couplings and URDF mimic joints, as runtime constraints (CONTRACT §1).
-fn add_constraints<T: Real>(
+fn add_constraints(
     robot: &Robot,
-    link_frames: &[(Option<usize>, Transform<T>)],
+    link_frames: &[(Option<usize>, Transform<f64>)],
     joint_body: &[Option<usize>],
     body_parent: &[Option<usize>],
-    builder: &mut embedyn_runtime::ModelBuilder<T>,
+    builder: &mut embedyn_runtime::ModelBuilder<f64>,
 ) -> Result<(), LoadError> {
     use embedyn_runtime::constraints::{Constraint, ConstraintKind, LoopClosure, LoopType};
     let path_of = &robot.source;
@@ -302,11 +387,7 @@ fn add_constraints<T: Real>(
             LoopKind::Spherical => LoopType::Spherical,
             LoopKind::Fixed => LoopType::Fixed,
         };
-        let axis = Vector3::new(
-            T::from_f64(l.axis[0]),
-            T::from_f64(l.axis[1]),
-            T::from_f64(l.axis[2]),
-        );
+        let axis = Vector3::new(l.axis[0], l.axis[1], l.axis[2]);
         let closure = LoopClosure::new(
             kind,
             pb,
@@ -324,12 +405,12 @@ fn add_constraints<T: Real>(
         let pb = link_frames[c.predecessor].0;
         let sb = link_frames[c.successor].0;
         let top = common_ancestor(body_parent, pb, sb);
-        let mut terms: Vec<(usize, T)> = Vec::new();
+        let mut terms: Vec<(usize, f64)> = Vec::new();
         for b in path(body_parent, pb, top) {
-            terms.push((b, T::from_f64(c.ratio)));
+            terms.push((b, c.ratio));
         }
         for b in path(body_parent, sb, top) {
-            terms.push((b, -T::one()));
+            terms.push((b, -1.0));
         }
         if terms.is_empty() {
             return Err(LoadError::new(
@@ -339,10 +420,7 @@ fn add_constraints<T: Real>(
         }
         builder.add_constraint(Constraint {
             name: c.name.clone(),
-            kind: ConstraintKind::Linear {
-                terms,
-                offset: T::zero(),
-            },
+            kind: ConstraintKind::Linear { terms, offset: 0.0 },
         });
     }
     for (j, joint) in robot.joints.iter().enumerate() {
@@ -356,8 +434,8 @@ fn add_constraints<T: Real>(
                 "a fixed joint cannot mimic another joint",
             ));
         };
-        let mut terms = vec![(body, T::one())];
-        let mut offset = T::zero();
+        let mut terms = vec![(body, 1.0)];
+        let mut offset = 0.0;
         for m in &joint.mimics {
             let driver = robot
                 .joints
@@ -373,8 +451,8 @@ fn add_constraints<T: Real>(
             if db == body {
                 return Err(LoadError::new(loc(m.line), "a joint cannot mimic itself"));
             }
-            terms.push((db, -T::from_f64(m.multiplier)));
-            offset -= T::from_f64(m.offset);
+            terms.push((db, -m.multiplier));
+            offset -= m.offset;
         }
         builder.add_constraint(Constraint {
             name: joint.name.clone(),
@@ -392,10 +470,10 @@ fn add_constraints<T: Real>(
     Ok(())
 }
 
-fn model_error(robot: &Robot, joint: &Option<usize>, e: ModelError) -> LoadError {
-    let location = match joint {
+fn joint_location(robot: &Robot, joint: Option<usize>) -> Location {
+    match joint {
         Some(j) => {
-            let joint = &robot.joints[*j];
+            let joint = &robot.joints[j];
             Location::new(
                 &robot.source,
                 joint.line,
@@ -403,12 +481,5 @@ fn model_error(robot: &Robot, joint: &Option<usize>, e: ModelError) -> LoadError
             )
         }
         None => Location::new(&robot.source, None, format!("joint \"{ROOT_JOINT}\"")),
-    };
-    let message = match e {
-        ModelError::NoInertiaAboutAxis { d, .. } => format!(
-            "the links this joint moves have no inertia about its axis (D = {d:e}), so its acceleration is undetermined; give the child link an <inertial> or make the joint fixed"
-        ),
-        other => other.to_string(),
-    };
-    LoadError::new(location, message)
+    }
 }

@@ -162,6 +162,13 @@ pub fn generate_tokens(
     options: &GenerateOptions,
 ) -> Result<TokenStream, LoadError> {
     let model64 = loaded.model::<f64>(&options.model)?;
+    if options.f32 {
+        // The f32 functions fold the same constants as f32 literals: each must fit f32.
+        crate::assemble::convert_model::<f32>(&loaded.robot, &model64).map_err(|mut e| {
+            e.message += " (generated f32 code cannot hold it; generate the f64 functions only)";
+            e
+        })?;
+    }
     if let Some(a) = options
         .algorithms
         .iter()

@@ -1,8 +1,8 @@
 //! The model IR: what a model file says, checked and in SI units, before any choice of scalar type.
 //!
 //! Every output (the interpreted model, generated code, `embedyn info`) is made from this one structure.
-//! Numbers stay as the file wrote them (`f64`), so that each scalar type evaluates the trigonometry of
-//! `rpy` and the merging of fixed joints in its own precision.
+//! Numbers stay as the file wrote them (`f64`); the model is assembled and validated from them in f64 and
+//! then converted to the scalar in use (see `assemble.rs`), so every scalar gets one structure.
 
 use std::path::PathBuf;
 

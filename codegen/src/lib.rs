@@ -23,6 +23,7 @@ pub mod sampling;
 pub mod standalone;
 pub mod trace;
 mod urdf;
+mod xml_text;
 
 pub use assemble::{build_model, inertial_about_link, ModelOptions, ROOT_JOINT};
 pub use error::{LoadError, Location, Warning};

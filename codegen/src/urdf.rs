@@ -7,6 +7,8 @@ use crate::error::{LoadError, Location, Warning};
 use crate::ir::{
     Coupling, Inertial, Joint, JointKind, Link, Loop, LoopFrame, LoopKind, Mimic, Origin, Robot,
 };
+use crate::xml_text::{nesting_too_deep, LineIndex, MAX_NESTING};
+use embedyn_runtime::nalgebra::Matrix3;
 use roxmltree::{Document, Node};
 use std::collections::HashMap;
 use std::path::Path;
@@ -31,6 +33,15 @@ pub fn load_urdf(path: &Path) -> Result<Loaded, LoadError> {
 
 /// Parses URDF text; `path` is used in messages only.
 pub fn parse_urdf(text: &str, path: &Path) -> Result<Loaded, LoadError> {
+    let lines = LineIndex::new(text);
+    if let Some(deep) = nesting_too_deep(text, MAX_NESTING) {
+        return Err(LoadError::new(
+            Location::new(path, Some(lines.line(deep.offset)), "XML"),
+            format!(
+                "elements are nested more than {MAX_NESTING} deep here; a URDF needs a handful of levels, so this is not a model file (refused before parsing, which would exhaust the stack)"
+            ),
+        ));
+    }
     let doc = Document::parse(text).map_err(|e| {
         let pos = e.pos();
         LoadError::new(
@@ -40,6 +51,7 @@ pub fn parse_urdf(text: &str, path: &Path) -> Result<Loaded, LoadError> {
     })?;
     let mut p = Parser {
         doc: &doc,
+        lines,
         path,
         warnings: Vec::new(),
     };
@@ -52,13 +64,14 @@ pub fn parse_urdf(text: &str, path: &Path) -> Result<Loaded, LoadError> {
 
 struct Parser<'a, 'input> {
     doc: &'a Document<'input>,
+    lines: LineIndex,
     path: &'a Path,
     warnings: Vec<Warning>,
 }
 
 impl<'a, 'input> Parser<'a, 'input> {
     fn line(&self, node: Node) -> Option<u32> {
-        Some(self.doc.text_pos_at(node.range().start).row)
+        Some(self.lines.line(node.range().start))
     }
 
     fn loc(&self, node: Node, element: impl Into<String>) -> Location {
@@ -198,13 +211,42 @@ impl<'a, 'input> Parser<'a, 'input> {
             }
         }
         let mut loops = Vec::new();
-        for node in root.children().filter(|n| n.has_tag_name("loop")) {
-            loops.push(self.loop_element(node, &link_index)?);
-        }
         let mut couplings = Vec::new();
-        for node in root.children().filter(|n| n.has_tag_name("coupling")) {
-            couplings.push(self.coupling(node, &link_index)?);
+        // Every constraint has a name that messages and `info` use to point at it: a loop's or a
+        // coupling's own, a mimic joint's is its joint's. The names must tell them apart.
+        let mut constraint_names: HashMap<String, (&str, Option<u32>)> = joints
+            .iter()
+            .filter(|j| !j.mimics.is_empty())
+            .map(|j| (j.name.clone(), ("the <mimic> of joint", j.line)))
+            .collect();
+        for node in root
+            .children()
+            .filter(|n| n.has_tag_name("loop") || n.has_tag_name("coupling"))
+        {
+            let (tag, name, line) = if node.has_tag_name("loop") {
+                let l = self.loop_element(node, &link_index)?;
+                let named = ("loop", l.name.clone(), l.line);
+                loops.push(l);
+                named
+            } else {
+                let c = self.coupling(node, &link_index)?;
+                let named = ("coupling", c.name.clone(), c.line);
+                couplings.push(c);
+                named
+            };
+            if let Some((other, other_line)) = constraint_names.get(&name) {
+                let at = other_line.map_or(String::new(), |l| format!(" at line {l}"));
+                return self.err(
+                    node,
+                    format!("{tag} \"{name}\""),
+                    format!(
+                        "{other} \"{name}\"{at} already has this name; loops, couplings and mimic joints are constraints that messages and `info` name, so each needs its own name"
+                    ),
+                );
+            }
+            constraint_names.insert(name, (tag, line));
         }
+        self.warn_ignored_joint_dynamics(root);
         Ok(Robot {
             name,
             source: self.path.to_path_buf(),
@@ -258,28 +300,26 @@ impl<'a, 'input> Parser<'a, 'input> {
             inertia[k] = self.number(inode, a, None, &iw)?;
         }
         let [ixx, ixy, ixz, iyy, iyz, izz] = inertia;
-        let m = [[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]];
-        if !is_psd(&m) {
-            return self.err(
+        let m = Matrix3::new(ixx, ixy, ixz, ixy, iyy, iyz, ixz, iyz, izz);
+        let scale = inertia_rounding_scale(&m, mass, &origin);
+        if below_rounding(min_eigenvalue(&m), scale) {
+            self.warn(
                 inode,
-                iw,
+                iw.clone(),
                 format!(
-                    "the inertia tensor is not positive semi-definite (ixx={ixx}, iyy={iyy}, izz={izz}, ixy={ixy}, ixz={ixz}, iyz={iyz})"
+                    "the inertia tensor is not positive semi-definite (ixx={ixx}, iyy={iyy}, izz={izz}, ixy={ixy}, ixz={ixz}, iyz={iyz}; smallest eigenvalue {:.3e}): no rigid body has it; loaded as given",
+                    min_eigenvalue(&m)
                 ),
             );
+        } else {
+            // The principal moments of a physical body satisfy the triangle inequality, equivalently
+            // ½ tr(I) 1 − I (the body's second moment of mass) is positive semi-definite.
+            let second_moment = Matrix3::identity() * (0.5 * m.trace()) - m;
+            if below_rounding(min_eigenvalue(&second_moment), scale) {
+                self.warn(inode, iw.clone(), "the principal moments of inertia violate the triangle inequality (no rigid body has them); loaded as given");
+            }
         }
-        // The principal moments of a physical body satisfy the triangle inequality, equivalently
-        // ½ tr(I) 1 − I (the body's second moment of mass) is positive semi-definite.
-        let h = 0.5 * (ixx + iyy + izz);
-        let sigma = [
-            [h - ixx, -ixy, -ixz],
-            [-ixy, h - iyy, -iyz],
-            [-ixz, -iyz, h - izz],
-        ];
-        if !is_psd(&sigma) {
-            self.warn(inode, iw.clone(), "the principal moments of inertia violate the triangle inequality (no rigid body has them); loaded as given");
-        }
-        if mass == 0.0 && m.iter().flatten().any(|&x| x != 0.0) {
+        if mass == 0.0 && m.iter().any(|&x| x != 0.0) {
             self.warn(
                 mnode,
                 iw,
@@ -418,8 +458,55 @@ impl<'a, 'input> Parser<'a, 'input> {
         }
     }
 
+    /// `<loop name>` or `<coupling name>`: required, as GRBDA's reader requires it (it refuses an
+    /// unnamed constraint), so that every message can point at the element.
+    fn constraint_name(&self, node: Node, tag: &str) -> Result<String, LoadError> {
+        match node.attribute("name") {
+            Some(name) => Ok(name.to_string()),
+            None => self.err(node, format!("<{tag}>"), "missing attribute `name`"),
+        }
+    }
+
+    /// `<dynamics damping friction>` describe joint losses that embedyn's ideal rigid bodies do not
+    /// model (nor do Pinocchio's algorithms): one warning per file that names the joints concerned.
+    /// A value of zero changes nothing and is passed over silently.
+    fn warn_ignored_joint_dynamics(&mut self, root: Node) {
+        let mut first = None;
+        let mut names = Vec::new();
+        for joint in root.children().filter(|n| n.has_tag_name("joint")) {
+            let name = joint.attribute("name").unwrap_or("?");
+            let lossy = joint.children().find(|d| {
+                d.has_tag_name("dynamics")
+                    && [d.attribute("damping"), d.attribute("friction")]
+                        .into_iter()
+                        .flatten()
+                        .any(|v| v.trim().parse::<f64>() != Ok(0.0))
+            });
+            if let Some(dynamics) = lossy {
+                first.get_or_insert((name, dynamics));
+                names.push(name);
+            }
+        }
+        let Some(first) = first else { return };
+        const LISTED: usize = 5;
+        let mut list = names[..names.len().min(LISTED)]
+            .iter()
+            .map(|n| format!("\"{n}\""))
+            .collect::<Vec<_>>()
+            .join(", ");
+        if names.len() > LISTED {
+            list += &format!(" and {} more", names.len() - LISTED);
+        }
+        let message = format!(
+            "<dynamics damping/friction> of {} joint(s) ({list}) ignored: embedyn computes the dynamics of ideal joints (as Pinocchio's algorithms do); add the losses to tau",
+            names.len()
+        );
+        let (joint, dynamics) = first;
+        self.warn(dynamics, format!("joint \"{joint}\" <dynamics>"), message);
+    }
+
     fn loop_element(&self, node: Node, links: &HashMap<String, usize>) -> Result<Loop, LoadError> {
-        let name = node.attribute("name").unwrap_or("").to_string();
+        let name = self.constraint_name(node, "loop")?;
         let what = format!("loop \"{name}\"");
         let kind = match node.attribute("type") {
             Some("revolute") | Some("continuous") => LoopKind::Revolute,
@@ -466,7 +553,7 @@ impl<'a, 'input> Parser<'a, 'input> {
     }
 
     fn coupling(&self, node: Node, links: &HashMap<String, usize>) -> Result<Coupling, LoadError> {
-        let name = node.attribute("name").unwrap_or("").to_string();
+        let name = self.constraint_name(node, "coupling")?;
         let what = format!("coupling \"{name}\"");
         let (predecessor, _) = self.named_link(node, "predecessor", &what, links)?;
         let (successor, _) = self.named_link(node, "successor", &what, links)?;
@@ -568,24 +655,31 @@ impl<'a, 'input> Parser<'a, 'input> {
     }
 }
 
-/// Whether a symmetric 3×3 matrix is positive semi-definite, up to rounding: every principal minor of
-/// order k is at least −1e-12 · sᵏ with s the largest entry.
-fn is_psd(m: &[[f64; 3]; 3]) -> bool {
-    let s = m.iter().flatten().fold(0.0f64, |a, &x| a.max(x.abs()));
-    if s == 0.0 {
-        return true;
-    }
-    let tol = 1e-12;
-    let d1 = [m[0][0], m[1][1], m[2][2]];
-    let d2 = [
-        m[0][0] * m[1][1] - m[0][1] * m[1][0],
-        m[0][0] * m[2][2] - m[0][2] * m[2][0],
-        m[1][1] * m[2][2] - m[1][2] * m[2][1],
-    ];
-    let d3 = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
-        - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
-        + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
-    d1.iter().all(|&x| x >= -tol * s)
-        && d2.iter().all(|&x| x >= -tol * s * s)
-        && d3 >= -tol * s * s * s
+/// The magnitude against which rounding in an `<inertial>`'s tensor is judged.
+///
+/// Not the tensor alone: what the dynamics uses is the link's inertia about its frame,
+/// I_c + m(|c|²1 − c cᵀ), and CAD exporters obtain I_c by subtracting that parallel-axis term from an
+/// inertia about a part frame, so the rounding left in I_c is relative to the larger of the two. A
+/// nearly point-like link then carries rounding residue that is tiny next to m|c|² but as large as
+/// I_c itself (icub's head: I_c = 2.4e-35 off the diagonal and zeros on it, m|c|² = 1.7e-2 kg·m²).
+/// Judged against I_c alone that residue would be "not positive semi-definite"; against the link's
+/// inertia it is, correctly, rounding. No absolute constant enters: a milligram link is judged at
+/// its own scale.
+fn inertia_rounding_scale(tensor: &Matrix3<f64>, mass: f64, origin: &Origin) -> f64 {
+    let [x, y, z] = origin.xyz;
+    let own = tensor.iter().fold(0.0f64, |a, &v| a.max(v.abs()));
+    own.max(mass * (x * x + y * y + z * z))
+}
+
+/// Whether an eigenvalue is negative beyond rounding at `scale`: more than 1e-12 · scale below zero.
+/// 1e-12 is some 4500 units of f64 roundoff, room for the arithmetic that produced the file's
+/// numbers; inertias that are wrong, not rounded, are off by 1e-4 … 1 relative (example-robot-data's
+/// tiago antennas −0.58, romeo_laas_small's body −0.15, against at most 3e-16 for rounding residue).
+fn below_rounding(eigenvalue: f64, scale: f64) -> bool {
+    eigenvalue < -1e-12 * scale
+}
+
+/// The smallest eigenvalue of a symmetric 3×3 matrix.
+fn min_eigenvalue(m: &Matrix3<f64>) -> f64 {
+    m.symmetric_eigenvalues().min()
 }

@@ -15,6 +15,7 @@ pub mod constraints;
 mod double_double;
 pub mod linalg;
 mod model;
+mod model_constants;
 mod scalar;
 pub mod spatial;
 
@@ -23,7 +24,7 @@ pub use algorithms::{
     kinetic_energy, kkt_forward_dynamics, link_poses, mass_matrix_inverse, potential_energy,
     reduced_mass_matrix, reduced_mass_matrix_in, rnea, rnea_with_gravity, DynamicsError, Workspace,
 };
-pub use model::{Body, Joint, JointType, Model, ModelBuilder, ModelError};
+pub use model::{Body, Joint, JointType, Model, ModelBuilder, ModelElement, ModelError};
 pub use scalar::{DoubleDouble, Real};
 pub use spatial::{ArticulatedInertia, Force, Motion, SpatialInertia, Transform};
 

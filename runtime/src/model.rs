@@ -197,6 +197,54 @@ pub enum ModelError {
     },
     #[error("{group}: the dependent joints cannot be solved from the independent ones (cond(Y1) = {condition:e} at a generic assembled configuration); declare other joints independent=\"false\"")]
     SingularDependentChoice { group: String, condition: f64 },
+    #[error("{element}: its {what} {value:e} {}", fit_problem(.too_large, .value, .scalar))]
+    ConstantDoesNotFit {
+        element: ModelElement,
+        what: &'static str,
+        value: f64,
+        /// The scalar type's name (`"f32"`).
+        scalar: &'static str,
+        /// Whether it is too large (else: too small to keep its precision).
+        too_large: bool,
+    },
+    #[error("joint `{joint}`: the inertias of the bodies it moves overflow when the dynamics combines them (the largest is body `{body}`'s, {magnitude:e}); the model's numbers are too large for this scalar type")]
+    InertiaOverflow {
+        joint: String,
+        body: String,
+        magnitude: f64,
+    },
+}
+
+fn fit_problem(too_large: &bool, value: &f64, scalar: &str) -> String {
+    if !value.is_finite() {
+        "is not a finite number".to_string()
+    } else if *too_large {
+        format!("is too large for {scalar}: a constant that does not fit the scalar type would make another model")
+    } else {
+        format!("is too small for {scalar} to keep its precision (it would become zero or subnormal), yet it matters at the model's scale")
+    }
+}
+
+/// What a model constant belongs to, for messages.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum ModelElement {
+    /// A body, or one of the links merged into it, by link name.
+    Body(String),
+    Joint(String),
+    /// A loop, coupling or mimic relation, by name.
+    Constraint(String),
+    Gravity,
+}
+
+impl core::fmt::Display for ModelElement {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            ModelElement::Body(n) => write!(f, "body `{n}`"),
+            ModelElement::Joint(n) => write!(f, "joint `{n}`"),
+            ModelElement::Constraint(n) => write!(f, "constraint `{n}`"),
+            ModelElement::Gravity => write!(f, "gravity"),
+        }
+    }
 }
 
 /// Adds bodies one at a time, each after its parent; [`ModelBuilder::build`] renumbers them depth-first.
@@ -340,6 +388,18 @@ impl<T: Real> Model<T> {
             groups: self.groups.clone(),
             group_of: self.group_of.clone(),
         }
+    }
+
+    /// Converts the model to another scalar type, keeping its structure (the groups, the redundant
+    /// equations and the independent coordinates decided when it was built), after checking that every
+    /// constant fits `U` and that `U` still determines every joint's acceleration (the articulated-inertia
+    /// check of [`ModelBuilder::build`], in `U`'s precision). Build in f64 and convert, so that every scalar
+    /// type gets the structure decided once, in f64.
+    pub fn try_cast<U: Real>(&self) -> Result<Model<U>, ModelError> {
+        crate::model_constants::check_constants_fit::<T, U>(self)?;
+        let model = self.cast::<U>();
+        crate::algorithms::check_articulated_inertia(&model)?;
+        Ok(model)
     }
 
     /// Whether the model has loops, couplings or mimic joints.

@@ -4,6 +4,7 @@
 mod aba;
 mod crba;
 mod embedded;
+mod inertia_check;
 mod kinematics;
 mod minv;
 mod rnea;
@@ -21,7 +22,9 @@ pub use minv::mass_matrix_inverse;
 pub use rnea::{rnea, rnea_with_gravity};
 pub use workspace::Workspace;
 
-use crate::model::{JointType, Model, ModelError};
+pub(crate) use inertia_check::check_articulated_inertia;
+
+use crate::model::{JointType, Model};
 use crate::spatial::{Motion, Transform};
 use crate::Real;
 
@@ -139,47 +142,4 @@ pub(crate) fn velocity_sweep<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, q
 #[inline(always)]
 pub(crate) fn gravity_in<T: Real>(gravity: &nalgebra::Vector3<T>, x: &Transform<T>) -> Motion<T> {
     Motion::new(nalgebra::Vector3::zeros(), -x.rotation.tr_mul(gravity))
-}
-
-/// Rejects a model in which some joint's `D(k)` vanishes at two unrelated configurations (then it
-/// vanishes identically: the joint moves no inertia, e.g. a massless leaf, and ABA would divide by zero).
-pub(crate) fn check_articulated_inertia<T: Real>(model: &Model<T>) -> Result<(), ModelError> {
-    if model.nbodies() == 0 {
-        return Ok(());
-    }
-    let scale = model.bodies.iter().fold(T::zero(), |s, b| {
-        s + b.inertia.mass + b.inertia.rotational.trace()
-    });
-    let tol = (T::one().max(scale)) * T::from_f64(1e-12);
-    let mut ws = Workspace::new(model);
-    let q0 = model.neutral_configuration();
-    let mut q1 = q0.clone();
-    // A fixed, irrational-looking configuration: no symmetry of a hand-written model lines up with it.
-    for (k, x) in q1.iter_mut().enumerate() {
-        *x += T::from_f64(0.37 + 0.61 * ((k as f64) * 1.618_033_988_749).sin());
-    }
-    model.normalize_configuration(&mut q1);
-    let v = vec![T::zero(); model.nv()];
-    let tau = v.clone();
-    // `last_d[i]` keeps the value of D for the error message; `regular[i]` is set once D > tol anywhere.
-    let mut regular = vec![false; model.nbodies()];
-    let mut last_d = vec![0.0; model.nbodies()];
-    for q in [&q0, &q1] {
-        aba::articulate(model, &mut ws, q, &v, &tau);
-        for i in 0..model.joints.len() {
-            // The smallest pivot of the joint's D (D itself for a 1-DoF joint).
-            let d = ws.d_pivot[i];
-            regular[i] |= d.is_finite() && d > tol;
-            last_d[i] = d.to_f64();
-        }
-    }
-    // A singular joint poisons its ancestors (D = NaN there): report the last one in depth-first
-    // order, which has no singular descendant and is the cause.
-    match regular.iter().rposition(|r| !r) {
-        Some(i) => Err(ModelError::NoInertiaAboutAxis {
-            joint: model.joints[i].name.clone(),
-            d: last_d[i],
-        }),
-        None => Ok(()),
-    }
 }
