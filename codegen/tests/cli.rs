@@ -496,3 +496,29 @@ fn bench_reports_every_engine_and_scalar() {
         }
     }
 }
+
+/// A model valid in f64 whose constants do not fit f32 (a gear ratio of 1e300): the f64 engines answer
+/// (the generated runner carries only the scalar asked for), and both f32 engines refuse at load time,
+/// naming the coupling, instead of computing a different model.
+#[test]
+fn constants_that_do_not_fit_f32_are_refused_only_in_f32() {
+    let model = repo("tests/data/bad/coupling_ratio_too_large_for_f32.urdf");
+    let input =
+        json!({"samples": [{"q": [0.0, 0.0, 0.0], "v": [0.0, 0.0, 0.0], "tau": [0.0, 0.0, 0.0]}]})
+            .to_string();
+    for engine in ["interpreted", "generated"] {
+        let args = ["eval", &model, "--algo", "aba", "--engine", engine];
+        let (ok, out, err) = embedyn_cached(&args, &input);
+        assert!(ok, "{engine} f64: {err}");
+        let qdd = flat(&serde_json::from_str::<Value>(&out).unwrap()["samples"]);
+        assert!(qdd.iter().all(|x| x.is_finite()), "{qdd:?}");
+        let mut args32 = args.to_vec();
+        args32.extend(["--scalar", "f32"]);
+        let (ok, _, err) = embedyn_cached(&args32, &input);
+        assert!(!ok, "{engine} f32 accepted a ratio of 1e300");
+        assert!(
+            err.contains("gear") && err.contains("f32"),
+            "{engine} f32: {err}"
+        );
+    }
+}

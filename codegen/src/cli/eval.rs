@@ -54,8 +54,12 @@ fn eval_generated(
     scalar: Scalar,
     samples: &Samples,
 ) -> Result<Value, CliError> {
+    // The scalar asked for only: half the compile time, and a model whose constants do not fit f32 can
+    // still be evaluated in f64.
     let gen_options = crate::GenerateOptions {
         model: options.clone(),
+        f64: scalar == Scalar::F64,
+        f32: scalar == Scalar::F32,
         ..Default::default()
     };
     let binary = super::runner::build_runner(loaded, &gen_options)?;

@@ -178,7 +178,11 @@ pub fn build_runner(loaded: &Loaded, options: &GenerateOptions) -> Result<PathBu
     let mut files = crate_files(loaded, options)?;
     let krate = crate_name(&loaded.robot.name);
     let constrained = loaded.model::<f64>(&options.model)?.has_constraints();
-    let main = runner_main(&krate, &options.algorithms, constrained).map_err(CliError)?;
+    let scalars: Vec<&str> = [(options.f64, "f64"), (options.f32, "f32")]
+        .into_iter()
+        .filter_map(|(on, name)| on.then_some(name))
+        .collect();
+    let main = runner_main(&krate, &options.algorithms, constrained, &scalars).map_err(CliError)?;
     files.push((PathBuf::from("src/main.rs"), main));
     let key_parts: Vec<&[u8]> = std::iter::once(GENERATOR_VERSION.as_bytes())
         .chain(
@@ -424,7 +428,12 @@ fn parse_rows(stdout: &str, inputs: usize, shape: &RowShape) -> Result<Vec<Vec<f
 /// f64 that reads back exactly. Bad input is an error on stderr with exit status 2, never a panic.
 /// For a model with constraints, `crba` is `crba_independent` (`Xᵀ M X`, what the CLI reports), and
 /// `aba` and `crba` print the singularity measure cond₁(Y1) after their values.
-fn runner_main(krate: &str, algorithms: &[Algorithm], constrained: bool) -> Result<String, String> {
+fn runner_main(
+    krate: &str,
+    algorithms: &[Algorithm],
+    constrained: bool,
+    scalars: &[&str],
+) -> Result<String, String> {
     let krate: syn::Ident =
         syn::parse_str(krate).map_err(|e| format!("`{krate}` is not an identifier: {e}"))?;
     let mut names = Vec::new();
@@ -491,7 +500,19 @@ fn runner_main(krate: &str, algorithms: &[Algorithm], constrained: bool) -> Resu
         eval_calls.push(eval);
         bench_calls.push(bench);
     }
-    let per_scalar = [("f64", quote!(f64)), ("f32", quote!(f32))].map(|(name, scalar)| {
+    // Only the scalar modules the crate has (a model whose constants do not fit f32 has no f32 module).
+    let present: Vec<(&str, TokenStream)> = [("f64", quote!(f64)), ("f32", quote!(f32))]
+        .into_iter()
+        .filter(|(name, _)| scalars.contains(name))
+        .collect();
+    let dispatch: Vec<TokenStream> = present
+        .iter()
+        .map(|(name, _)| {
+            let function = format_ident!("run_{}", name);
+            quote!(#name => #function(algo, bench, &rows, &mut text)?,)
+        })
+        .collect();
+    let per_scalar = present.into_iter().map(|(name, scalar)| {
         let function = format_ident!("run_{}", name);
         let module = format_ident!("{}", name);
         quote! {
@@ -612,9 +633,8 @@ fn runner_main(krate: &str, algorithms: &[Algorithm], constrained: bool) -> Resu
             }
             let mut text = String::new();
             match scalar {
-                "f64" => run_f64(algo, bench, &rows, &mut text)?,
-                "f32" => run_f32(algo, bench, &rows, &mut text)?,
-                other => return Err(format!("unknown scalar {other:?}")),
+                #(#dispatch)*
+                other => return Err(format!("scalar {other:?} was not generated")),
             }
             std::io::stdout()
                 .write_all(text.as_bytes())
@@ -717,13 +737,19 @@ mod tests {
     #[test]
     fn runner_source_parses_for_every_algorithm() {
         for constrained in [false, true] {
-            let src = runner_main("arm_dynamics", &Algorithm::ALL, constrained).unwrap();
+            let src = runner_main(
+                "arm_dynamics",
+                &Algorithm::ALL,
+                constrained,
+                &["f64", "f32"],
+            )
+            .unwrap();
             assert!(src.contains("use arm_dynamics::{NI, NQ, NV};"), "{src}");
             assert!(
                 !src.contains("unwrap()") && !src.contains("panic!"),
                 "{src}"
             );
         }
-        assert!(runner_main("not an identifier", &Algorithm::ALL, false).is_err());
+        assert!(runner_main("not an identifier", &Algorithm::ALL, false, &["f64"]).is_err());
     }
 }
