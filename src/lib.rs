@@ -20,6 +20,11 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
+// The README's examples are doctests of this crate, so that they can never rot.
+#[doc = include_str!("../README.md")]
+#[cfg(doctest)]
+pub struct ReadmeDoctests;
+
 pub use embedyn_codegen as codegen;
 pub use embedyn_codegen::{load, LoadError, Loaded, ModelOptions, Warning};
 pub use embedyn_macros::robot;
