@@ -13,6 +13,7 @@
 //! ```
 
 mod assemble;
+mod bounded_read;
 pub mod cli;
 mod emit;
 mod error;

@@ -3,6 +3,7 @@
 //! `urdf-rs` is not used: it drops URDF+ elements, keeps no source positions and rejects a joint with two
 //! `<mimic>` children (a differential).
 
+use crate::bounded_read::{read_file_limited, MAX_MODEL_BYTES};
 use crate::error::{LoadError, Location, Warning};
 use crate::ir::{
     Coupling, Inertial, Joint, JointKind, Link, Loop, LoopFrame, LoopKind, Mimic, Origin, Robot,
@@ -22,7 +23,7 @@ pub struct Loaded {
 
 /// Reads and checks a URDF file.
 pub fn load_urdf(path: &Path) -> Result<Loaded, LoadError> {
-    let text = std::fs::read_to_string(path).map_err(|e| {
+    let text = read_file_limited(path, MAX_MODEL_BYTES).map_err(|e| {
         LoadError::new(
             Location::new(path, None, ""),
             format!("cannot read the model file: {e}"),

@@ -522,3 +522,27 @@ fn constants_that_do_not_fit_f32_are_refused_only_in_f32() {
         );
     }
 }
+
+/// A model path or `--input` naming an endless stream ends with an error naming the limit, instead of
+/// reading until memory runs out (once a hang and an out-of-memory abort).
+#[cfg(unix)]
+#[test]
+fn endless_inputs_end_with_an_error() {
+    let (ok, _, err) = embedyn(&["info", "/dev/zero"], "");
+    assert!(
+        !ok && err.contains("/dev/zero") && err.contains("larger than"),
+        "{err}"
+    );
+    let (ok, _, err) = embedyn(
+        &[
+            "eval",
+            &repo("models/arm7.urdf"),
+            "--algo",
+            "aba",
+            "--input",
+            "/dev/zero",
+        ],
+        "",
+    );
+    assert!(!ok && err.contains("larger than"), "{err}");
+}

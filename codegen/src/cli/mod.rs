@@ -8,6 +8,7 @@ mod output;
 mod runner;
 mod samples;
 
+use crate::bounded_read::{read_file_limited, read_to_string_limited, MAX_INPUT_BYTES};
 use crate::{load, LoadError, Loaded, ModelOptions};
 use clap::{Parser, Subcommand, ValueEnum};
 use std::path::{Path, PathBuf};
@@ -244,13 +245,9 @@ fn load_reporting(path: &Path) -> Result<Loaded, CliError> {
 
 fn read_input(path: Option<&Path>) -> Result<String, CliError> {
     match path {
-        Some(p) => std::fs::read_to_string(p)
+        Some(p) => read_file_limited(p, MAX_INPUT_BYTES)
             .map_err(|e| CliError(format!("{}: cannot read the input: {e}", p.display()))),
-        None => {
-            let mut s = String::new();
-            std::io::Read::read_to_string(&mut std::io::stdin(), &mut s)
-                .map_err(|e| CliError(format!("cannot read the input from stdin: {e}")))?;
-            Ok(s)
-        }
+        None => read_to_string_limited(std::io::stdin(), MAX_INPUT_BYTES)
+            .map_err(|e| CliError(format!("cannot read the input from stdin: {e}"))),
     }
 }
