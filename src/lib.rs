@@ -25,6 +25,10 @@
 #[cfg(doctest)]
 pub struct ReadmeDoctests;
 
+#[doc = include_str!("../docs/generated-code.md")]
+#[cfg(doctest)]
+pub struct GeneratedCodeDoctests;
+
 pub use embedyn_codegen as codegen;
 pub use embedyn_codegen::{load, LoadError, Loaded, ModelOptions, Warning};
 pub use embedyn_macros::robot;
