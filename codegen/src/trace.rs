@@ -170,15 +170,29 @@ impl std::hash::Hash for Sym {
     }
 }
 
-/// Only constants compare; comparisons involving runtime values have no answer at generation time
-/// (the algorithms use them only for diagnostics, which the generated code does not carry).
+/// Only constants compare. A comparison involving a value computed from the generated function's inputs
+/// has no answer at generation time, and answering it anyway would silently freeze one branch into the
+/// generated code: it is a generation-time error instead (as CasADi and JAX refuse). Algorithms choose
+/// between run-time values with [`Real::select_gt`] (a select in the generated code) and check them
+/// through [`Real::value`] (which is `None` here, so the generated function returns the measure instead).
 impl PartialOrd for Sym {
     fn partial_cmp(&self, other: &Self) -> Option<std::cmp::Ordering> {
         match (self, other) {
             (Sym::Const(a), Sym::Const(b)) => a.partial_cmp(b),
-            _ => None,
+            _ => branch_on_traced_value("a comparison"),
         }
     }
+}
+
+/// The generation-time error of a branch on a traced value (a bug in the algorithm being traced, not in
+/// the user's model: the message says where to look).
+#[cold]
+#[track_caller]
+fn branch_on_traced_value(what: &str) -> ! {
+    panic!(
+        "embedyn code generation: {what} on a value only known at run time, at {}; the traced algorithm must use Real::select_gt for a run-time choice or Real::value for a check",
+        std::panic::Location::caller()
+    )
 }
 
 impl Add for Sym {
@@ -359,10 +373,13 @@ impl Real for Sym {
     fn epsilon() -> Self {
         Sym::Const(f64::EPSILON)
     }
-    /// Runtime values are assumed finite: the generated code carries no checks (the model was validated
-    /// when it was loaded, and the hot functions have no panicking or erroring paths).
+    /// A check, answerable for constants only (see [`PartialOrd`] for `Sym`).
+    #[track_caller]
     fn is_finite(self) -> bool {
-        self.constant().is_none_or(f64::is_finite)
+        match self {
+            Sym::Const(c) => c.is_finite(),
+            Sym::Node(_) => branch_on_traced_value("a finiteness check"),
+        }
     }
     fn select_gt(self, other: Self, then: Self, otherwise: Self) -> Self {
         if then == otherwise {
@@ -386,7 +403,30 @@ impl Real for Sym {
             otherwise,
         })
     }
-    fn is_positive_finite(self) -> bool {
-        self.constant().is_none_or(|c| c > 0.0 && c.is_finite())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A branch on a traced value is a loud generation-time error, not a silently frozen branch; a
+    /// run-time choice is a select, and constants still compare.
+    #[test]
+    fn branching_on_a_traced_value_is_refused() {
+        let ((), tape) = record(|| {
+            let x = input(0, 0);
+            let two = Sym::Const(2.0);
+            assert!(two > Sym::Const(1.0));
+            let refused = std::panic::catch_unwind(|| x > two).unwrap_err();
+            let message = refused.downcast_ref::<String>().unwrap();
+            assert!(message.contains("select_gt"), "{message}");
+            assert!(std::panic::catch_unwind(|| x.is_finite()).is_err());
+            assert!(std::panic::catch_unwind(|| x.is_positive_finite()).is_err());
+            assert_eq!(x.value(), None);
+            assert_eq!(two.value(), Some(2.0));
+            // max is a select node, not a guess.
+            assert!(matches!(x.max(two), Sym::Node(_)));
+        });
+        assert!(tape.nodes.iter().any(|op| matches!(op, Op::Select { .. })));
     }
 }

@@ -34,7 +34,9 @@ pub fn cholesky_in_place<T: Real, R: Dim, S: RawStorageMut<T, R, R>>(
             d -= a[(j, k)] * a[(k, j)];
         }
         min_pivot = Some(min_pivot.map_or(d, |m| m.min(d)));
-        if !d.is_positive_finite() {
+        // Stop at a pivot known to be unusable; one known only at run time is the caller's to check
+        // through the returned minimum.
+        if d.value().is_some_and(|x| !(x > 0.0 && x.is_finite())) {
             return d;
         }
         let inv = T::one() / d;

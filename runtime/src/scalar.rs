@@ -60,7 +60,8 @@ pub trait Real:
         Some(self.to_f64())
     }
 
-    /// `self > 0` and finite: false for zero, negatives, infinities and NaN (a usable pivot).
+    /// `self > 0` and finite: false for zero, negatives, infinities and NaN (a usable pivot). A check:
+    /// on a value unknown at generation time it is a generation-time error (see [`Real::value`]).
     #[inline(always)]
     fn is_positive_finite(self) -> bool {
         self > Self::zero() && self.is_finite()
@@ -68,7 +69,8 @@ pub trait Real:
 
     /// `if self > other { then } else { otherwise }`: a data-dependent choice that generated code keeps
     /// (the tracing scalar records it as a select instead of answering the comparison at generation
-    /// time). Used where the branch matters at run time, e.g. pivoting.
+    /// time). Every choice on a computed value in the algorithms is written with this, never with `if`:
+    /// the tracing scalar refuses to answer a comparison of values it does not know.
     #[inline(always)]
     fn select_gt(self, other: Self, then: Self, otherwise: Self) -> Self {
         if self > other {
@@ -78,21 +80,15 @@ pub trait Real:
         }
     }
 
+    /// The larger of two values (`other` where they are equal or either is NaN), as a select.
     #[inline(always)]
     fn max(self, other: Self) -> Self {
-        if self >= other {
-            self
-        } else {
-            other
-        }
+        self.select_gt(other, self, other)
     }
+    /// The smaller of two values (`other` where they are equal or either is NaN), as a select.
     #[inline(always)]
     fn min(self, other: Self) -> Self {
-        if self <= other {
-            self
-        } else {
-            other
-        }
+        other.select_gt(self, self, other)
     }
 }
 

@@ -172,7 +172,8 @@ fn group_backward<T: Real>(
             gw.d[(l, k)] = d;
         }
     }
-    if !cholesky_in_place(&mut gw.d).is_positive_finite() {
+    let pivot = cholesky_in_place(&mut gw.d);
+    if pivot.value().is_some_and(|p| !(p > 0.0 && p.is_finite())) {
         return Err(DynamicsError::SingularGroup {
             group: group_label(model, g),
         });
