@@ -4,7 +4,7 @@
 //! the IR, which unrolls them for this model and folds its constants; the tape becomes straight-line Rust,
 //! once per scalar type.
 
-use crate::emit::{function, Arg, Output};
+use crate::emit::{function, Arg, Emitted, Output};
 use crate::trace::{input, record, snap, Sym};
 use crate::{build_model, LoadError, Loaded, Location, ModelOptions};
 use embedyn_runtime::constraints::{complete_configuration_with, constraint_pivot_ratio};
@@ -153,12 +153,16 @@ fn gen_error(loaded: &Loaded, msg: impl Into<String>) -> LoadError {
     )
 }
 
-/// Generates the items for a model: `NQ`, `NV`, `JOINTS`, and modules `f64`/`f32` with one function per
-/// algorithm.
-pub fn generate_tokens(
-    loaded: &Loaded,
-    options: &GenerateOptions,
-) -> Result<TokenStream, LoadError> {
+/// The generated items before they are joined into a file or a token stream: the constants at the top
+/// and the functions of the scalar modules (the same code for `f64` and `f32`: only `S` differs, so
+/// each algorithm is traced and emitted once).
+struct Generated {
+    header: TokenStream,
+    scalars: Vec<&'static str>,
+    functions: Vec<Emitted>,
+}
+
+fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generated, LoadError> {
     let model64 = loaded.model::<f64>(&options.model)?;
     if let Some(a) = options
         .algorithms
@@ -176,38 +180,28 @@ pub fn generate_tokens(
     let model: Model<Sym> = snapped(&model64).cast();
     let (nq, nv) = (model.nq(), model.nv());
     let names: Vec<&str> = model.joints.iter().map(|j| j.name.as_str()).collect();
-    let mut modules = Vec::new();
-    for (enabled, scalar) in [(options.f64, quote!(f64)), (options.f32, quote!(f32))] {
-        if !enabled {
-            continue;
-        }
-        let mut fns = Vec::new();
-        let mut algorithms = options.algorithms.clone();
-        // A model with constraints also gets its position completion and embedding map.
-        if model.has_constraints() && !options.exact {
-            for extra in [
-                Algorithm::Complete,
-                Algorithm::Embedding,
-                Algorithm::CrbaIndependent,
-            ] {
-                if !algorithms.contains(&extra) {
-                    algorithms.push(extra);
-                }
+    let scalars: Vec<&'static str> = [(options.f64, "f64"), (options.f32, "f32")]
+        .into_iter()
+        .filter_map(|(enabled, scalar)| enabled.then_some(scalar))
+        .collect();
+    let mut algorithms = options.algorithms.clone();
+    // A model with constraints also gets its position completion and embedding map.
+    if model.has_constraints() && !options.exact {
+        for extra in [
+            Algorithm::Complete,
+            Algorithm::Embedding,
+            Algorithm::CrbaIndependent,
+        ] {
+            if !algorithms.contains(&extra) {
+                algorithms.push(extra);
             }
         }
+    }
+    let mut functions = Vec::new();
+    if !scalars.is_empty() {
         for &algo in &algorithms {
-            fns.push(generate_algorithm(loaded, &model, algo, &options.helpers)?);
+            functions.push(generate_algorithm(loaded, &model, algo, &options.helpers)?);
         }
-        let module = format_ident!("{}", scalar.to_string());
-        let doc = format!("The generated dynamics in `{scalar}`.");
-        modules.push(quote! {
-            #[doc = #doc]
-            #[allow(clippy::all, clippy::pedantic, unused_parens, non_snake_case)]
-            pub mod #module {
-                type S = #scalar;
-                #(#fns)*
-            }
-        });
     }
     let independent: Vec<bool> = (0..model64.joints.len())
         .map(|j| model64.is_independent(j))
@@ -227,7 +221,7 @@ pub fn generate_tokens(
         loaded.robot.source.file_name().map_or_else(String::new, |f| f.to_string_lossy().into_owned()),
         names.join(", ")
     );
-    Ok(quote! {
+    let header = quote! {
         #[doc = #doc]
         pub const NQ: usize = #nq;
         /// Length of `v`, `tau` and `qdd`.
@@ -241,8 +235,93 @@ pub fn generate_tokens(
         /// The links whose poses `kinematics` returns, in its order (every link on a moving body; links
         /// fixed to the world are constant and not listed).
         pub const FRAMES: [&str; #nf] = [#(#frames),*];
+    };
+    Ok(Generated {
+        header,
+        scalars,
+        functions,
+    })
+}
+
+/// The scalar module `pub mod f64 { type S = f64; … }` around `functions`.
+fn scalar_module(scalar: &str, functions: &[TokenStream]) -> TokenStream {
+    let module = format_ident!("{}", scalar);
+    let doc = format!("The generated dynamics in `{scalar}`.");
+    quote! {
+        #[doc = #doc]
+        #[allow(clippy::all, clippy::pedantic, unused_parens, non_snake_case)]
+        pub mod #module {
+            type S = #module;
+            #(#functions)*
+        }
+    }
+}
+
+/// Generates the items for a model: `NQ`, `NV`, `JOINTS`, and modules `f64`/`f32` with one function per
+/// algorithm.
+pub fn generate_tokens(
+    loaded: &Loaded,
+    options: &GenerateOptions,
+) -> Result<TokenStream, LoadError> {
+    let generated = generate_items(loaded, options)?;
+    let functions = generated
+        .functions
+        .into_iter()
+        .map(|f| match f {
+            Emitted::Tokens(t) => Ok(t),
+            Emitted::Text(text) => text
+                .parse::<TokenStream>()
+                .map_err(|e| gen_error(loaded, format!("generated code does not tokenize: {e}"))),
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    let modules = generated
+        .scalars
+        .iter()
+        .map(|scalar| scalar_module(scalar, &functions));
+    let header = generated.header;
+    Ok(quote! {
+        #header
         #(#modules)*
     })
+}
+
+/// Generates the model's code as formatted source text: the same items as [`generate_tokens`], with
+/// the small functions formatted by `prettyplease` and the long ones written formatted by the emitter
+/// (pretty-printing millions of tokens would cost more time and memory than generating them).
+pub fn generate_source(loaded: &Loaded, options: &GenerateOptions) -> Result<String, LoadError> {
+    let generated = generate_items(loaded, options)?;
+    let fail = |e: String| gen_error(loaded, e);
+    let mut text = format_tokens(&generated.header).map_err(fail)?;
+    // Each function formatted on its own inside a module, so that it is indented (and its lines
+    // broken) exactly as inside the scalar module.
+    let functions = generated
+        .functions
+        .iter()
+        .map(|f| match f {
+            Emitted::Tokens(t) => {
+                let wrapped = format_tokens(&quote!(mod m { #t })).map_err(fail)?;
+                Ok(module_body(&wrapped).to_string())
+            }
+            Emitted::Text(body) => Ok(body.clone()),
+        })
+        .collect::<Result<Vec<String>, LoadError>>()?;
+    for scalar in &generated.scalars {
+        let empty = format_tokens(&scalar_module(scalar, &[])).map_err(fail)?;
+        text.push_str(empty.strip_suffix("}\n").unwrap_or(&empty));
+        for f in &functions {
+            text.push_str(f);
+        }
+        text.push_str("}\n");
+    }
+    Ok(text)
+}
+
+/// The lines between `mod m {` and the closing `}` of a formatted module.
+fn module_body(formatted: &str) -> &str {
+    let start = formatted.find('\n').map_or(0, |i| i + 1);
+    formatted[start..]
+        .strip_suffix("}\n")
+        .unwrap_or(&formatted[start..])
 }
 
 /// A matrix result as a row-major output.
@@ -261,7 +340,7 @@ fn generate_algorithm(
     model: &Model<Sym>,
     algo: Algorithm,
     helpers: &TokenStream,
-) -> Result<TokenStream, LoadError> {
+) -> Result<Emitted, LoadError> {
     let (nq, nv) = (model.nq(), model.nv());
     let inputs = |arg: u8, n: usize| -> Vec<Sym> { (0..n).map(|i| input(arg, i)).collect() };
     let fail = |e: embedyn_runtime::DynamicsError| {
@@ -391,8 +470,7 @@ pub fn generate_file(
 ) -> Result<(), LoadError> {
     println!("cargo:rerun-if-changed={}", model_path.display());
     let loaded = crate::load(model_path)?;
-    let tokens = generate_tokens(&loaded, options)?;
-    let text = format_tokens(&tokens).map_err(|e| gen_error(&loaded, e))?;
+    let text = generate_source(&loaded, options)?;
     std::fs::write(out, text)
         .map_err(|e| gen_error(&loaded, format!("cannot write {}: {e}", out.display())))
 }

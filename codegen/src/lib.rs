@@ -15,6 +15,7 @@
 mod assemble;
 pub mod cli;
 mod emit;
+mod emit_large;
 mod error;
 mod generate;
 pub mod ir;
@@ -25,8 +26,8 @@ mod urdf;
 pub use assemble::{build_model, inertial_about_link, ModelOptions, ROOT_JOINT};
 pub use error::{LoadError, Location, Warning};
 pub use generate::{
-    format_tokens, generate_file, generate_tokens, generation_model, Algorithm, GenerateOptions,
-    GENERATOR_VERSION,
+    format_tokens, generate_file, generate_source, generate_tokens, generation_model, Algorithm,
+    GenerateOptions, GENERATOR_VERSION,
 };
 pub use urdf::{load_urdf, parse_urdf, Loaded};
 
