@@ -9,8 +9,8 @@
 //! this form spends as few bindings and indexings as the computation allows:
 //!
 //! - a value used once, by an operation in the same part, is written into its user's expression
-//!   (`let t9 = (t3 * 0.5 - t4) * t8;`) instead of being bound to a name; an input read once is read in
-//!   place (`q[3]`), a value of an earlier part wherever it is read (`s.17`). Evaluation order and
+//!   (`let t9 = (t3 * 0.5 - t4) * t8;`) instead of being bound to a name; an input or a value of an
+//!   earlier part read once is read in place (`q[3]`, `s.17`). Evaluation order and
 //!   rounding are those of separate statements: every operation keeps its operands, Rust neither
 //!   reassociates nor contracts floating-point arithmetic, and parentheses keep every grouping;
 //! - the parts are cut near every [`CHUNK`] operations where the fewest values cross (between bodies
@@ -29,6 +29,62 @@ use std::fmt::Write;
 /// Operations written into one expression at most; longer single-use chains get a name. Keeps lines
 /// readable and the compiler's recursion shallow.
 const MAX_EXPRESSION: u32 = 12;
+
+/// rustc's memory per construct of this text (one scalar module), fitted by least squares to the peak
+/// memory of compiling generated chains' `aba`, `rnea`, `kinematics`, `crba` and `minv` (BENCHMARKS.md,
+/// "Scale of generation"): per traced operation, per `let`, per indexing (`q[3]`, `m[2][5]`: each
+/// index is a bounds check in MIR), per scratch field (`s.17`).
+const PER_OPERATION: f64 = 560.0;
+const PER_LET: f64 = 3000.0;
+const PER_INDEXING: f64 = 3400.0;
+const PER_FIELD: f64 = 1370.0;
+
+/// rustc's estimated memory, in bytes, for a function written by [`function_text`] with `operations`
+/// traced operations: the constructs of `text` counted and weighted by what the compiler builds for
+/// each.
+pub(crate) fn compile_bytes(operations: usize, text: &str) -> f64 {
+    let (lets, indexings, fields) = constructs(text);
+    PER_OPERATION * operations as f64
+        + PER_LET * lets as f64
+        + PER_INDEXING * indexings as f64
+        + PER_FIELD * fields as f64
+}
+
+/// The `let` statements, the indexings (`x[`, `][`) and the scratch fields (`s.k`) of emitted text.
+fn constructs(text: &str) -> (usize, usize, usize) {
+    let (mut lets, mut indexings, mut fields) = (0, 0, 0);
+    for line in text.lines() {
+        let statement = line.trim_start();
+        if statement.starts_with("let ") {
+            lets += 1;
+        }
+        if statement.starts_with("#[")
+            || statement.starts_with("fn ")
+            || statement.starts_with("pub fn ")
+            || statement.starts_with("type ")
+        {
+            continue;
+        }
+        let bytes = statement.as_bytes();
+        for (i, &b) in bytes.iter().enumerate() {
+            let after_name = i > 0
+                && (bytes[i - 1].is_ascii_alphanumeric()
+                    || bytes[i - 1] == b'_'
+                    || bytes[i - 1] == b']');
+            if b == b'[' && after_name {
+                indexings += 1;
+            }
+            let starts_field = b == b's'
+                && bytes.get(i + 1) == Some(&b'.')
+                && bytes.get(i + 2).is_some_and(u8::is_ascii_digit)
+                && (i == 0 || !(bytes[i - 1].is_ascii_alphanumeric() || bytes[i - 1] == b'_'));
+            if starts_field {
+                fields += 1;
+            }
+        }
+    }
+    (lets, indexings, fields)
+}
 
 /// Slot `k` of the scratch tuple `s`.
 fn slot_text(k: usize) -> String {
@@ -77,7 +133,7 @@ enum Reference {
     Name,
     /// Written in place: the operation's own expression (single use in this part).
     Inline,
-    /// Read in place: `q[i]`, `sin_batch[k]` (single use in this part) or `s.k` (any use).
+    /// Read in place: `q[i]`, `s.k` or `sin_batch[k]` (single use in this part).
     Access,
 }
 
@@ -318,7 +374,7 @@ pub(crate) fn function_text(
     text
 }
 
-/// The first position of each part.
+/// The positions of each part, from the first positions `parts`.
 fn part_ranges(parts: &[usize], len: usize) -> impl Iterator<Item = std::ops::Range<usize>> + '_ {
     parts
         .iter()
@@ -361,8 +417,9 @@ fn pair_sines_with_cosines(
     out
 }
 
-/// Start positions of the parts: each near `CHUNK` statements long, cut where the fewest computed
-/// values are live (defined before the cut and read after it), which on a tree is between bodies.
+/// Start positions of the parts: each within a quarter of `CHUNK` operations of `CHUNK` long, cut
+/// where the fewest computed values are live (defined before the cut and read after it), which on a
+/// tree is between bodies rather than inside one.
 fn cut_into_parts(order: &[u32], last_reader: &HashMap<u32, usize>) -> Vec<usize> {
     let len = order.len();
     // live[p]: computed values defined before position p and read at p or later (inputs are read in
@@ -382,15 +439,14 @@ fn cut_into_parts(order: &[u32], last_reader: &HashMap<u32, usize>) -> Vec<usize
             }
         }
     }
-    let chunk = CHUNK;
     let mut starts = vec![0usize];
     let mut start = 0usize;
-    while len - start > chunk + chunk / 4 {
+    while len - start > CHUNK + CHUNK / 4 {
         let (lo, hi) = (
-            start + chunk * 3 / 4,
-            (start + chunk * 5 / 4).min(len - chunk / 4),
+            start + CHUNK * 3 / 4,
+            (start + CHUNK * 5 / 4).min(len - CHUNK / 4),
         );
-        let target = start + chunk;
+        let target = start + CHUNK;
         let cut = (lo..=hi)
             .min_by_key(|&p| (live[p], p.abs_diff(target)))
             .unwrap_or(target);
@@ -447,8 +503,10 @@ impl Part<'_> {
                 }
                 let single = readers[&m] == 1;
                 let r = if !self.is_local(m) || self.batched.contains(&m) {
-                    // An input, a value of an earlier part, or a batched sine: read in place once.
-                    if single || self.slot.contains_key(&m) && !self.is_local(m) {
+                    // An input, a value of an earlier part or a batched sine: read in place when read
+                    // once, else named once at the top (measured: a name read twice costs rustc less
+                    // than two reads of a field).
+                    if single {
                         Reference::Access
                     } else {
                         Reference::Name

@@ -4,7 +4,8 @@
 //! the IR, which unrolls them for this model and folds its constants; the tape becomes straight-line Rust,
 //! once per scalar type.
 
-use crate::emit::{function, Arg, Emitted, Output};
+use crate::emit::{function, Arg, Code, Emitted, Output};
+use crate::size;
 use crate::trace::{input, record, snap, Sym};
 use crate::{build_model, LoadError, Loaded, Location, ModelOptions};
 use embedyn_runtime::constraints::{complete_configuration_with, constraint_pivot_ratio};
@@ -108,6 +109,10 @@ pub struct GenerateOptions {
     /// `aba`). When false, a model with constraints also gets `complete`, `embedding` and
     /// `crba_independent`.
     pub exact: bool,
+    /// Refuse to generate code that rustc is estimated to need more than this many MB of memory to
+    /// compile (checked before tracing from the model and after tracing from the code, always before
+    /// anything is formatted or written; see `size.rs`). `None`: no limit.
+    pub max_compile_memory_mb: Option<u64>,
 }
 
 impl Default for GenerateOptions {
@@ -124,6 +129,7 @@ impl Default for GenerateOptions {
             f32: true,
             helpers: quote!(::embedyn::codegen_support),
             exact: false,
+            max_compile_memory_mb: Some(crate::size::DEFAULT_COMPILE_MEMORY_MB),
         }
     }
 }
@@ -199,8 +205,20 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
     }
     let mut functions = Vec::new();
     if !scalars.is_empty() {
-        for &algo in &algorithms {
-            functions.push(generate_algorithm(loaded, &model, algo, &options.helpers)?);
+        let mut sizes =
+            check_size_before_tracing(loaded, &model64, &algorithms, &scalars, options)?;
+        for (k, &algo) in algorithms.iter().enumerate() {
+            let function = generate_algorithm(loaded, &model, algo, &options.helpers)?;
+            sizes[k] = size::FunctionSize {
+                algorithm: algo,
+                operations: function.operations,
+                compile_bytes: function.compile_bytes,
+                traced: true,
+            };
+            // Exact for what is traced: refused as soon as that alone is too large.
+            let limit = options.max_compile_memory_mb;
+            size::check(loaded, &sizes[..=k], &sizes, &scalars, limit, 1.0)?;
+            functions.push(function);
         }
     }
     let independent: Vec<bool> = (0..model64.joints.len())
@@ -243,6 +261,24 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
     })
 }
 
+/// The size guard's first step: the functions' sizes predicted from the model, refused before any
+/// tracing when far beyond the limit (see `size.rs`).
+fn check_size_before_tracing(
+    loaded: &Loaded,
+    model: &Model<f64>,
+    algorithms: &[Algorithm],
+    scalars: &[&str],
+    options: &GenerateOptions,
+) -> Result<Vec<size::FunctionSize>, LoadError> {
+    let predicted: Vec<size::FunctionSize> = algorithms
+        .iter()
+        .map(|&a| size::predicted(model, a))
+        .collect();
+    let limit = options.max_compile_memory_mb;
+    size::check(loaded, &predicted, &predicted, scalars, limit, 2.0)?;
+    Ok(predicted)
+}
+
 /// The scalar module `pub mod f64 { type S = f64; … }` around `functions`.
 fn scalar_module(scalar: &str, functions: &[TokenStream]) -> TokenStream {
     let module = format_ident!("{}", scalar);
@@ -267,9 +303,9 @@ pub fn generate_tokens(
     let functions = generated
         .functions
         .into_iter()
-        .map(|f| match f {
-            Emitted::Tokens(t) => Ok(t),
-            Emitted::Text(text) => text
+        .map(|f| match f.code {
+            Code::Tokens(t) => Ok(t),
+            Code::Text(text) => text
                 .parse::<TokenStream>()
                 .map_err(|e| gen_error(loaded, format!("generated code does not tokenize: {e}"))),
         })
@@ -297,12 +333,12 @@ pub fn generate_source(loaded: &Loaded, options: &GenerateOptions) -> Result<Str
     let functions = generated
         .functions
         .iter()
-        .map(|f| match f {
-            Emitted::Tokens(t) => {
+        .map(|f| match &f.code {
+            Code::Tokens(t) => {
                 let wrapped = format_tokens(&quote!(mod m { #t })).map_err(fail)?;
                 Ok(module_body(&wrapped).to_string())
             }
-            Emitted::Text(body) => Ok(body.clone()),
+            Code::Text(body) => Ok(body.clone()),
         })
         .collect::<Result<Vec<String>, LoadError>>()?;
     for scalar in &generated.scalars {

@@ -19,6 +19,7 @@ mod emit_large;
 mod error;
 mod generate;
 pub mod ir;
+mod size;
 pub mod standalone;
 pub mod trace;
 mod urdf;
@@ -29,6 +30,7 @@ pub use generate::{
     format_tokens, generate_file, generate_source, generate_tokens, generation_model, Algorithm,
     GenerateOptions, GENERATOR_VERSION,
 };
+pub use size::DEFAULT_COMPILE_MEMORY_MB;
 pub use urdf::{load_urdf, parse_urdf, Loaded};
 
 use embedyn_runtime::{Model, Real};
