@@ -30,14 +30,17 @@ use std::fmt::Write;
 /// readable and the compiler's recursion shallow.
 const MAX_EXPRESSION: u32 = 12;
 
-/// rustc's memory per construct of this text (one scalar module), fitted by least squares to the peak
-/// memory of compiling generated chains' `aba`, `rnea`, `kinematics`, `crba` and `minv` (BENCHMARKS.md,
-/// "Scale of generation"): per traced operation, per `let`, per indexing (`q[3]`, `m[2][5]`: each
-/// index is a bounds check in MIR), per scratch field (`s.17`).
-const PER_OPERATION: f64 = 560.0;
-const PER_LET: f64 = 3000.0;
-const PER_INDEXING: f64 = 3400.0;
-const PER_FIELD: f64 = 1370.0;
+/// rustc's memory per construct of this text, per scalar module, in bytes: a `let` (a named local with
+/// its scope, debug entry and storage markers) and a scratch field (a place projection and its copy)
+/// as measured by comparing emitted forms of the same function; a traced operation (its result and
+/// operand temporaries in MIR) and an indexing (`q[3]`, `m[2][5]`: each index a bounds check with a
+/// block of its own in MIR) fitted by least squares to 14 measured compiles of generated chains'
+/// `aba`, `rnea`, `kinematics`, `crba`, `minv` with one and two scalar modules, within 11 %
+/// (BENCHMARKS.md, "Scale of generation").
+const PER_OPERATION: f64 = 1300.0;
+const PER_LET: f64 = 1300.0;
+const PER_INDEXING: f64 = 4150.0;
+const PER_FIELD: f64 = 800.0;
 
 /// rustc's estimated memory, in bytes, for a function written by [`function_text`] with `operations`
 /// traced operations: the constructs of `text` counted and weighted by what the compiler builds for
@@ -737,5 +740,38 @@ impl Part<'_> {
             ),
             Op::Input { .. } | Op::Sin(_) | Op::Cos(_) => (self.access(n), ATOM),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn constants_are_written_as_the_token_form_writes_them() {
+        // The two forms of emission must print the same literal for every constant (same bits).
+        for x in [
+            0.5f64,
+            3.0,
+            1e-300,
+            1.7976931348623157e308,
+            0.1 + 0.2,
+            -0.003887210469140914,
+            -2.0,
+            5e-324,
+        ] {
+            let tokens = proc_macro2::Literal::f64_unsuffixed(x.abs()).to_string();
+            let text = float_text(x);
+            assert_eq!(text.trim_start_matches('-'), tokens, "{x:e}");
+            assert_eq!(text.starts_with('-'), x < 0.0);
+            assert_eq!(text.parse::<f64>().unwrap().to_bits(), x.to_bits());
+        }
+        assert_eq!(float_text(-0.0), "-0.0");
+    }
+
+    #[test]
+    fn scratch_types_are_camel_case() {
+        assert_eq!(scratch_type("aba"), "AbaScratch");
+        assert_eq!(scratch_type("crba_independent"), "CrbaIndependentScratch");
     }
 }

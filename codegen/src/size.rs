@@ -18,8 +18,8 @@
 //!    ([`crate::emit::Emitted::compile_bytes`]). The total is checked against the limit before any
 //!    formatting, writing or compiling.
 //!
-//! Calibrated on measured peak memory (BENCHMARKS.md, "Scale of generation"): within 15 % of the
-//! measured compiles of chains of 100–1000 bodies.
+//! Calibrated on measured peak memory (BENCHMARKS.md, "Scale of generation"): within 11 % of 14
+//! measured compiles of generated chains of 50–1000 bodies.
 
 use crate::generate::Algorithm;
 use crate::{LoadError, Loaded, Location};
@@ -31,11 +31,11 @@ pub const DEFAULT_COMPILE_MEMORY_MB: u64 = 2048;
 
 /// What rustc needs for any generated crate, MB (the intercept of the fit; a crate with a one-body
 /// `kinematics` measured 101 MB).
-const COMPILER_BASE_MB: f64 = 131.0;
+const COMPILER_BASE_MB: f64 = 130.0;
 
-/// rustc's memory per operation of a long function, bytes, for predictions before tracing (measured
-/// beyond the base: 1.8 KB for `aba`, 2.3–2.4 KB for `crba` and `minv`; the upper end keeps the
-/// prediction an upper bound).
+/// rustc's memory per operation of a long function and scalar module, bytes, for predictions before
+/// tracing (measured beyond the base: 1.8 KB for `aba`, 2.2–2.5 KB for `crba` and `minv`; the upper
+/// end keeps the prediction an upper bound).
 const PREDICTED_BYTES_PER_OPERATION: f64 = 2600.0;
 
 /// Bytes of Rust per operation of a long function, for the message (measured: 21 on chains).
@@ -66,7 +66,9 @@ pub fn predicted(model: &Model<f64>, algorithm: Algorithm) -> FunctionSize {
     let operations = match algorithm {
         Algorithm::Aba => 440.0 * nv,
         Algorithm::Rnea => 215.0 * nv,
-        Algorithm::Kinematics => 40.0 * nv,
+        Algorithm::Kinematics => {
+            40.0 * (nv + model.bodies.iter().map(|b| b.links.len()).sum::<usize>() as f64)
+        }
         Algorithm::Crba => crba,
         Algorithm::Minv => 38.0 * nv * nv + 170.0 * nv,
         Algorithm::Complete => 100.0 * nv,

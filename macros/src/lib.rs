@@ -85,7 +85,10 @@ impl Parse for Args {
 ///
 /// The path is relative to the calling crate's `Cargo.toml` (or to `$EMBEDYN_MODEL_DIR` when set). Expands to `NQ`, `NV`, `JOINTS`,
 /// `INDEPENDENT`, `FRAMES` and modules `f64`/`f32` with `kinematics`, `aba`, `rnea`, `crba` (and `minv` with the
-/// `minv` option; `only(aba, crba, …)` generates exactly the functions named, nothing else).
+/// `minv` option; `only(aba, crba, …)` generates exactly the functions named, nothing else;
+/// `f64_only`/`f32_only` one scalar module). Code that rustc is estimated to need more than 2 GB of
+/// memory to compile is a compile error naming the estimate and what shrinks it (fewer functions, one
+/// scalar type); `max_compile_memory = 4096` raises the limit (MB).
 /// Invoke it inside a module of its own (`mod arm { embedyn::robot!("arm.urdf"); }`): the modules are
 /// named after the scalar types. Errors in the model are compile errors that name the element.
 #[proc_macro]
