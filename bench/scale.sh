@@ -29,7 +29,7 @@ for n in "${sizes[@]}"; do
   # shellcheck disable=SC2086
   if ! /usr/bin/time -v target/release/embedyn generate "$work/chain$n.urdf" --out "$out" --only "$only" $extra \
       > /dev/null 2> "$work/generate$n.log"; then
-    echo "| $n | $only $extra | refused: $(grep -o 'estimated [0-9.]* GB' "$work/generate$n.log") | | | | |"
+    echo "| $n | $only $extra | refused: $(grep -o 'estimated [0-9.]* [GM]B' "$work/generate$n.log") | | | | |"
     continue
   fi
   bytes=$(wc -c < "$out/src/lib.rs")

@@ -134,8 +134,13 @@ fn grouped(n: usize) -> String {
     out
 }
 
-fn gigabytes(mb: f64) -> String {
-    format!("{:.1} GB", mb / 1024.0)
+/// `270 MB`, `2.8 GB`.
+fn memory_text(mb: f64) -> String {
+    if mb < 1024.0 {
+        format!("{mb:.0} MB")
+    } else {
+        format!("{:.1} GB", mb / 1024.0)
+    }
 }
 
 fn refusal(functions: &[FunctionSize], scalars: &[&str], memory: f64, limit: u64) -> String {
@@ -226,7 +231,7 @@ fn refusal(functions: &[FunctionSize], scalars: &[&str], memory: f64, limit: u64
         list.join(", "),
         how,
         grouped((total as f64 * SOURCE_BYTES_PER_OPERATION / 1e6).ceil() as usize),
-        gigabytes(memory),
-        gigabytes(limit as f64),
+        memory_text(memory),
+        memory_text(limit as f64),
     )
 }
