@@ -1,5 +1,6 @@
 //! From a traced tape to Rust: liveness, chunking into small functions (rustc's optimizer is superlinear
-//! in function size), and emission with `quote`.
+//! in function size), and emission with `quote`; functions too long to schedule are written as text by
+//! [`crate::emit_large`].
 
 use crate::trace::{Op, Sym, Tape};
 use proc_macro2::{Ident, Literal, TokenStream};
@@ -48,6 +49,30 @@ fn node_ident(n: u32) -> Ident {
     format_ident!("t{}", n)
 }
 
+/// A generated function (its parts and the public function), ready for a scalar module whose `S` is
+/// the scalar type, with what it costs to compile.
+pub struct Emitted {
+    /// Operations of the traced computation that reach the code.
+    pub operations: usize,
+    /// rustc's estimated memory for this function in one scalar module, in bytes
+    /// ([`TOKEN_BYTES_PER_OPERATION`], [`crate::emit_large::compile_bytes`]).
+    pub compile_bytes: f64,
+    pub code: Code,
+}
+
+/// The code of an [`Emitted`] function.
+pub enum Code {
+    /// A function of up to [`SCHEDULE_LIMIT`] statements, as tokens (formatted by `prettyplease`).
+    Tokens(TokenStream),
+    /// A longer one, as formatted module-body text (items indented by four spaces).
+    Text(String),
+}
+
+/// rustc's memory per operation of a function emitted as tokens: one `let` per operation, values
+/// crossing chunks through an array. Measured: 3.6 KB (a 130,000-operation function in this form
+/// needed 541 MB with one scalar module, 70 MB of which the compiler needs for any crate).
+pub const TOKEN_BYTES_PER_OPERATION: f64 = 3600.0;
+
 /// Errors of emission (a constant that folded to a non-finite number).
 #[derive(Debug)]
 pub struct EmitError(pub String);
@@ -60,7 +85,7 @@ pub fn function(
     outputs: &[Output],
     tape: &Tape,
     helpers: &TokenStream,
-) -> Result<TokenStream, EmitError> {
+) -> Result<Emitted, EmitError> {
     let nodes = &tape.nodes;
     // Liveness from the outputs.
     let mut live = vec![false; nodes.len()];
@@ -120,6 +145,20 @@ pub fn function(
     let order: Vec<u32> = (0..nodes.len() as u32)
         .filter(|&i| live[i as usize] && !matches!(nodes[i as usize], Op::Input { .. }))
         .collect();
+    if order.len() > SCHEDULE_LIMIT {
+        let (order, batch) = batch_angles(nodes, order, &sin_of, &cos_of);
+        let angles = batch_args(nodes, &batch);
+        let helpers = helpers.to_string().replace(' ', "");
+        let operations = order.len();
+        let text = crate::emit_large::function_text(
+            name, doc, args, outputs, nodes, order, &batch, &angles, &sin_of, &cos_of, &helpers,
+        );
+        return Ok(Emitted {
+            operations,
+            compile_bytes: crate::emit_large::compile_bytes(operations, &text),
+            code: Code::Text(text),
+        });
+    }
     let order = schedule(nodes, order);
     let (order, batch) = batch_angles(nodes, order, &sin_of, &cos_of);
     let angles = batch_args(nodes, &batch);
@@ -189,13 +228,14 @@ pub fn function(
         for &n in ns.iter() {
             for o in operands(&nodes[n as usize]) {
                 if let Sym::Node(m) = o {
-                    if !ns.contains(&m) && !needed.contains(&m) {
+                    if chunk_of.get(&m) != Some(&c) {
                         needed.push(m);
                     }
                 }
             }
         }
         needed.sort_unstable();
+        needed.dedup();
         for m in needed {
             let id = node_ident(m);
             match nodes[m as usize] {
@@ -387,13 +427,18 @@ pub fn function(
             #ret_value
         }
     };
-    Ok(quote! {
-        #(#chunk_fns)*
-        #[doc = #doc]
-        #[allow(unused_variables, clippy::all)]
-        pub fn #fname(#(#scalar_args,)* #(#out_params),*) #ret_type {
-            #body
-        }
+    let operations = order.len();
+    Ok(Emitted {
+        operations,
+        compile_bytes: TOKEN_BYTES_PER_OPERATION * operations as f64,
+        code: Code::Tokens(quote! {
+            #(#chunk_fns)*
+            #[doc = #doc]
+            #[allow(unused_variables, clippy::all)]
+            pub fn #fname(#(#scalar_args,)* #(#out_params),*) #ret_type {
+                #body
+            }
+        }),
     })
 }
 
@@ -423,7 +468,7 @@ fn value_tokens(
     }
 }
 
-fn operands(op: &Op) -> Vec<Sym> {
+pub(crate) fn operands(op: &Op) -> Vec<Sym> {
     match *op {
         Op::Input { .. } => vec![],
         Op::Add(a, b) | Op::Sub(a, b) | Op::Mul(a, b) | Op::Div(a, b) => vec![a, b],
@@ -450,7 +495,7 @@ fn latency(op: &Op) -> u32 {
 }
 
 /// Functions up to this many statements are reordered by [`schedule`]; longer ones keep the trace order.
-const SCHEDULE_LIMIT: usize = 2 * CHUNK;
+pub const SCHEDULE_LIMIT: usize = 2 * CHUNK;
 
 /// Orders the statements for an out-of-order core. The code is latency-bound, so the statements on the
 /// longest remaining dependency chain go first (list scheduling by height, ties in trace order) and

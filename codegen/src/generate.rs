@@ -4,8 +4,9 @@
 //! the IR, which unrolls them for this model and folds its constants; the tape becomes straight-line Rust,
 //! once per scalar type.
 
-use crate::emit::{function, Arg, Output};
+use crate::emit::{function, Arg, Code, Emitted, Output};
 use crate::names::{code_span, shown};
+use crate::size;
 use crate::trace::{input, record, snap, Sym};
 use crate::{build_model, LoadError, Loaded, Location, ModelOptions};
 use embedyn_runtime::constraints::{
@@ -110,6 +111,10 @@ pub struct GenerateOptions {
     /// `aba`). When false, a model with constraints also gets `complete`, `embedding` and
     /// `crba_independent`.
     pub exact: bool,
+    /// Refuse to generate code that rustc is estimated to need more than this many MB of memory to
+    /// compile (checked before tracing from the model and after tracing from the code, always before
+    /// anything is formatted or written; see `size.rs`). `None`: no limit.
+    pub max_compile_memory_mb: Option<u64>,
 }
 
 impl Default for GenerateOptions {
@@ -126,6 +131,7 @@ impl Default for GenerateOptions {
             f32: true,
             helpers: quote!(::embedyn::codegen_support),
             exact: false,
+            max_compile_memory_mb: Some(crate::size::DEFAULT_COMPILE_MEMORY_MB),
         }
     }
 }
@@ -155,12 +161,19 @@ fn gen_error(loaded: &Loaded, msg: impl Into<String>) -> LoadError {
     )
 }
 
-/// Generates the items for a model: `NQ`, `NV`, `JOINTS`, and modules `f64`/`f32` with one function per
-/// algorithm.
-pub fn generate_tokens(
-    loaded: &Loaded,
-    options: &GenerateOptions,
-) -> Result<TokenStream, LoadError> {
+/// The generated items before they are joined into a file or a token stream: the constants at the top
+/// and the functions of the scalar modules (the same code for `f64` and `f32`: only `S` differs, so
+/// each algorithm is traced and emitted once).
+struct Generated {
+    header: TokenStream,
+    scalars: Vec<&'static str>,
+    functions: Vec<Emitted>,
+    /// Whether the model has loops, couplings or mimic joints (then each scalar module has its
+    /// `SINGULARITY_THRESHOLD`).
+    constrained: bool,
+}
+
+fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generated, LoadError> {
     let model64 = loaded.model::<f64>(&options.model)?;
     if options.f32 {
         // The f32 functions fold the same constants as f32 literals: each must fit f32.
@@ -185,54 +198,40 @@ pub fn generate_tokens(
     let model: Model<Sym> = snapped(&model64).cast();
     let (nq, nv) = (model.nq(), model.nv());
     let names: Vec<&str> = model.joints.iter().map(|j| j.name.as_str()).collect();
-    let mut modules = Vec::new();
-    for (enabled, scalar, threshold) in [
-        (options.f64, quote!(f64), singularity_threshold::<f64>()),
-        (options.f32, quote!(f32), singularity_threshold::<f32>()),
-    ] {
-        if !enabled {
-            continue;
-        }
-        let mut fns = Vec::new();
-        let mut algorithms = options.algorithms.clone();
-        // A model with constraints also gets its position completion and embedding map.
-        if model.has_constraints() && !options.exact {
-            for extra in [
-                Algorithm::Complete,
-                Algorithm::Embedding,
-                Algorithm::CrbaIndependent,
-            ] {
-                if !algorithms.contains(&extra) {
-                    algorithms.push(extra);
-                }
+    let scalars: Vec<&'static str> = [(options.f64, "f64"), (options.f32, "f32")]
+        .into_iter()
+        .filter_map(|(enabled, scalar)| enabled.then_some(scalar))
+        .collect();
+    let mut algorithms = options.algorithms.clone();
+    // A model with constraints also gets its position completion and embedding map.
+    if model.has_constraints() && !options.exact {
+        for extra in [
+            Algorithm::Complete,
+            Algorithm::Embedding,
+            Algorithm::CrbaIndependent,
+        ] {
+            if !algorithms.contains(&extra) {
+                algorithms.push(extra);
             }
         }
-        for &algo in &algorithms {
-            fns.push(generate_algorithm(loaded, &model, algo, &options.helpers)?);
+    }
+    let mut functions = Vec::new();
+    if !scalars.is_empty() {
+        let mut sizes =
+            check_size_before_tracing(loaded, &model64, &algorithms, &scalars, options)?;
+        for (k, &algo) in algorithms.iter().enumerate() {
+            let function = generate_algorithm(loaded, &model, algo, &options.helpers)?;
+            sizes[k] = size::FunctionSize {
+                algorithm: algo,
+                operations: function.operations,
+                compile_bytes: function.compile_bytes,
+                traced: true,
+            };
+            // Exact for what is traced: refused as soon as that alone is too large.
+            let limit = options.max_compile_memory_mb;
+            size::check(loaded, &sizes[..=k], &sizes, &scalars, limit, 1.0)?;
+            functions.push(function);
         }
-        let module = format_ident!("{}", scalar.to_string());
-        let doc = format!("The generated dynamics in `{scalar}`.");
-        let threshold = if model.has_constraints() {
-            let value = proc_macro2::Literal::f64_unsuffixed(threshold);
-            quote! {
-                /// cond₁(Y1) at or above which a configuration counts as singular in this scalar type,
-                /// `min(1e10, 10⁻³ / ε)`: where the condition number returned by `aba`, `embedding` or
-                /// `crba_independent` is not below it (`!(cond < SINGULARITY_THRESHOLD)`, which also
-                /// catches NaN), the results are meaningless and the interpreted solver refuses.
-                pub const SINGULARITY_THRESHOLD: S = #value;
-            }
-        } else {
-            quote!()
-        };
-        modules.push(quote! {
-            #[doc = #doc]
-            #[allow(clippy::all, clippy::pedantic, unused_parens, non_snake_case)]
-            pub mod #module {
-                type S = #scalar;
-                #threshold
-                #(#fns)*
-            }
-        });
     }
     let independent: Vec<bool> = (0..model64.joints.len())
         .map(|j| model64.is_independent(j))
@@ -255,7 +254,7 @@ pub fn generate_tokens(
         code_span(&loaded.robot.source.file_name().map_or_else(String::new, |f| f.to_string_lossy().into_owned())),
         shown.join(", ")
     );
-    Ok(quote! {
+    let header = quote! {
         #[doc = #doc]
         pub const NQ: usize = #nq;
         /// Length of `v`, `tau` and `qdd`.
@@ -269,8 +268,130 @@ pub fn generate_tokens(
         /// The links whose poses `kinematics` returns, in its order (every link on a moving body; links
         /// fixed to the world are constant and not listed).
         pub const FRAMES: [&str; #nf] = [#(#frames),*];
+    };
+    Ok(Generated {
+        header,
+        scalars,
+        functions,
+        constrained: model64.has_constraints(),
+    })
+}
+
+/// The size guard's first step: the functions' sizes predicted from the model, refused before any
+/// tracing when far beyond the limit (see `size.rs`).
+fn check_size_before_tracing(
+    loaded: &Loaded,
+    model: &Model<f64>,
+    algorithms: &[Algorithm],
+    scalars: &[&str],
+    options: &GenerateOptions,
+) -> Result<Vec<size::FunctionSize>, LoadError> {
+    let predicted: Vec<size::FunctionSize> = algorithms
+        .iter()
+        .map(|&a| size::predicted(model, a))
+        .collect();
+    let limit = options.max_compile_memory_mb;
+    size::check(loaded, &predicted, &predicted, scalars, limit, 2.0)?;
+    Ok(predicted)
+}
+
+/// The scalar module `pub mod f64 { type S = f64; … }` around `functions`; for a model with constraints
+/// it also holds the scalar's singularity threshold.
+fn scalar_module(scalar: &str, constrained: bool, functions: &[TokenStream]) -> TokenStream {
+    let module = format_ident!("{}", scalar);
+    let doc = format!("The generated dynamics in `{scalar}`.");
+    let threshold = if constrained {
+        let value = proc_macro2::Literal::f64_unsuffixed(match scalar {
+            "f32" => singularity_threshold::<f32>(),
+            _ => singularity_threshold::<f64>(),
+        });
+        quote! {
+            /// cond₁(Y1) at or above which a configuration counts as singular in this scalar type,
+            /// `min(1e10, 10⁻³ / ε)`: where the condition number returned by `aba`, `embedding` or
+            /// `crba_independent` is not below it (`cond.is_nan() || cond >= SINGULARITY_THRESHOLD`), the
+            /// results are meaningless and the interpreted solver refuses.
+            pub const SINGULARITY_THRESHOLD: S = #value;
+        }
+    } else {
+        quote!()
+    };
+    quote! {
+        #[doc = #doc]
+        #[allow(clippy::all, clippy::pedantic, unused_parens, non_snake_case)]
+        pub mod #module {
+            type S = #module;
+            #threshold
+            #(#functions)*
+        }
+    }
+}
+
+/// Generates the items for a model: `NQ`, `NV`, `JOINTS`, and modules `f64`/`f32` with one function per
+/// algorithm.
+pub fn generate_tokens(
+    loaded: &Loaded,
+    options: &GenerateOptions,
+) -> Result<TokenStream, LoadError> {
+    let generated = generate_items(loaded, options)?;
+    let functions = generated
+        .functions
+        .into_iter()
+        .map(|f| match f.code {
+            Code::Tokens(t) => Ok(t),
+            Code::Text(text) => text
+                .parse::<TokenStream>()
+                .map_err(|e| gen_error(loaded, format!("generated code does not tokenize: {e}"))),
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    let modules = generated
+        .scalars
+        .iter()
+        .map(|scalar| scalar_module(scalar, generated.constrained, &functions));
+    let header = generated.header;
+    Ok(quote! {
+        #header
         #(#modules)*
     })
+}
+
+/// Generates the model's code as formatted source text: the same items as [`generate_tokens`], with
+/// the small functions formatted by `prettyplease` and the long ones written formatted by the emitter
+/// (pretty-printing millions of tokens would cost more time and memory than generating them).
+pub fn generate_source(loaded: &Loaded, options: &GenerateOptions) -> Result<String, LoadError> {
+    let generated = generate_items(loaded, options)?;
+    let fail = |e: String| gen_error(loaded, e);
+    let mut text = format_tokens(&generated.header).map_err(fail)?;
+    // Each function formatted on its own inside a module, so that it is indented (and its lines
+    // broken) exactly as inside the scalar module.
+    let functions = generated
+        .functions
+        .iter()
+        .map(|f| match &f.code {
+            Code::Tokens(t) => {
+                let wrapped = format_tokens(&quote!(mod m { #t })).map_err(fail)?;
+                Ok(module_body(&wrapped).to_string())
+            }
+            Code::Text(body) => Ok(body.clone()),
+        })
+        .collect::<Result<Vec<String>, LoadError>>()?;
+    for scalar in &generated.scalars {
+        let empty =
+            format_tokens(&scalar_module(scalar, generated.constrained, &[])).map_err(fail)?;
+        text.push_str(empty.strip_suffix("}\n").unwrap_or(&empty));
+        for f in &functions {
+            text.push_str(f);
+        }
+        text.push_str("}\n");
+    }
+    Ok(text)
+}
+
+/// The lines between `mod m {` and the closing `}` of a formatted module.
+fn module_body(formatted: &str) -> &str {
+    let start = formatted.find('\n').map_or(0, |i| i + 1);
+    formatted[start..]
+        .strip_suffix("}\n")
+        .unwrap_or(&formatted[start..])
 }
 
 /// `complete`: `complete_step` iterated until the relative residual is below 64 ε (or NaN) or the step
@@ -317,7 +438,7 @@ fn generate_algorithm(
     model: &Model<Sym>,
     algo: Algorithm,
     helpers: &TokenStream,
-) -> Result<TokenStream, LoadError> {
+) -> Result<Emitted, LoadError> {
     let (nq, nv) = (model.nq(), model.nv());
     let inputs = |arg: u8, n: usize| -> Vec<Sym> { (0..n).map(|i| input(arg, i)).collect() };
     let fail = |e: embedyn_runtime::DynamicsError| {
@@ -425,10 +546,18 @@ fn generate_algorithm(
         Algorithm::CrbaIndependent => (vec![Arg { name: "q", len: nq }], "The mass matrix over the independent coordinates, `Xᵀ M(q) X` (the spanning tree's `M` is `crba`). Returns the singularity measure cond₁(Y1) (as `aba` does)."),
     };
     if algo == Algorithm::Complete {
-        let step = function("complete_step", doc, &args, &outputs, &tape, helpers)
+        let mut step = function("complete_step", doc, &args, &outputs, &tape, helpers)
             .map_err(|e| gen_error(loaded, e.0))?;
         let wrapper = complete_loop();
-        return Ok(quote! { #step #wrapper });
+        step.code = match step.code {
+            Code::Tokens(t) => Code::Tokens(quote! { #t #wrapper }),
+            Code::Text(text) => {
+                let formatted =
+                    format_tokens(&quote!(mod m { #wrapper })).map_err(|e| gen_error(loaded, e))?;
+                Code::Text(text + module_body(&formatted))
+            }
+        };
+        return Ok(step);
     }
     function(algo.name(), doc, &args, &outputs, &tape, helpers).map_err(|e| gen_error(loaded, e.0))
 }
@@ -465,8 +594,7 @@ pub fn generate_file(
     }
     println!("cargo:rerun-if-changed={shown_path}");
     let loaded = crate::load(model_path)?;
-    let tokens = generate_tokens(&loaded, options)?;
-    let text = format_tokens(&tokens).map_err(|e| gen_error(&loaded, e))?;
+    let text = generate_source(&loaded, options)?;
     std::fs::write(out, text)
         .map_err(|e| gen_error(&loaded, format!("cannot write {}: {e}", out.display())))
 }

@@ -16,11 +16,13 @@ mod assemble;
 mod bounded_read;
 pub mod cli;
 mod emit;
+mod emit_large;
 mod error;
 mod generate;
 pub mod ir;
 pub mod names;
 pub mod sampling;
+mod size;
 pub mod standalone;
 pub mod trace;
 mod urdf;
@@ -29,9 +31,10 @@ mod xml_text;
 pub use assemble::{build_model, inertial_about_link, ModelOptions, ROOT_JOINT};
 pub use error::{LoadError, Location, Warning};
 pub use generate::{
-    format_tokens, generate_file, generate_tokens, generation_model, Algorithm, GenerateOptions,
-    GENERATOR_VERSION,
+    format_tokens, generate_file, generate_source, generate_tokens, generation_model, Algorithm,
+    GenerateOptions, GENERATOR_VERSION,
 };
+pub use size::DEFAULT_COMPILE_MEMORY_MB;
 pub use urdf::{load_urdf, parse_urdf, Loaded};
 
 use embedyn_runtime::{Model, Real};

@@ -2,7 +2,7 @@
 //! module inline, `libm` as its only dependency, a README with the joint order. Same bytes for the same
 //! input and options (no timestamps, no absolute paths).
 
-use crate::generate::{format_tokens, generate_tokens, GenerateOptions, GENERATOR_VERSION};
+use crate::generate::{format_tokens, generate_source, GenerateOptions, GENERATOR_VERSION};
 use crate::names::{code_span, table_cell};
 use crate::{LoadError, Loaded, Location};
 use quote::quote;
@@ -98,9 +98,7 @@ pub fn crate_files(
 ) -> Result<Vec<(PathBuf, String)>, LoadError> {
     let mut options = options.clone();
     options.helpers = quote!(crate::helpers);
-    let items = generate_tokens(loaded, &options)?;
-    let body = format_tokens(&items)
-        .map_err(|e| LoadError::new(Location::new(&loaded.robot.source, None, ""), e))?;
+    let body = generate_source(loaded, &options)?;
     let name = crate_name(&loaded.robot.name);
     let file_name = loaded
         .robot

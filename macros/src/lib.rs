@@ -6,7 +6,8 @@ use quote::quote;
 use syn::parse::{Parse, ParseStream};
 use syn::{Ident, LitStr, Path, Token};
 
-/// `robot!("model.urdf")` or `robot!("model.urdf", floating, minv, only(aba, kinematics), crate = ::my_facade)`.
+/// `robot!("model.urdf")` or `robot!("model.urdf", floating, minv, only(aba, kinematics), crate = ::my_facade)`
+/// (and `max_compile_memory = 4096` to raise the limit on rustc's estimated memory, MB).
 struct Args {
     path: LitStr,
     floating: bool,
@@ -16,6 +17,8 @@ struct Args {
     krate: Option<Path>,
     /// `only(aba, kinematics, …)`: exactly these functions.
     only: Option<Vec<embedyn_codegen::Algorithm>>,
+    /// `max_compile_memory = MB`.
+    max_compile_memory: u64,
 }
 
 impl Parse for Args {
@@ -29,6 +32,7 @@ impl Parse for Args {
             f32: true,
             krate: None,
             only: None,
+            max_compile_memory: embedyn_codegen::DEFAULT_COMPILE_MEMORY_MB,
         };
         while !input.is_empty() {
             input.parse::<Token![,]>()?;
@@ -47,6 +51,10 @@ impl Parse for Args {
                 "minv" => args.minv = true,
                 "f64_only" => args.f32 = false,
                 "f32_only" => args.f64 = false,
+                "max_compile_memory" => {
+                    input.parse::<Token![=]>()?;
+                    args.max_compile_memory = input.parse::<syn::LitInt>()?.base10_parse()?;
+                }
                 "only" => {
                     let content;
                     syn::parenthesized!(content in input);
@@ -64,7 +72,7 @@ impl Parse for Args {
                 other => {
                     return Err(syn::Error::new(
                         key.span(),
-                        format!("unknown option `{other}` (expected floating, minv, f64_only, f32_only, only(…) or crate = path)"),
+                        format!("unknown option `{other}` (expected floating, minv, f64_only, f32_only, only(…), max_compile_memory = MB or crate = path)"),
                     ))
                 }
             }
@@ -77,7 +85,10 @@ impl Parse for Args {
 ///
 /// The path is relative to the calling crate's `Cargo.toml` (or to `$EMBEDYN_MODEL_DIR` when set). Expands to `NQ`, `NV`, `JOINTS`,
 /// `INDEPENDENT`, `FRAMES` and modules `f64`/`f32` with `kinematics`, `aba`, `rnea`, `crba` (and `minv` with the
-/// `minv` option; `only(aba, crba, …)` generates exactly the functions named, nothing else).
+/// `minv` option; `only(aba, crba, …)` generates exactly the functions named, nothing else;
+/// `f64_only`/`f32_only` one scalar module). Code that rustc is estimated to need more than 2 GB of
+/// memory to compile is a compile error naming the estimate and what shrinks it (fewer functions, one
+/// scalar type); `max_compile_memory = 4096` raises the limit (MB).
 /// Invoke it inside a module of its own (`mod arm { embedyn::robot!("arm.urdf"); }`): the modules are
 /// named after the scalar types. Errors in the model are compile errors that name the element.
 #[proc_macro]
@@ -125,6 +136,7 @@ fn expand(args: &Args) -> Result<proc_macro2::TokenStream, String> {
         f32: args.f32,
         helpers: quote!(#krate::codegen_support),
         exact: args.only.is_some(),
+        max_compile_memory_mb: Some(args.max_compile_memory),
     };
     let items =
         embedyn_codegen::generate_tokens(&loaded, &options).map_err(|e| format!("embedyn: {e}"))?;

@@ -88,6 +88,12 @@ pub enum Command {
         /// constraints, complete, embedding and crba_independent.
         #[arg(long, value_delimiter = ',')]
         only: Option<Vec<String>>,
+        /// Generate only this scalar type's module (default: both `f64` and `f32`).
+        #[arg(long, value_enum)]
+        scalar: Option<Scalar>,
+        /// Refuse code that rustc is estimated to need more than this many MB of memory to compile.
+        #[arg(long, value_name = "MB", default_value_t = crate::DEFAULT_COMPILE_MEMORY_MB)]
+        max_compile_memory: u64,
     },
     /// Time every algorithm for each engine and scalar (median ns per call, in-process, pre-generated
     /// random states).
@@ -176,10 +182,15 @@ pub fn run(cli: Cli) -> Result<serde_json::Value, CliError> {
             floating,
             minv,
             only,
+            scalar,
+            max_compile_memory,
         } => {
             let loaded = load_reporting(&model)?;
             let mut options = crate::GenerateOptions {
                 model: options(floating),
+                f64: scalar != Some(Scalar::F32),
+                f32: scalar != Some(Scalar::F64),
+                max_compile_memory_mb: Some(max_compile_memory),
                 ..Default::default()
             };
             if let Some(names) = only {

@@ -7,16 +7,21 @@
 //!   it moves, held rigid), against the size of that composite inertia in any direction (its mass for a
 //!   translation, the largest entry of its rotational inertia for a rotation): a joint turning a needle
 //!   about its own length, or a massless subtree, moves nothing.
-//! - `D(k) ≤ M_kk` against `M_kk`: `D` is what is left of `M_kk` once the descendants' joints move
-//!   freely. Where they can absorb all of it (a massless link carrying a coaxial joint), `D` is rounding
-//!   noise of order ε·`M_kk`, positive or negative, and the acceleration is undetermined.
+//! - `D(k)` against what it is computed from, `R(k) = H (I_k + Σ_children φ P_c φ*) H*`: the body's own
+//!   inertia plus its children's articulated inertias *before* each child's joint direction is taken out
+//!   (`P⁺ = P − U D⁻¹ Uᵀ`). That subtraction is where `D`'s rounding error comes from, of order ε·`R`.
+//!   Where the descendants' joints can absorb all of the inertia (a massless link carrying a coaxial
+//!   joint), `D` is that rounding noise, positive or negative, and the acceleration is undetermined.
+//!   (Not `M_kk`: the composite inertia carries the lever arms of the whole subtree, so along a long chain
+//!   of free joints a perfectly determined `D` is a tiny fraction of it, and f32 would refuse a 100-link
+//!   chain.)
 //!
 //! Both are judged at [`resolvable_fraction`] of the reference, i.e. in the precision of the scalar the
 //! check runs in: [`crate::Model::try_cast`] runs it again in the target type.
 
 use super::{aba, Workspace};
 use crate::model::{Model, ModelError};
-use crate::spatial::SpatialInertia;
+use crate::spatial::{ArticulatedInertia, SpatialInertia};
 use crate::Real;
 
 /// The smallest fraction of its reference a quantity must keep to be more than rounding in `T`: 1000 ε
@@ -66,19 +71,31 @@ pub(crate) fn check_articulated_inertia<T: Real>(model: &Model<T>) -> Result<(),
         };
         n
     ];
+    let mut unprojected: Vec<ArticulatedInertia<T>> = Vec::with_capacity(n);
     for q in [&q0, &q1] {
         aba::articulate(model, &mut ws, q, &v, &tau);
-        // Composite inertias, leaves first, from the placements the sweep left in `ws`.
+        // Composite inertias, leaves first, from the placements the sweep left in `ws`; and each body's
+        // inertia plus its children's articulated inertias before their joints are taken out (`ws.inertia`
+        // keeps every body's `P` as it was before its own projection).
         composite.clear();
         composite.extend(model.bodies.iter().map(|b| b.inertia));
+        unprojected.clear();
+        unprojected.extend(
+            model
+                .bodies
+                .iter()
+                .map(|b| ArticulatedInertia::from(b.inertia)),
+        );
         for i in (0..n).rev() {
             if let Some(p) = model.joints[i].parent {
-                let c = composite[i].act(&ws.parent_placement[i]);
+                let x = &ws.parent_placement[i];
+                let c = composite[i].act(x);
                 composite[p] = composite[p] + c;
+                unprojected[p] += ws.inertia[i].act(x);
             }
         }
         for i in 0..n {
-            last[i] = judge_joint(model, &ws, &composite[i], i);
+            last[i] = judge_joint(model, &ws, &composite[i], &unprojected[i], i);
             regular[i] |= last[i].regular;
         }
     }
@@ -114,12 +131,14 @@ pub(crate) fn check_articulated_inertia<T: Real>(model: &Model<T>) -> Result<(),
     })
 }
 
-/// The verdict on joint `i` from its articulated inertia (in `ws` after the backward sweep) and its
-/// composite inertia, both in its body frame.
+/// The verdict on joint `i` from its articulated inertia (in `ws` after the backward sweep), its
+/// composite inertia and the unprojected sum `D` is computed from (see the module documentation), all in
+/// its body frame.
 fn judge_joint<T: Real>(
     model: &Model<T>,
     ws: &Workspace<T>,
     composite: &SpatialInertia<T>,
+    unprojected: &ArticulatedInertia<T>,
     i: usize,
 ) -> JointVerdict {
     let joint = &model.joints[i];
@@ -129,6 +148,7 @@ fn judge_joint<T: Real>(
     // D = Sᵀ P S and M = Sᵀ I_c S (≤ 6 × 6), in f64: their entries are what T computed.
     let mut d = [[0.0f64; 6]; 6];
     let mut m = [[0.0f64; 6]; 6];
+    let mut reference = [0.0f64; 6];
     let mut moves_inertia = true;
     // The largest entry, not the trace: a sum could overflow where every entry is finite.
     let rotational_size = composite
@@ -143,6 +163,7 @@ fn judge_joint<T: Real>(
             d[r][c] = s_r.dot(&articulated.mul_motion(&s_c)).to_f64();
             m[r][c] = s_r.dot(&composite.mul_motion(&s_c)).to_f64();
         }
+        reference[r] = s_r.dot(&unprojected.mul_motion(&s_r)).to_f64();
         // The composite's size along any direction of this kind of motion.
         let squared = |v: &nalgebra::Vector3<T>| v.dot(v).to_f64();
         let size = squared(&s_r.angular) * rotational_size + squared(&s_r.linear) * mass;
@@ -159,15 +180,15 @@ fn judge_joint<T: Real>(
             d: f64::NAN,
         };
     }
-    // The Cholesky pivots of D scaled by diag(M)^(-1/2) on both sides: each is the share of M_kk that D
-    // keeps in direction k after the earlier directions (1-DoF: D / M_kk), unit-free for a floating joint
+    // The Cholesky pivots of D scaled by diag(R)^(-1/2) on both sides: each is the share of R_kk that D
+    // keeps in direction k after the earlier directions (1-DoF: D / R_kk), unit-free for a floating joint
     // whose directions mix kg and kg·m².
     let mut smallest_share = f64::INFINITY;
     let mut d_at_smallest = d[0][0];
     for k in 0..nv {
         // Gaussian elimination without pivoting: the pivots of D's LDLᵀ factorization, in order.
         let pivot = d[k][k];
-        let share = pivot / m[k][k];
+        let share = pivot / reference[k];
         if share < smallest_share || share.is_nan() {
             smallest_share = share;
             d_at_smallest = pivot;

@@ -1,0 +1,237 @@
+//! How much memory rustc will need for generated code, and the refusal, with the numbers and the ways
+//! to shrink it, when that is more than the user allows — instead of an out-of-memory abort in rustc
+//! minutes later.
+//!
+//! The model of the estimate: rustc holds the whole crate's HIR and MIR at once, so its peak memory
+//! is a base plus a cost per operation of the generated code, once per scalar module (`f64` and `f32`
+//! hold the same code). The operations come from the traced tape; its size is known exactly once an
+//! algorithm is traced, and before that it is predicted from the model's structure. Two checks:
+//!
+//! 1. before tracing, from the model: the O(N) algorithms trace to at most ~440 (`aba`), ~215 (`rnea`)
+//!    and ~40 (`kinematics`) operations per degree of freedom, the O(N²) ones to ~24 per pair of
+//!    degrees of freedom on one branch (`crba`) and ~38 per pair of any two (`minv`) — the counts of a
+//!    chain whose joints have general offsets and whose links have full inertias, which folds least
+//!    (robots with axis-aligned joints trace to 60–70 % of these). A request predicted at more than
+//!    twice the limit is refused here, before the tracer spends time and memory on it;
+//! 2. after tracing each function, from the emitted code itself: its operations, `let` bindings,
+//!    indexings and scratch fields, weighted by what rustc builds for each
+//!    ([`crate::emit::Emitted::compile_bytes`]). The total is checked against the limit before any
+//!    formatting, writing or compiling.
+//!
+//! Calibrated on measured peak memory (BENCHMARKS.md, "Scale of generation"): within 11 % of 14
+//! measured compiles of generated chains of 50–1000 bodies.
+
+use crate::generate::Algorithm;
+use crate::{LoadError, Loaded, Location};
+use embedyn_runtime::Model;
+
+/// The default limit on rustc's estimated memory, MB: a 1000-body chain's `aba` (f64 and f32) fits, a
+/// 200-body chain's `crba` does not.
+pub const DEFAULT_COMPILE_MEMORY_MB: u64 = 2048;
+
+/// What rustc needs for any generated crate, MB (the intercept of the fit; a crate with a one-body
+/// `kinematics` measured 101 MB).
+const COMPILER_BASE_MB: f64 = 130.0;
+
+/// rustc's memory per operation of a long function and scalar module, bytes, for predictions before
+/// tracing (measured beyond the base: 1.8 KB for `aba`, 2.2–2.5 KB for `crba` and `minv`; the upper
+/// end keeps the prediction an upper bound).
+const PREDICTED_BYTES_PER_OPERATION: f64 = 2600.0;
+
+/// Bytes of Rust per operation of a long function, for the message (measured: 21 on chains).
+const SOURCE_BYTES_PER_OPERATION: f64 = 21.0;
+
+/// One function's size: exact once traced, else predicted from the model.
+#[derive(Clone, Copy, Debug)]
+pub struct FunctionSize {
+    pub algorithm: Algorithm,
+    pub operations: usize,
+    /// rustc's estimated memory for the function in one scalar module, bytes.
+    pub compile_bytes: f64,
+    pub traced: bool,
+}
+
+/// The predicted size of `algorithm` on `model` (an upper bound for the joints embedyn supports).
+pub fn predicted(model: &Model<f64>, algorithm: Algorithm) -> FunctionSize {
+    let nv = model.nv() as f64;
+    let ni = model.independent_nv() as f64;
+    // Pairs of degrees of freedom on one branch (the nonzero lower triangle of M on a tree).
+    let mut depth = vec![0usize; model.joints.len()];
+    let mut branch_pairs = 0usize;
+    for (j, joint) in model.joints.iter().enumerate() {
+        depth[j] = joint.nv() + joint.parent.map_or(0, |p| depth[p]);
+        branch_pairs += joint.nv() * depth[j];
+    }
+    let crba = 24.0 * branch_pairs as f64 + 30.0 * nv;
+    let operations = match algorithm {
+        Algorithm::Aba => 440.0 * nv,
+        Algorithm::Rnea => 215.0 * nv,
+        Algorithm::Kinematics => {
+            40.0 * (nv + model.bodies.iter().map(|b| b.links.len()).sum::<usize>() as f64)
+        }
+        Algorithm::Crba => crba,
+        Algorithm::Minv => 38.0 * nv * nv + 170.0 * nv,
+        Algorithm::Complete => 100.0 * nv,
+        Algorithm::Embedding => 50.0 * nv + 2.0 * nv * ni,
+        Algorithm::CrbaIndependent => 1.25 * crba + 2.0 * nv * ni,
+    };
+    FunctionSize {
+        algorithm,
+        operations: operations.ceil() as usize,
+        compile_bytes: operations * PREDICTED_BYTES_PER_OPERATION,
+        traced: false,
+    }
+}
+
+/// `cargo build` over a bare `rustc` compile of the same crate (it also writes metadata and
+/// dependency information): measured 1.81 GB against 1.65 GB for the 1000-body chain's `aba`.
+const CARGO_OVERHEAD: f64 = 1.1;
+
+/// rustc's estimated peak memory under `cargo build --release`, MB, for these functions in `modules`
+/// scalar modules.
+pub fn compile_memory_mb(functions: &[FunctionSize], modules: usize) -> f64 {
+    let per_module: f64 = functions.iter().map(|f| f.compile_bytes).sum();
+    COMPILER_BASE_MB + CARGO_OVERHEAD * modules as f64 * per_module / (1024.0 * 1024.0)
+}
+
+/// Refuses when the estimate for `decisive` exceeds `limit_mb` times `slack` (2 for predictions
+/// before tracing, 1 for traced code); the message reports `all` the requested functions.
+pub fn check(
+    loaded: &Loaded,
+    decisive: &[FunctionSize],
+    all: &[FunctionSize],
+    scalars: &[&str],
+    limit_mb: Option<u64>,
+    slack: f64,
+) -> Result<(), LoadError> {
+    let Some(limit) = limit_mb else {
+        return Ok(());
+    };
+    if compile_memory_mb(decisive, scalars.len()) <= limit as f64 * slack {
+        return Ok(());
+    }
+    let memory = compile_memory_mb(all, scalars.len());
+    Err(LoadError::new(
+        Location::new(
+            &loaded.robot.source,
+            None,
+            format!("robot \"{}\"", loaded.robot.name),
+        ),
+        refusal(all, scalars, memory, limit),
+    ))
+}
+
+/// `1,234,567`.
+fn grouped(n: usize) -> String {
+    let digits = n.to_string();
+    let mut out = String::new();
+    for (i, c) in digits.chars().enumerate() {
+        if i > 0 && (digits.len() - i) % 3 == 0 {
+            out.push(',');
+        }
+        out.push(c);
+    }
+    out
+}
+
+/// `270 MB`, `2.8 GB`.
+fn memory_text(mb: f64) -> String {
+    if mb < 1024.0 {
+        format!("{mb:.0} MB")
+    } else {
+        format!("{:.1} GB", mb / 1024.0)
+    }
+}
+
+fn refusal(functions: &[FunctionSize], scalars: &[&str], memory: f64, limit: u64) -> String {
+    let mut sorted: Vec<&FunctionSize> = functions.iter().collect();
+    sorted.sort_by_key(|f| std::cmp::Reverse(f.operations));
+    let total: usize = functions.iter().map(|f| f.operations).sum::<usize>() * scalars.len();
+    let list: Vec<String> = sorted
+        .iter()
+        .map(|f| {
+            format!(
+                "`{}` {}{}",
+                f.algorithm.name(),
+                grouped(f.operations),
+                if f.traced { "" } else { " predicted" }
+            )
+        })
+        .collect();
+    let how = if functions.iter().all(|f| f.traced) {
+        "counted in the traced code"
+    } else if functions.iter().any(|f| f.traced) {
+        "counted in the traced code, and predicted from the model for what is not traced yet"
+    } else {
+        "predicted from the model before tracing"
+    };
+    let quadratic: Vec<&str> = sorted
+        .iter()
+        .map(|f| f.algorithm)
+        .filter(|a| {
+            matches!(
+                a,
+                Algorithm::Crba | Algorithm::Minv | Algorithm::CrbaIndependent
+            )
+        })
+        .map(Algorithm::name)
+        .collect();
+    let linear: Vec<&str> = sorted
+        .iter()
+        .map(|f| f.algorithm.name())
+        .filter(|n| !quadratic.contains(n))
+        .collect();
+    let by_name = |names: &[&str], sep: &str| -> String {
+        names
+            .iter()
+            .map(|n| format!("`{n}`"))
+            .collect::<Vec<_>>()
+            .join(sep)
+    };
+    let fewer = match (quadratic.is_empty(), linear.is_empty()) {
+        _ if sorted.len() == 1 => String::new(),
+        (false, false) => format!(
+            "leave out {} — the mass matrix and its inverse grow with the square of the number of \
+             degrees of freedom, the other functions linearly (`--only {}` for `embedyn generate`, \
+             `only({})` in `robot!`, `GenerateOptions::algorithms` in build.rs); ",
+            by_name(&quadratic, " and "),
+            linear.join(","),
+            linear.join(", ")
+        ),
+        (false, true) => format!(
+            "generate {} one at a time — each grows with the square of the number of degrees of \
+             freedom (`--only {}` for `embedyn generate`, `only({})` in `robot!`); ",
+            by_name(&quadratic, " and "),
+            quadratic[quadratic.len() - 1],
+            quadratic[quadratic.len() - 1]
+        ),
+        (true, _) => "generate fewer functions (`--only …` for `embedyn generate`, `only(…)` in \
+                      `robot!`, `GenerateOptions::algorithms` in build.rs); "
+            .to_string(),
+    };
+    let one_scalar = if scalars.len() > 1 {
+        "generate one scalar type, which halves it (`--scalar f64` for `embedyn generate`, `f64_only` \
+         in `robot!`, `GenerateOptions::f32 = false`); "
+    } else {
+        ""
+    };
+    let needed = ((memory / 1024.0).ceil() as u64) * 1024;
+    format!(
+        "the generated code is too large to compile within the memory limit: {} operations in {} \
+         (each: {}; {}), about {} MB of Rust, for which rustc needs an estimated {} of memory \
+         (limit {}). To shrink it, {fewer}{one_scalar}or raise the limit where the memory is \
+         available (`--max-compile-memory {needed}`, `max_compile_memory = {needed}` in `robot!`, \
+         `GenerateOptions::max_compile_memory_mb`)",
+        grouped(total),
+        if scalars.len() > 1 {
+            format!("the {} modules", scalars.join(" and "))
+        } else {
+            format!("the {} module", scalars.join(""))
+        },
+        list.join(", "),
+        how,
+        grouped((total as f64 * SOURCE_BYTES_PER_OPERATION / 1e6).ceil() as usize),
+        memory_text(memory),
+        memory_text(limit as f64),
+    )
+}
