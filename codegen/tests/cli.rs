@@ -546,3 +546,31 @@ fn endless_inputs_end_with_an_error() {
     );
     assert!(!ok && err.contains("larger than"), "{err}");
 }
+
+/// `eval --engine generated` and `bench` take the generated code's compile-memory limit: a request beyond
+/// it is refused up front with the estimate (nothing is compiled), as `embedyn generate` does.
+#[test]
+fn generated_engine_refuses_beyond_the_compile_memory_limit() {
+    let model = repo("models/humanoid34.urdf");
+    let input = json!({"samples": [{"q": vec![0.0; 34]}]}).to_string();
+    let (ok, _, err) = embedyn_cached(
+        &[
+            "eval",
+            &model,
+            "--algo",
+            "crba",
+            "--engine",
+            "generated",
+            "--max-compile-memory",
+            "64",
+        ],
+        &input,
+    );
+    assert!(!ok, "accepted");
+    assert!(
+        err.contains("--max-compile-memory") && err.contains("MB"),
+        "{err}"
+    );
+    let (ok, _, err) = embedyn_cached(&["bench", &model, "--max-compile-memory", "64"], "");
+    assert!(!ok && err.contains("--max-compile-memory"), "{err}");
+}

@@ -5,7 +5,7 @@
 use super::runner::{build_runner, run, RowShape};
 use super::CliError;
 use crate::sampling::{consistent_states, Rng};
-use crate::{GenerateOptions, Loaded, ModelOptions};
+use crate::{Algorithm, GenerateOptions, Loaded, ModelOptions};
 use embedyn_runtime::{aba, crba, reduced_mass_matrix_in, rnea, Model, Workspace};
 use serde_json::{json, Value};
 use std::hint::black_box;
@@ -57,7 +57,11 @@ fn states(model: &Model<f64>) -> Result<Vec<TimedState>, CliError> {
         .collect())
 }
 
-pub fn bench(loaded: &Loaded, options: &ModelOptions) -> Result<Value, CliError> {
+pub fn bench(
+    loaded: &Loaded,
+    options: &ModelOptions,
+    max_compile_memory_mb: u64,
+) -> Result<Value, CliError> {
     let model = loaded.model::<f64>(options)?;
     if model.nv() == 0 {
         super::output::note(&format!(
@@ -97,6 +101,19 @@ pub fn bench(loaded: &Loaded, options: &ModelOptions) -> Result<Value, CliError>
         loaded,
         &GenerateOptions {
             model: options.clone(),
+            // What is timed, nothing more (`crba` is Xᵀ M X for a model with constraints).
+            algorithms: if model.has_constraints() {
+                vec![
+                    Algorithm::Aba,
+                    Algorithm::Rnea,
+                    Algorithm::Crba,
+                    Algorithm::CrbaIndependent,
+                ]
+            } else {
+                vec![Algorithm::Aba, Algorithm::Rnea, Algorithm::Crba]
+            },
+            exact: true,
+            max_compile_memory_mb: Some(max_compile_memory_mb),
             ..Default::default()
         },
     )?;

@@ -12,6 +12,8 @@ use embedyn_runtime::{
 };
 use serde_json::{json, Value};
 
+/// `embedyn eval` on the samples of `input`; `max_compile_memory_mb` is the generated engine's limit
+/// (`--max-compile-memory`).
 pub fn eval(
     loaded: &Loaded,
     options: &ModelOptions,
@@ -19,6 +21,7 @@ pub fn eval(
     engine: Engine,
     scalar: Scalar,
     input: &str,
+    max_compile_memory_mb: u64,
 ) -> Result<Value, CliError> {
     let samples = Samples::parse(input)?;
     // Consistency with the constraints is judged in f64 whatever the scalar (1e-9 is below f32's
@@ -36,7 +39,15 @@ pub fn eval(
         }
     }
     if engine == Engine::Generated {
-        return eval_generated(loaded, options, &model64, algo, scalar, &samples);
+        return eval_generated(
+            loaded,
+            options,
+            &model64,
+            algo,
+            scalar,
+            &samples,
+            max_compile_memory_mb,
+        );
     }
     match scalar {
         Scalar::F64 => eval_in::<f64>(&model64, algo, &samples),
@@ -53,13 +64,26 @@ fn eval_generated(
     algo: Algo,
     scalar: Scalar,
     samples: &Samples,
+    max_compile_memory_mb: u64,
 ) -> Result<Value, CliError> {
-    // The scalar asked for only: half the compile time, and a model whose constants do not fit f32 can
-    // still be evaluated in f64.
+    // The function and scalar asked for only: a fraction of the compile time and memory, and a model
+    // whose constants do not fit f32 can still be evaluated in f64.
+    let algorithms = match algo {
+        Algo::Aba => vec![crate::Algorithm::Aba],
+        Algo::Rnea => vec![crate::Algorithm::Rnea],
+        // What the command reports for a model with constraints is Xᵀ M X.
+        Algo::Crba if model.has_constraints() => {
+            vec![crate::Algorithm::Crba, crate::Algorithm::CrbaIndependent]
+        }
+        Algo::Crba => vec![crate::Algorithm::Crba],
+    };
     let gen_options = crate::GenerateOptions {
         model: options.clone(),
+        algorithms,
+        exact: true,
         f64: scalar == Scalar::F64,
         f32: scalar == Scalar::F32,
+        max_compile_memory_mb: Some(max_compile_memory_mb),
         ..Default::default()
     };
     let binary = super::runner::build_runner(loaded, &gen_options)?;

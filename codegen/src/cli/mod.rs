@@ -104,6 +104,9 @@ pub enum Command {
         /// Print JSON instead of a table.
         #[arg(long)]
         json: bool,
+        /// Refuse generated code whose compilation is estimated to need more memory than this (MB).
+        #[arg(long, value_name = "MB", default_value_t = crate::size::DEFAULT_COMPILE_MEMORY_MB)]
+        max_compile_memory: u64,
     },
     /// Evaluate an algorithm on the samples of a JSON file (or stdin).
     Eval {
@@ -119,6 +122,10 @@ pub enum Command {
         /// JSON input: `{"samples": [...]}`; stdin when absent.
         #[arg(long)]
         input: Option<PathBuf>,
+        /// `--engine generated`: refuse generated code whose compilation is estimated to need more memory
+        /// than this (MB).
+        #[arg(long, value_name = "MB", default_value_t = crate::size::DEFAULT_COMPILE_MEMORY_MB)]
+        max_compile_memory: u64,
     },
 }
 
@@ -167,9 +174,10 @@ pub fn run(cli: Cli) -> Result<serde_json::Value, CliError> {
             model,
             floating,
             json,
+            max_compile_memory,
         } => {
             let loaded = load_reporting(&model)?;
-            let result = bench::bench(&loaded, &options(floating))?;
+            let result = bench::bench(&loaded, &options(floating), max_compile_memory)?;
             Ok(if json {
                 result
             } else {
@@ -230,10 +238,19 @@ pub fn run(cli: Cli) -> Result<serde_json::Value, CliError> {
             scalar,
             floating,
             input,
+            max_compile_memory,
         } => {
             let loaded = load_reporting(&model)?;
             let text = read_input(input.as_deref())?;
-            eval::eval(&loaded, &options(floating), algo, engine, scalar, &text)
+            eval::eval(
+                &loaded,
+                &options(floating),
+                algo,
+                engine,
+                scalar,
+                &text,
+                max_compile_memory,
+            )
         }
     }
 }
