@@ -137,7 +137,7 @@ impl Default for GenerateOptions {
 }
 
 /// Version of the generator, part of every cache key: generated code from another version is never reused.
-pub const GENERATOR_VERSION: &str = concat!(env!("CARGO_PKG_VERSION"), "-g2");
+pub const GENERATOR_VERSION: &str = concat!(env!("CARGO_PKG_VERSION"), "-g3");
 
 /// The model the generator traces: rotations and axes within 1e-14 of 0 or ±1 made exact, so that the
 /// zero structure of axis-aligned joints and right-angle frames folds away.
