@@ -52,7 +52,10 @@ fn node_ident(n: u32) -> Ident {
 #[derive(Debug)]
 pub struct EmitError(pub String);
 
-/// Emits `pub fn name(args…, outputs…)` for one scalar module; `helpers` is the path of the helper module.
+/// Emits `pub fn name(args…, outputs…)` for one scalar module; `helpers` is the path of the helper module,
+/// `largest` the largest finite value of the module's scalar type. Constants are folded in `f64` and
+/// written as literals of the module's type: one beyond `largest` (a product of model numbers that each
+/// fit, a coupling ratio squared) would not compile, so it is an error here.
 pub fn function(
     name: &str,
     doc: &str,
@@ -60,7 +63,13 @@ pub fn function(
     outputs: &[Output],
     tape: &Tape,
     helpers: &TokenStream,
+    largest: f64,
 ) -> Result<TokenStream, EmitError> {
+    let unfit = |c: f64| {
+        EmitError(format!(
+            "`{name}`: the constant {c:e}, folded from the model's numbers, is beyond the range of the scalar type (largest {largest:e})"
+        ))
+    };
     let nodes = &tape.nodes;
     // Liveness from the outputs.
     let mut live = vec![false; nodes.len()];
@@ -82,6 +91,7 @@ pub fn function(
                     "`{name}`: an output folded to the non-finite constant {c}"
                 )))
             }
+            Sym::Const(c) if c.abs() > largest => return Err(unfit(*c)),
             _ => {}
         }
     }
@@ -96,6 +106,7 @@ pub fn function(
                 Sym::Const(c) if !c.is_finite() => {
                     return Err(EmitError(format!("`{name}`: a constant folded to {c}")))
                 }
+                Sym::Const(c) if c.abs() > largest => return Err(unfit(c)),
                 _ => {}
             }
         }

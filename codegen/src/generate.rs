@@ -186,9 +186,19 @@ pub fn generate_tokens(
     let (nq, nv) = (model.nq(), model.nv());
     let names: Vec<&str> = model.joints.iter().map(|j| j.name.as_str()).collect();
     let mut modules = Vec::new();
-    for (enabled, scalar, threshold) in [
-        (options.f64, quote!(f64), singularity_threshold::<f64>()),
-        (options.f32, quote!(f32), singularity_threshold::<f32>()),
+    for (enabled, scalar, threshold, largest) in [
+        (
+            options.f64,
+            quote!(f64),
+            singularity_threshold::<f64>(),
+            f64::MAX,
+        ),
+        (
+            options.f32,
+            quote!(f32),
+            singularity_threshold::<f32>(),
+            f64::from(f32::MAX),
+        ),
     ] {
         if !enabled {
             continue;
@@ -208,7 +218,13 @@ pub fn generate_tokens(
             }
         }
         for &algo in &algorithms {
-            fns.push(generate_algorithm(loaded, &model, algo, &options.helpers)?);
+            fns.push(generate_algorithm(
+                loaded,
+                &model,
+                algo,
+                &options.helpers,
+                largest,
+            )?);
         }
         let module = format_ident!("{}", scalar.to_string());
         let doc = format!("The generated dynamics in `{scalar}`.");
@@ -312,12 +328,21 @@ fn matrix_output(name: &'static str, m: &DMatrix<Sym>) -> Output {
     }
 }
 
+/// One algorithm's function for the module whose scalar's largest finite value is `largest`.
 fn generate_algorithm(
     loaded: &Loaded,
     model: &Model<Sym>,
     algo: Algorithm,
     helpers: &TokenStream,
+    largest: f64,
 ) -> Result<TokenStream, LoadError> {
+    let emit_error = |e: crate::emit::EmitError| {
+        let mut message = e.0;
+        if largest < f64::MAX {
+            message += " (generated f32 code cannot hold it; generate the f64 functions only)";
+        }
+        gen_error(loaded, message)
+    };
     let (nq, nv) = (model.nq(), model.nv());
     let inputs = |arg: u8, n: usize| -> Vec<Sym> { (0..n).map(|i| input(arg, i)).collect() };
     let fail = |e: embedyn_runtime::DynamicsError| {
@@ -425,12 +450,20 @@ fn generate_algorithm(
         Algorithm::CrbaIndependent => (vec![Arg { name: "q", len: nq }], "The mass matrix over the independent coordinates, `Xᵀ M(q) X` (the spanning tree's `M` is `crba`). Returns the singularity measure cond₁(Y1) (as `aba` does)."),
     };
     if algo == Algorithm::Complete {
-        let step = function("complete_step", doc, &args, &outputs, &tape, helpers)
-            .map_err(|e| gen_error(loaded, e.0))?;
+        let step = function(
+            "complete_step",
+            doc,
+            &args,
+            &outputs,
+            &tape,
+            helpers,
+            largest,
+        )
+        .map_err(emit_error)?;
         let wrapper = complete_loop();
         return Ok(quote! { #step #wrapper });
     }
-    function(algo.name(), doc, &args, &outputs, &tape, helpers).map_err(|e| gen_error(loaded, e.0))
+    function(algo.name(), doc, &args, &outputs, &tape, helpers, largest).map_err(emit_error)
 }
 
 /// Formats generated items as a source file with `prettyplease`.
