@@ -4,8 +4,10 @@
 mod common;
 
 use common::repo_path;
-use embedyn::codegen::{format_tokens, generate_tokens, Algorithm, GenerateOptions};
-use embedyn::{load, ModelOptions};
+use embedyn::codegen::{format_tokens, generate_tokens, parse_urdf, Algorithm, GenerateOptions};
+use embedyn::constraints::{complete_configuration, complete_velocity, ConstraintKind};
+use embedyn::nalgebra::Vector3;
+use embedyn::{aba, load, ModelOptions, Workspace};
 
 /// Generated code folds constants in f64 and writes them as literals of the module's scalar. A coupling
 /// ratio of 1e20 fits f32, but `crba_independent` folds Xᵀ M X, whose rotor entry is about ratio² = 1e40:
@@ -39,4 +41,52 @@ fn a_folded_constant_beyond_f32_is_refused_in_f32_code() {
     let tokens = generate_tokens(&loaded, &only_crba(false)).unwrap();
     let text = format_tokens(&tokens).unwrap();
     assert!(text.contains("pub fn crba_independent"), "{text}");
+}
+
+/// The four-bar of `models/loops/four_bar_internal.urdf` with every axis (the joints' and the loop's)
+/// written as `0 s 0`.
+fn four_bar_with_axes_scaled(s: &str) -> embedyn::Model<f64> {
+    let path = repo_path("models/loops/four_bar_internal.urdf");
+    let text = std::fs::read_to_string(&path)
+        .unwrap()
+        .replace("<axis xyz=\"0 1 0\"/>", &format!("<axis xyz=\"0 {s} 0\"/>"));
+    assert_eq!(text.matches(&format!("\"0 {s} 0\"")).count(), 5);
+    parse_urdf(&text, &path)
+        .unwrap_or_else(|e| panic!("{e}"))
+        .model::<f64>(&ModelOptions::default())
+        .unwrap_or_else(|e| panic!("axes 0 {s} 0: {e}"))
+}
+
+/// An axis is a direction: `0 1e-200 0` and `0 1e200 0` are the y axis. Normalizing by the Euclidean
+/// norm squared the components first, which underflowed to 0 or overflowed to infinity: a joint axis was
+/// refused as "not a non-zero finite vector", and a loop axis was silently replaced by the x axis (the
+/// four-bar then lost its planar redundancy and was refused for a dependent-joint mismatch). Unit
+/// vectors are now computed scaled by the largest component.
+#[test]
+fn tiny_and_huge_axes_are_directions() {
+    let reference = four_bar_with_axes_scaled("1");
+    let y = Vector3::new(0.0, 1.0, 0.0);
+    for s in ["1e-200", "1e200", "5e-324"] {
+        let model = four_bar_with_axes_scaled(s);
+        for j in &model.joints {
+            assert_eq!(j.axis, y, "axes 0 {s} 0: joint {}", j.name);
+        }
+        let ConstraintKind::Loop(l) = &model.constraints[0].kind else {
+            panic!("the four-bar's constraint is a loop")
+        };
+        assert_eq!(l.axis, y, "axes 0 {s} 0: the loop's axis");
+        assert_eq!(model.independent_nv(), reference.independent_nv());
+        // Same model, same dynamics.
+        let (q, v, tau) = ([0.2, -0.3, 0.1, 0.4], [0.5, -0.2, 0.3, 0.1], [0.3; 4]);
+        let mut ws = Workspace::new(&model);
+        let mut ws_ref = Workspace::new(&reference);
+        let mut q1 = q;
+        complete_configuration(&reference, &mut ws_ref, &mut q1).unwrap();
+        let mut v1 = v;
+        complete_velocity(&reference, &mut ws_ref, &q1, &mut v1).unwrap();
+        let expected = aba(&reference, &mut ws_ref, &q1, &v1, &tau)
+            .unwrap()
+            .to_vec();
+        assert_eq!(aba(&model, &mut ws, &q1, &v1, &tau).unwrap(), &expected[..]);
+    }
 }
