@@ -5,9 +5,14 @@ mod common;
 
 use common::repo_path;
 use embedyn::codegen::{format_tokens, generate_tokens, parse_urdf, Algorithm, GenerateOptions};
-use embedyn::constraints::{complete_configuration, complete_velocity, ConstraintKind};
+use embedyn::constraints::{
+    complete_configuration, complete_velocity, constraint_condition, singularity_threshold,
+    ConstraintKind,
+};
 use embedyn::nalgebra::Vector3;
-use embedyn::{aba, load, ModelOptions, Workspace};
+use embedyn::{
+    aba, embedding_map, load, reduced_mass_matrix, DynamicsError, ModelOptions, Workspace,
+};
 
 /// Generated code folds constants in f64 and writes them as literals of the module's scalar. A coupling
 /// ratio of 1e20 fits f32, but `crba_independent` folds Xᵀ M X, whose rotor entry is about ratio² = 1e40:
@@ -89,4 +94,37 @@ fn tiny_and_huge_axes_are_directions() {
             .to_vec();
         assert_eq!(aba(&model, &mut ws, &q1, &v1, &tau).unwrap(), &expected[..]);
     }
+}
+
+/// At the neutral configuration of this four-bar (crank and rocker on one ground pivot, every angle 0)
+/// the loop's Y1 is exactly singular and its computed inverse is NaN. The condition number's column-sum
+/// norm took a `max` that skips NaN, reported cond(Y1) = 0, and `embedding_map` returned Ok with NaN in
+/// X. NaN is now sticky in that norm (and in completion's worst residual), so every call that uses X
+/// refuses with the singular-constraint error there, and the measure generated code returns is past the
+/// threshold.
+#[test]
+fn an_exactly_singular_loop_is_refused_not_nan() {
+    let loaded = load(&repo_path(
+        "tests/data/loops/coincident_pivots_four_bar.urdf",
+    ))
+    .unwrap();
+    let model = loaded.model::<f64>(&ModelOptions::default()).unwrap();
+    let mut ws = Workspace::new(&model);
+    let q = model.neutral_configuration();
+    let singular = |e: DynamicsError| {
+        matches!(e, DynamicsError::SingularConstraint { ref group, condition, .. }
+            if group == "loop1" && condition >= singularity_threshold::<f64>())
+    };
+    let x = embedding_map(&model, &mut ws, &q);
+    assert!(x.clone().is_err_and(singular), "{x:?}");
+    assert!(constraint_condition(&ws) >= singularity_threshold::<f64>());
+    let m = reduced_mass_matrix(&model, &mut ws, &q);
+    assert!(m.clone().is_err_and(singular), "{m:?}");
+    let qdd = aba(&model, &mut ws, &q, &[0.0; 3], &[0.0; 3]).map(|x| x.to_vec());
+    assert!(qdd.clone().is_err_and(singular), "{qdd:?}");
+    // Assembled (from a guess on the branch), the mechanism is regular and X is finite.
+    let mut q = vec![0.3, 0.0, 0.0];
+    complete_configuration(&model, &mut ws, &mut q).unwrap();
+    let x = embedding_map(&model, &mut ws, &q).unwrap();
+    assert!(x.iter().all(|v| v.is_finite()), "{x}");
 }
