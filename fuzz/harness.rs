@@ -6,7 +6,8 @@
 //! input). The properties (CONTRACT §1 and §3: never a panic, never an abort, never a hang, never a silent
 //! NaN):
 //!
-//! - **No panic, abort or hang** on any input: every failure is an `Err`.
+//! - **No panic, abort or hang** on any input: every failure is an `Err`, and the line it names (if
+//!   any) is a line of the file.
 //! - **Constants fit the scalar**: a model that builds in `T` holds only finite numbers (a constant that
 //!   does not fit `T` is a load error, not a different model).
 //! - **Non-finite inputs are refused**: an algorithm given a NaN or infinite `q`, `v`, `tau` or `qdd`
@@ -33,7 +34,8 @@
 use embedyn_codegen::cli::{complete_text, eval_interpreted, Algo, Scalar};
 use embedyn_codegen::ir::Robot;
 use embedyn_codegen::{
-    format_tokens, generate_tokens, parse_urdf, Algorithm, GenerateOptions, Loaded, ModelOptions,
+    format_tokens, generate_tokens, parse_urdf, Algorithm, GenerateOptions, Loaded, Location,
+    ModelOptions,
 };
 use embedyn_runtime::constraints::{complete_configuration, complete_velocity, ConstraintKind};
 use embedyn_runtime::nalgebra::DMatrix;
@@ -79,9 +81,14 @@ pub fn urdf(data: &[u8]) {
         None => (data, &[][..]),
     };
     let text = String::from_utf8_lossy(text);
-    let Ok(loaded) = parse_urdf(&text, Path::new("fuzz.urdf")) else {
-        return;
+    let lines = text.matches('\n').count() + 1;
+    let loaded = match parse_urdf(&text, Path::new("fuzz.urdf")) {
+        Ok(loaded) => loaded,
+        Err(e) => return assert_line_in_file(&e.location, lines),
     };
+    for w in &loaded.warnings {
+        assert_line_in_file(&w.location, lines);
+    }
     let mut generated = false;
     for floating in [false, true] {
         let options = ModelOptions {
@@ -90,6 +97,12 @@ pub fn urdf(data: &[u8]) {
         };
         let model64 = loaded.model::<f64>(&options);
         let model32 = loaded.model::<f32>(&options);
+        for e in [model64.as_ref().err(), model32.as_ref().err()]
+            .into_iter()
+            .flatten()
+        {
+            assert_line_in_file(&e.location, lines);
+        }
         if let Ok(m) = &model64 {
             assert_model_finite(m, "f64");
         }
@@ -111,6 +124,16 @@ pub fn urdf(data: &[u8]) {
             let pick = usize::from(StateBytes::new(state).nth(1));
             generation(&loaded, &options, &model64, pick);
         }
+    }
+}
+
+/// A message's line, where it gives one, is a line of the file (`lines` lines).
+fn assert_line_in_file(location: &Location, lines: usize) {
+    if let Some(line) = location.line {
+        assert!(
+            (1..=lines).contains(&(line as usize)),
+            "{location}: line {line} of a file of {lines} lines"
+        );
     }
 }
 
@@ -667,10 +690,17 @@ pub fn eval_input(data: &[u8]) {
             Command::Eval(Algo::Aba, _) => {
                 assert_eq!(len("qdd"), Some(nv), "{what}: qdd");
                 assert_eq!(len("qdd_independent"), Some(ni), "{what}: qdd_independent");
+                if !model.has_constraints() {
+                    assert_eq!(s["qdd_independent"], s["qdd"], "{what}: a tree's qdd");
+                }
             }
             Command::Eval(Algo::Rnea, _) => {
                 assert_eq!(len("tau"), Some(nv), "{what}: tau");
                 assert_eq!(len("tau_independent"), Some(ni), "{what}: tau_independent");
+                if !model.has_constraints() {
+                    // CONTRACT §3: for a model without constraints tau_independent equals tau.
+                    assert_eq!(s["tau_independent"], s["tau"], "{what}: a tree's tau");
+                }
             }
             Command::Eval(Algo::Crba, _) => {
                 let n = if model.has_constraints() { ni } else { nv };
