@@ -352,14 +352,10 @@ fn run_algorithms<T: Real>(
     strict: bool,
     what: &str,
 ) {
-    let inputs_finite = [&state.q, &state.v, &state.tau, &state.qdd]
-        .iter()
-        .all(|x| x.iter().all(|v| T::from_f64(*v).is_finite()));
     let mut q: Vec<T> = cast(&state.q);
     let mut v: Vec<T> = cast(&state.v);
     let tau: Vec<T> = cast(&state.tau);
     let qdd: Vec<T> = cast(&state.qdd);
-    let q_finite = all_finite(q.iter().copied());
 
     if model.has_constraints() {
         // The state's dependent entries are the guess; where completion converges, the algorithms run
@@ -388,6 +384,11 @@ fn run_algorithms<T: Real>(
         }
     }
 
+    // Whether each call's own inputs are finite in `T` (after the cast and the completion).
+    let q_finite = all_finite(q.iter().copied());
+    let v_finite = all_finite(v.iter().copied());
+    let aba_inputs_finite = q_finite && v_finite && all_finite(tau.iter().copied());
+    let rnea_inputs_finite = q_finite && v_finite && all_finite(qdd.iter().copied());
     // An Ok answer with a non-finite entry: refused on non-finite inputs, a failure in the moderate regime.
     let check = |name: &str, ok: bool, finite: bool, inputs_ok: bool| {
         if !inputs_ok {
@@ -406,7 +407,7 @@ fn run_algorithms<T: Real>(
         aba_out
             .as_ref()
             .is_ok_and(|x| all_finite(x.iter().copied())),
-        inputs_finite,
+        aba_inputs_finite,
     );
     let rnea_out = rnea(model, ws, &q, &v, &qdd).map(|x| x.to_vec());
     check(
@@ -415,7 +416,7 @@ fn run_algorithms<T: Real>(
         rnea_out
             .as_ref()
             .is_ok_and(|x| all_finite(x.iter().copied())),
-        inputs_finite,
+        rnea_inputs_finite,
     );
     let m = crba(model, ws, &q).cloned();
     check(
@@ -444,7 +445,7 @@ fn run_algorithms<T: Real>(
         "forward_kinematics",
         fk.is_ok(),
         fk_finite,
-        q_finite && all_finite(v.iter().copied()),
+        q_finite && v_finite,
     );
     if model.has_constraints() {
         let x = embedding_map(model, ws, &q);
