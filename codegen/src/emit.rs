@@ -54,6 +54,10 @@ fn node_ident(n: u32) -> Ident {
 pub struct Emitted {
     /// Operations of the traced computation that reach the code.
     pub operations: usize,
+    /// The largest magnitude of a constant the code contains. Constants are folded in `f64` and written
+    /// as literals of the module's type: one beyond that type's range (a product of model numbers that
+    /// each fit, a coupling ratio squared) would not compile, so each scalar module checks it.
+    pub largest_constant: f64,
     /// rustc's estimated memory for this function in one scalar module, in bytes
     /// ([`TOKEN_BYTES_PER_OPERATION`], [`crate::emit_large::compile_bytes`]).
     pub compile_bytes: f64,
@@ -90,6 +94,7 @@ pub fn function(
     // Liveness from the outputs.
     let mut live = vec![false; nodes.len()];
     let mut stack: Vec<u32> = Vec::new();
+    let mut largest_constant = 0.0_f64;
     let mut out_syms: Vec<Sym> = Vec::new();
     for o in outputs {
         match o {
@@ -107,7 +112,7 @@ pub fn function(
                     "`{name}`: an output folded to the non-finite constant {c}"
                 )))
             }
-            _ => {}
+            Sym::Const(c) => largest_constant = largest_constant.max(c.abs()),
         }
     }
     while let Some(n) = stack.pop() {
@@ -121,7 +126,7 @@ pub fn function(
                 Sym::Const(c) if !c.is_finite() => {
                     return Err(EmitError(format!("`{name}`: a constant folded to {c}")))
                 }
-                _ => {}
+                Sym::Const(c) => largest_constant = largest_constant.max(c.abs()),
             }
         }
     }
@@ -155,6 +160,7 @@ pub fn function(
         );
         return Ok(Emitted {
             operations,
+            largest_constant,
             compile_bytes: crate::emit_large::compile_bytes(operations, &text),
             code: Code::Text(text),
         });
@@ -430,6 +436,7 @@ pub fn function(
     let operations = order.len();
     Ok(Emitted {
         operations,
+        largest_constant,
         compile_bytes: TOKEN_BYTES_PER_OPERATION * operations as f64,
         code: Code::Tokens(quote! {
             #(#chunk_fns)*

@@ -221,6 +221,18 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
             check_size_before_tracing(loaded, &model64, &algorithms, &scalars, options)?;
         for (k, &algo) in algorithms.iter().enumerate() {
             let function = generate_algorithm(loaded, &model, algo, &options.helpers)?;
+            // Constants are folded in f64; the f32 module writes them as f32 literals.
+            if options.f32 && function.largest_constant > f64::from(f32::MAX) {
+                return Err(gen_error(
+                    loaded,
+                    format!(
+                        "`{}`: the constant {:e}, folded from the model's numbers, is beyond the range of the scalar type f32 (largest {:e}); generated f32 code cannot hold it, generate the f64 functions only",
+                        algo.name(),
+                        function.largest_constant,
+                        f32::MAX
+                    ),
+                ));
+            }
             sizes[k] = size::FunctionSize {
                 algorithm: algo,
                 operations: function.operations,

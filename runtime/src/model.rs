@@ -488,13 +488,10 @@ impl<T: Real> ModelBuilder<T> {
                 }
                 Vector3::zeros()
             }
-            _ => {
-                let n = axis.dot(&axis).sqrt();
-                if !(n.is_finite() && n > T::zero()) {
-                    return Err(ModelError::BadAxis { joint: joint_name });
-                }
-                axis / n
-            }
+            _ => match crate::spatial::unit_vector(&axis) {
+                Some(unit) => unit,
+                None => return Err(ModelError::BadAxis { joint: joint_name }),
+            },
         };
         let body_name = body_name.into();
         self.joints.push(Joint {

@@ -255,6 +255,27 @@ pub fn run(cli: Cli) -> Result<serde_json::Value, CliError> {
     }
 }
 
+/// `embedyn eval --engine interpreted` on input text already read: the JSON document the command prints,
+/// or its error. (The command line's own path, without file or stdin; the fuzzer drives it.)
+pub fn eval_interpreted(
+    loaded: &Loaded,
+    options: &ModelOptions,
+    algo: Algo,
+    scalar: Scalar,
+    input: &str,
+) -> Result<serde_json::Value, CliError> {
+    eval::eval(loaded, options, algo, Engine::Interpreted, scalar, input, 0)
+}
+
+/// `embedyn complete` on input text already read: the JSON document the command prints, or its error.
+pub fn complete_text(
+    loaded: &Loaded,
+    options: &ModelOptions,
+    input: &str,
+) -> Result<serde_json::Value, CliError> {
+    complete::complete(loaded, options, input)
+}
+
 fn options(floating: bool) -> ModelOptions {
     ModelOptions {
         floating,

@@ -78,12 +78,8 @@ impl<T: Real> LoopClosure<T> {
         successor_frame: Transform<T>,
         axis: Vector3<T>,
     ) -> Self {
-        let n = axis.dot(&axis).sqrt();
-        let axis = if n > T::zero() {
-            axis / n
-        } else {
-            Vector3::x()
-        };
+        // (A zero axis is what spherical and fixed loops, which have none, are given.)
+        let axis = crate::spatial::unit_vector(&axis).unwrap_or_else(Vector3::x);
         // e1: the unit vector most orthogonal to the axis among x, y, z, projected and normalized.
         let pick = if axis.x.abs() <= axis.y.abs() && axis.x.abs() <= axis.z.abs() {
             Vector3::x()

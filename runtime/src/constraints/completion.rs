@@ -109,8 +109,7 @@ pub fn completion_step<T: Real>(
     let mut worst = T::zero();
     for gi in 0..model.groups.len() {
         let r = newton_step(model, ws, gi, q, true)?;
-        // NaN wins (select: if r > worst or r is NaN, r).
-        worst = worst.select_gt(r, worst, r);
+        worst = super::max_keeping_nan(worst, r);
     }
     Ok(worst)
 }
@@ -137,7 +136,7 @@ fn newton_step<T: Real>(
     let mut worst = T::zero();
     for &row in &g.rows {
         let e = relative_residual(r[row], scale[row]);
-        worst = worst.select_gt(e, worst, e);
+        worst = super::max_keeping_nan(worst, e);
     }
     if take_step && !g.rows.is_empty() {
         group_rows(model, ws, g, &mut gw, false);

@@ -317,7 +317,10 @@ fn max_column_sum<T: Real>(n: usize, a: impl Fn(usize, usize) -> T) -> T {
         for i in 0..n {
             s += a(i, j).abs();
         }
-        norm = s.select_gt(norm, s, norm);
+        // A column sum that is not a number (the inverse of an exactly singular Y1) makes the norm NaN,
+        // which reads as singular; skipping it could report a finite condition number for a singular Y1
+        // and a silent NaN in X (found by fuzzing).
+        norm = super::max_keeping_nan(norm, s);
     }
     norm
 }

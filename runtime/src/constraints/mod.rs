@@ -135,6 +135,16 @@ fn residual_of<T: Real>(
     }
 }
 
+/// The larger of `acc` and `x` (both non-negative or NaN), NaN if either is: a norm or a worst residual
+/// that is not a number stays not a number through every later comparison, so it reads as singular or
+/// unconverged (a plain `max` keeps whichever operand compares true and drops a NaN). Selects, not
+/// branches, so that generated code keeps the rule.
+#[inline(always)]
+pub(crate) fn max_keeping_nan<T: Real>(acc: T, x: T) -> T {
+    let larger = x.select_gt(acc, x, acc);
+    x.select_gt(T::from_f64(-1.0), larger, x)
+}
+
 /// `|r| / max(1, magnitude)`: a residual relative to the numbers it came from (NaN stays NaN).
 #[inline(always)]
 pub(crate) fn relative_residual<T: Real>(r: T, magnitude: T) -> T {

@@ -85,3 +85,15 @@ pub(crate) fn rotate_tensor<T: Real>(r: &Matrix3<T>, a: &Matrix3<T>) -> Matrix3<
     let (xx, xy, xz, yy, yz, zz) = (e(0, 0), e(0, 1), e(0, 2), e(1, 1), e(1, 2), e(2, 2));
     Matrix3::new(xx, xy, xz, xy, yy, yz, xz, yz, zz)
 }
+
+/// The unit vector along `v`, or `None` for a zero or non-finite vector. Scaled by its largest
+/// component first, so that a direction written as `0 1e-200 0` or `0 1e200 0` is a direction: its
+/// squared norm would underflow to zero or overflow to infinity.
+pub(crate) fn unit_vector<T: Real>(v: &Vector3<T>) -> Option<Vector3<T>> {
+    let largest = v.x.abs().max(v.y.abs()).max(v.z.abs());
+    if !(v.iter().all(|x| x.is_finite()) && largest > T::zero()) {
+        return None;
+    }
+    let scaled = v / largest;
+    Some(scaled / scaled.dot(&scaled).sqrt())
+}
