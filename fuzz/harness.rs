@@ -31,7 +31,7 @@
 
 #![allow(dead_code)]
 
-use embedyn_codegen::cli::{complete_text, eval_interpreted, Algo, Scalar};
+use embedyn_cli::{complete_text, eval_interpreted, Algo, Scalar};
 use embedyn_codegen::ir::Robot;
 use embedyn_codegen::{
     format_tokens, generate_tokens, parse_urdf, Algorithm, GenerateOptions, Loaded, Location,

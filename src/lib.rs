@@ -20,6 +20,11 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
+#![no_std]
+
+#[cfg(feature = "std")]
+extern crate std;
+
 // The README's examples are doctests of this crate, so that they can never rot.
 #[doc = include_str!("../README.md")]
 #[cfg(doctest)]
@@ -29,7 +34,9 @@ pub struct ReadmeDoctests;
 #[cfg(doctest)]
 pub struct GeneratedCodeDoctests;
 
+#[cfg(feature = "std")]
 pub use embedyn_codegen as codegen;
+#[cfg(feature = "std")]
 pub use embedyn_codegen::{load, LoadError, Loaded, ModelOptions, Warning};
 pub use embedyn_macros::robot;
 pub use embedyn_runtime::*;

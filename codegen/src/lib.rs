@@ -13,15 +13,13 @@
 //! ```
 
 mod assemble;
-mod bounded_read;
-pub mod cli;
+pub mod bounded_read;
 mod emit;
 mod emit_large;
 mod error;
 mod generate;
 pub mod ir;
 pub mod names;
-pub mod sampling;
 mod size;
 pub mod standalone;
 pub mod trace;

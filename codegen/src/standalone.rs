@@ -11,14 +11,14 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 /// The helper source shared with `embedyn_runtime::codegen_support`.
-pub const HELPERS_SOURCE: &str = include_str!("../../runtime/src/codegen_support.rs");
+pub const HELPERS_SOURCE: &str = embedyn_runtime::CODEGEN_SUPPORT_SOURCE;
 
 pub use crate::names::crate_name;
 
 /// A `Cargo.toml`, written by the `toml` serializer (so every string in it is escaped): the standalone
 /// crate's, and, with `bins`, the `embedyn eval --engine generated` runner's.
 #[derive(Serialize)]
-pub(crate) struct Manifest {
+pub struct Manifest {
     pub package: Package,
     #[serde(rename = "bin", skip_serializing_if = "Vec::is_empty")]
     pub bins: Vec<Binary>,
@@ -28,7 +28,7 @@ pub(crate) struct Manifest {
 }
 
 #[derive(Serialize)]
-pub(crate) struct Package {
+pub struct Package {
     pub name: String,
     pub version: String,
     pub edition: String,
@@ -39,7 +39,7 @@ pub(crate) struct Package {
 
 /// A `[[bin]]` target.
 #[derive(Serialize)]
-pub(crate) struct Binary {
+pub struct Binary {
     pub name: String,
     pub path: String,
 }

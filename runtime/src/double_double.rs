@@ -19,6 +19,8 @@
 //! generally produces NaN rather than ±∞ (the error terms become `∞ − ∞`). Either way
 //! [`DoubleDouble::is_finite`] reports `false`, which is all the solver looks at.
 
+#[allow(unused_imports)]
+use crate::alloc_prelude::*;
 use core::fmt;
 use core::iter::Sum;
 use core::ops::{Add, AddAssign, Div, DivAssign, Mul, MulAssign, Neg, Sub, SubAssign};

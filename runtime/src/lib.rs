@@ -10,22 +10,53 @@
 //! Conventions (see CONTRACT.md §2): spatial vectors are `[angular; linear]`, SI units, gravity
 //! (0, 0, −9.81) m/s² by default; a floating base uses Pinocchio's free-flyer layout.
 
+#![no_std]
+
+#[cfg(feature = "alloc")]
+extern crate alloc;
+// Tests print their measured errors.
+#[cfg(any(feature = "std", test))]
+#[macro_use]
+extern crate std;
+
+/// What `std`'s prelude would bring, for the modules that allocate.
+#[cfg(feature = "alloc")]
+#[allow(unused_imports)]
+mod alloc_prelude {
+    pub use alloc::borrow::ToOwned;
+    pub use alloc::format;
+    pub use alloc::string::{String, ToString};
+    pub use alloc::vec;
+    pub use alloc::vec::Vec;
+}
+
+#[cfg(feature = "alloc")]
 mod algorithms;
+#[cfg(feature = "alloc")]
 pub mod constraints;
+// Fused multiply-add and exact rounding come from the platform's libm.
+#[cfg(feature = "std")]
 mod double_double;
+#[cfg(feature = "alloc")]
 pub mod linalg;
+#[cfg(feature = "alloc")]
 mod model;
+#[cfg(feature = "alloc")]
 mod model_constants;
 mod scalar;
 pub mod spatial;
 
+#[cfg(feature = "alloc")]
 pub use algorithms::{
     aba, constraint_kinematics, crba, embedding_map, embedding_map_in, forward_kinematics,
     kinetic_energy, kkt_forward_dynamics, link_poses, mass_matrix_inverse, potential_energy,
     reduced_mass_matrix, reduced_mass_matrix_in, rnea, rnea_with_gravity, DynamicsError, Workspace,
 };
+#[cfg(feature = "alloc")]
 pub use model::{Body, Joint, JointType, Model, ModelBuilder, ModelElement, ModelError};
-pub use scalar::{DoubleDouble, Real};
+#[cfg(feature = "std")]
+pub use scalar::DoubleDouble;
+pub use scalar::Real;
 pub use spatial::{ArticulatedInertia, Force, Motion, SpatialInertia, Transform};
 
 /// Re-exported so that users of the model API need not depend on nalgebra themselves.
@@ -53,3 +84,8 @@ pub fn relative_error<T: Real>(a: &[T], b: &[T]) -> f64 {
 pub mod codegen_support {
     include!("codegen_support.rs");
 }
+
+/// The source text of [`codegen_support`], which `embedyn generate` copies into every standalone crate so
+/// that it depends on nothing (and computes bit-identically to the macro and build.rs routes).
+#[doc(hidden)]
+pub const CODEGEN_SUPPORT_SOURCE: &str = include_str!("codegen_support.rs");

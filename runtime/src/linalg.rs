@@ -13,6 +13,8 @@
 //! The `_in_place` / `_into` functions never allocate: they work in the buffers they are given. The
 //! QR-based functions allocate; they run at model load or inside a setup-time Newton iteration.
 
+#[allow(unused_imports)]
+use crate::alloc_prelude::*;
 use crate::Real;
 use nalgebra::{DMatrix, Dim, Matrix, RawStorageMut};
 

@@ -9,6 +9,8 @@
 //! joint map; that enters as a new node kind with its own forward and backward step, not as a change to
 //! the recursions.
 
+#[allow(unused_imports)]
+use crate::alloc_prelude::*;
 use crate::constraints::{Constraint, ConstraintKind, Group};
 use crate::spatial::{Motion, SpatialInertia, Transform};
 use crate::Real;

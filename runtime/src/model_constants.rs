@@ -11,6 +11,8 @@
 //! converted inertias still determine every joint's acceleration is checked separately, by the
 //! articulated-inertia check run in the new type.
 
+#[allow(unused_imports)]
+use crate::alloc_prelude::*;
 use crate::constraints::ConstraintKind;
 use crate::model::{Model, ModelElement, ModelError};
 use crate::spatial::Transform;

@@ -9,6 +9,7 @@ use core::fmt::Debug;
 use core::ops::{Add, AddAssign, Div, DivAssign, Mul, MulAssign, Neg, Sub, SubAssign};
 use num_traits::{One, Zero};
 
+#[cfg(feature = "std")]
 pub use crate::double_double::DoubleDouble;
 
 /// A real scalar the spatial algebra and the algorithms can run on.
@@ -92,6 +93,7 @@ pub trait Real:
     }
 }
 
+// `num_traits::Float` is the platform's libm with `std` and the `libm` crate without it.
 macro_rules! impl_real_for_float {
     ($t:ty, $name:literal) => {
         impl Real for $t {
@@ -106,19 +108,19 @@ macro_rules! impl_real_for_float {
             }
             #[inline(always)]
             fn sqrt(self) -> Self {
-                <$t>::sqrt(self)
+                <$t as num_traits::Float>::sqrt(self)
             }
             #[inline(always)]
             fn sin(self) -> Self {
-                <$t>::sin(self)
+                <$t as num_traits::Float>::sin(self)
             }
             #[inline(always)]
             fn cos(self) -> Self {
-                <$t>::cos(self)
+                <$t as num_traits::Float>::cos(self)
             }
             #[inline(always)]
             fn sin_cos(self) -> (Self, Self) {
-                <$t>::sin_cos(self)
+                <$t as num_traits::Float>::sin_cos(self)
             }
             #[inline(always)]
             fn abs(self) -> Self {

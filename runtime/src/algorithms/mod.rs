@@ -1,6 +1,8 @@
 //! The interpreted algorithms: each a forward and/or backward sweep over the tree, one small step per
 //! joint (as in the paper's Eqs. 1, 9 and 6). They are the oracle the generated code is tested against.
 
+#[allow(unused_imports)]
+use crate::alloc_prelude::*;
 mod aba;
 mod crba;
 mod embedded;

@@ -1,3 +1,5 @@
+#[allow(unused_imports)]
+use crate::alloc_prelude::*;
 use crate::model::Model;
 use crate::spatial::{ArticulatedInertia, Force, Motion, SpatialInertia, Transform};
 use crate::Real;

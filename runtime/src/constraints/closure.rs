@@ -6,6 +6,8 @@
 //! position residual is chosen so that its derivative along the motion is exactly these rows wherever
 //! the loop is assembled, which is what Newton's method and the finite-difference tests rely on.
 
+#[allow(unused_imports)]
+use crate::alloc_prelude::*;
 use crate::algorithms::Workspace;
 use crate::model::Model;
 use crate::spatial::Transform;

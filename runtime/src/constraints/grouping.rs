@@ -2,6 +2,8 @@
 //! system is a tree again; and, once per model, which equations are redundant and which coordinates are
 //! independent.
 
+#[allow(unused_imports)]
+use crate::alloc_prelude::*;
 use super::embedding::{fill_y1, group_rows, y1_condition_of, GroupWorkspace};
 use super::{jacobian, residuals, residuals_scaled, ConstraintKind};
 use crate::algorithms::{forward_kinematics, Workspace};
@@ -169,9 +171,9 @@ pub(crate) fn build_groups<T: Real>(
             restart += 1;
             let mut trial = model.neutral_configuration();
             for (k, &b) in bodies.iter().enumerate() {
-                let x = ((restart * 7 + k * 13) as f64 * 0.754_877_666).fract();
+                let x = num_traits::Float::fract((restart * 7 + k * 13) as f64 * 0.754_877_666);
                 trial[model.joints[b].q_index] =
-                    T::from_f64(std::f64::consts::PI * (2.0 * x - 1.0));
+                    T::from_f64(core::f64::consts::PI * (2.0 * x - 1.0));
             }
             if assemble(model, &mut ws, &mut trial, &bodies, &raw_rows, 200) {
                 q = trial;

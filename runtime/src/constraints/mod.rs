@@ -6,6 +6,8 @@
 //! partitioned constraint Jacobian `Y = [Y1 Y2]`). Constraints that share bodies form a [`Group`], the
 //! paper's aggregate link.
 
+#[allow(unused_imports)]
+use crate::alloc_prelude::*;
 mod closure;
 mod completion;
 mod embedding;

@@ -89,6 +89,7 @@ pub(crate) fn rotate_tensor<T: Real>(r: &Matrix3<T>, a: &Matrix3<T>) -> Matrix3<
 /// The unit vector along `v`, or `None` for a zero or non-finite vector. Scaled by its largest
 /// component first, so that a direction written as `0 1e-200 0` or `0 1e200 0` is a direction: its
 /// squared norm would underflow to zero or overflow to infinity.
+#[cfg_attr(not(feature = "alloc"), allow(dead_code))]
 pub(crate) fn unit_vector<T: Real>(v: &Vector3<T>) -> Option<Vector3<T>> {
     let largest = v.x.abs().max(v.y.abs()).max(v.z.abs());
     if !(v.iter().all(|x| x.is_finite()) && largest > T::zero()) {

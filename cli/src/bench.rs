@@ -5,7 +5,7 @@
 use super::runner::{build_runner, run, RowShape};
 use super::CliError;
 use crate::sampling::{consistent_states, Rng};
-use crate::{Algorithm, GenerateOptions, Loaded, ModelOptions};
+use embedyn_codegen::{Algorithm, GenerateOptions, Loaded, ModelOptions};
 use embedyn_runtime::{aba, crba, reduced_mass_matrix_in, rnea, Model, Workspace};
 use serde_json::{json, Value};
 use std::hint::black_box;
@@ -66,7 +66,7 @@ pub fn bench(
     if model.nv() == 0 {
         super::output::note(&format!(
             "embedyn: {} has no degree of freedom (every joint is fixed): the times are those of calls that compute nothing",
-            crate::names::code_span(&model.name)
+            embedyn_codegen::names::code_span(&model.name)
         ));
     }
     let st = states(&model)?;

@@ -1,7 +1,7 @@
 //! `embedyn info`.
 
 use super::CliError;
-use crate::{Loaded, ModelOptions};
+use embedyn_codegen::{Loaded, ModelOptions};
 use serde_json::{json, Value};
 
 pub fn info(loaded: &Loaded, options: &ModelOptions) -> Result<Value, CliError> {

@@ -1,5 +1,5 @@
 //! The `embedyn` command line; see `embedyn --help` and CONTRACT.md §3.
 
 fn main() -> std::process::ExitCode {
-    embedyn_codegen::cli::main()
+    embedyn_cli::main()
 }

@@ -4,7 +4,7 @@
 //! memory limit is refused up front with the estimate and the ways to shrink it — never an
 //! out-of-memory abort of rustc.
 
-#[path = "support/chain_urdf.rs"]
+#[path = "../../codegen/tests/support/chain_urdf.rs"]
 mod chain_urdf;
 
 use chain_urdf::chain_urdf;

@@ -8,9 +8,9 @@
 //! place, so concurrent runs never see half a file.
 
 use super::CliError;
-use crate::generate::{format_tokens, GenerateOptions, GENERATOR_VERSION};
-use crate::standalone::{crate_files, crate_name, Binary, Manifest};
-use crate::{Algorithm, Loaded};
+use embedyn_codegen::{format_tokens, GenerateOptions, GENERATOR_VERSION};
+use embedyn_codegen::standalone::{crate_files, crate_name, Binary, Manifest};
+use embedyn_codegen::{Algorithm, Loaded};
 use proc_macro2::TokenStream;
 use quote::{format_ident, quote};
 use sha2::{Digest, Sha256};
@@ -229,7 +229,7 @@ pub fn build_runner(loaded: &Loaded, options: &GenerateOptions) -> Result<PathBu
     }
     super::output::note(&format!(
         "embedyn: compiling the generated code of {} (once; cached in {})",
-        crate::names::code_span(&loaded.robot.name),
+        embedyn_codegen::names::code_span(&loaded.robot.name),
         entry.display()
     ));
     let target = root.join("target");

@@ -3,7 +3,7 @@
 use super::runner::RowShape;
 use super::samples::{vector, Samples};
 use super::{Algo, CliError, Engine, Scalar};
-use crate::{Loaded, ModelOptions};
+use embedyn_codegen::{Loaded, ModelOptions};
 use embedyn_runtime::constraints::{constraint_violation, singularity_threshold};
 use embedyn_runtime::nalgebra;
 use embedyn_runtime::{
@@ -69,15 +69,15 @@ fn eval_generated(
     // The function and scalar asked for only: a fraction of the compile time and memory, and a model
     // whose constants do not fit f32 can still be evaluated in f64.
     let algorithms = match algo {
-        Algo::Aba => vec![crate::Algorithm::Aba],
-        Algo::Rnea => vec![crate::Algorithm::Rnea],
+        Algo::Aba => vec![embedyn_codegen::Algorithm::Aba],
+        Algo::Rnea => vec![embedyn_codegen::Algorithm::Rnea],
         // What the command reports for a model with constraints is Xᵀ M X.
         Algo::Crba if model.has_constraints() => {
-            vec![crate::Algorithm::Crba, crate::Algorithm::CrbaIndependent]
+            vec![embedyn_codegen::Algorithm::Crba, embedyn_codegen::Algorithm::CrbaIndependent]
         }
-        Algo::Crba => vec![crate::Algorithm::Crba],
+        Algo::Crba => vec![embedyn_codegen::Algorithm::Crba],
     };
-    let gen_options = crate::GenerateOptions {
+    let gen_options = embedyn_codegen::GenerateOptions {
         model: options.clone(),
         algorithms,
         exact: true,

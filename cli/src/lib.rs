@@ -1,4 +1,9 @@
-//! The `embedyn` command line (CONTRACT §3): JSON on stdout, errors on stderr with a non-zero exit code.
+//! # embedyn-cli
+//!
+//! The `embedyn` command line: `info`, `eval`, `complete`, `generate` and `bench` on a model file, JSON on
+//! stdout, errors on stderr with a non-zero exit code (docs/command-line.md). The library part exists for
+//! the binary, the tests and the fuzzer; it is not an API to build on (use `embedyn` and
+//! `embedyn-codegen`).
 
 mod bench;
 mod complete;
@@ -7,9 +12,10 @@ mod info;
 mod output;
 mod runner;
 mod samples;
+mod sampling;
 
-use crate::bounded_read::{read_file_limited, read_to_string_limited, MAX_INPUT_BYTES};
-use crate::{load, LoadError, Loaded, ModelOptions};
+use embedyn_codegen::bounded_read::{read_file_limited, read_to_string_limited, MAX_INPUT_BYTES};
+use embedyn_codegen::{load, LoadError, Loaded, ModelOptions};
 use clap::{Parser, Subcommand, ValueEnum};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -92,7 +98,7 @@ pub enum Command {
         #[arg(long, value_enum)]
         scalar: Option<Scalar>,
         /// Refuse code that rustc is estimated to need more than this many MB of memory to compile.
-        #[arg(long, value_name = "MB", default_value_t = crate::DEFAULT_COMPILE_MEMORY_MB)]
+        #[arg(long, value_name = "MB", default_value_t = embedyn_codegen::DEFAULT_COMPILE_MEMORY_MB)]
         max_compile_memory: u64,
     },
     /// Time every algorithm for each engine and scalar (median ns per call, in-process, pre-generated
@@ -105,7 +111,7 @@ pub enum Command {
         #[arg(long)]
         json: bool,
         /// Refuse generated code whose compilation is estimated to need more memory than this (MB).
-        #[arg(long, value_name = "MB", default_value_t = crate::size::DEFAULT_COMPILE_MEMORY_MB)]
+        #[arg(long, value_name = "MB", default_value_t = embedyn_codegen::DEFAULT_COMPILE_MEMORY_MB)]
         max_compile_memory: u64,
     },
     /// Evaluate an algorithm on the samples of a JSON file (or stdin).
@@ -124,7 +130,7 @@ pub enum Command {
         input: Option<PathBuf>,
         /// `--engine generated`: refuse generated code whose compilation is estimated to need more memory
         /// than this (MB).
-        #[arg(long, value_name = "MB", default_value_t = crate::size::DEFAULT_COMPILE_MEMORY_MB)]
+        #[arg(long, value_name = "MB", default_value_t = embedyn_codegen::DEFAULT_COMPILE_MEMORY_MB)]
         max_compile_memory: u64,
     },
 }
@@ -194,7 +200,7 @@ pub fn run(cli: Cli) -> Result<serde_json::Value, CliError> {
             max_compile_memory,
         } => {
             let loaded = load_reporting(&model)?;
-            let mut options = crate::GenerateOptions {
+            let mut options = embedyn_codegen::GenerateOptions {
                 model: options(floating),
                 f64: scalar != Some(Scalar::F32),
                 f32: scalar != Some(Scalar::F64),
@@ -204,7 +210,7 @@ pub fn run(cli: Cli) -> Result<serde_json::Value, CliError> {
             if let Some(names) = only {
                 options.algorithms = Vec::new();
                 for name in names {
-                    let algo = crate::Algorithm::from_name(name.trim())
+                    let algo = embedyn_codegen::Algorithm::from_name(name.trim())
                         .map_err(|e| CliError(format!("--only: {e}")))?;
                     if !options.algorithms.contains(&algo) {
                         options.algorithms.push(algo);
@@ -212,12 +218,12 @@ pub fn run(cli: Cli) -> Result<serde_json::Value, CliError> {
                 }
                 options.exact = true;
             }
-            if minv && !options.algorithms.contains(&crate::Algorithm::Minv) {
-                options.algorithms.push(crate::Algorithm::Minv);
+            if minv && !options.algorithms.contains(&embedyn_codegen::Algorithm::Minv) {
+                options.algorithms.push(embedyn_codegen::Algorithm::Minv);
             }
-            let files = crate::standalone::write_crate(&loaded, &options, &out)?;
+            let files = embedyn_codegen::standalone::write_crate(&loaded, &options, &out)?;
             Ok(serde_json::json!({
-                "crate": crate::standalone::crate_name(&loaded.robot.name),
+                "crate": embedyn_codegen::standalone::crate_name(&loaded.robot.name),
                 "out": out,
                 "files": files,
             }))

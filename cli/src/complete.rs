@@ -2,7 +2,7 @@
 
 use super::samples::{vector, Samples};
 use super::CliError;
-use crate::{Loaded, ModelOptions};
+use embedyn_codegen::{Loaded, ModelOptions};
 use embedyn_runtime::constraints::{
     complete_configuration, complete_velocity, constraint_violation,
 };

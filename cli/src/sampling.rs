@@ -182,7 +182,7 @@ fn complete(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::ModelOptions;
+    use embedyn_codegen::ModelOptions;
     use std::path::PathBuf;
 
     fn narrow_four_bar_text() -> (String, PathBuf) {
@@ -192,7 +192,7 @@ mod tests {
     }
 
     fn model_of(text: &str, path: &std::path::Path) -> Model<f64> {
-        crate::parse_urdf(text, path)
+        embedyn_codegen::parse_urdf(text, path)
             .unwrap()
             .model(&ModelOptions::default())
             .unwrap()
@@ -242,7 +242,7 @@ mod tests {
     fn tree_states_are_unit_quaternion_configurations() {
         let path =
             PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../models/loops/biped_floating.urdf");
-        let model = crate::load(&path)
+        let model = embedyn_codegen::load(&path)
             .unwrap()
             .model::<f64>(&ModelOptions::default())
             .unwrap();
