@@ -73,7 +73,10 @@ fn eval_generated(
         Algo::Rnea => vec![embedyn_codegen::Algorithm::Rnea],
         // What the command reports for a model with constraints is Xᵀ M X.
         Algo::Crba if model.has_constraints() => {
-            vec![embedyn_codegen::Algorithm::Crba, embedyn_codegen::Algorithm::CrbaIndependent]
+            vec![
+                embedyn_codegen::Algorithm::Crba,
+                embedyn_codegen::Algorithm::CrbaIndependent,
+            ]
         }
         Algo::Crba => vec![embedyn_codegen::Algorithm::Crba],
     };

@@ -14,9 +14,9 @@ mod runner;
 mod samples;
 mod sampling;
 
+use clap::{Parser, Subcommand, ValueEnum};
 use embedyn_codegen::bounded_read::{read_file_limited, read_to_string_limited, MAX_INPUT_BYTES};
 use embedyn_codegen::{load, LoadError, Loaded, ModelOptions};
-use clap::{Parser, Subcommand, ValueEnum};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -218,7 +218,11 @@ pub fn run(cli: Cli) -> Result<serde_json::Value, CliError> {
                 }
                 options.exact = true;
             }
-            if minv && !options.algorithms.contains(&embedyn_codegen::Algorithm::Minv) {
+            if minv
+                && !options
+                    .algorithms
+                    .contains(&embedyn_codegen::Algorithm::Minv)
+            {
                 options.algorithms.push(embedyn_codegen::Algorithm::Minv);
             }
             let files = embedyn_codegen::standalone::write_crate(&loaded, &options, &out)?;

@@ -8,8 +8,8 @@
 //! place, so concurrent runs never see half a file.
 
 use super::CliError;
-use embedyn_codegen::{format_tokens, GenerateOptions, GENERATOR_VERSION};
 use embedyn_codegen::standalone::{crate_files, crate_name, Binary, Manifest};
+use embedyn_codegen::{format_tokens, GenerateOptions, GENERATOR_VERSION};
 use embedyn_codegen::{Algorithm, Loaded};
 use proc_macro2::TokenStream;
 use quote::{format_ident, quote};
@@ -59,34 +59,73 @@ fn create_private_dir(dir: &Path) -> Result<(), CliError> {
     })
 }
 
-/// The cache root, created if needed, after checking that no other user can write to it (a binary found
-/// there is executed).
+/// The cache root, created if needed, resolved to its canonical path and checked: a binary found there is
+/// executed, so no other user may be able to write to it or to replace it, or any folder above it, while
+/// embedyn works. Checking the path as given and working through it later would not do: a symlink, or a
+/// folder above that someone else can rename, could point elsewhere between the check and the use. So the
+/// path is resolved once, every folder from `/` down is checked, and only the resolved path is used.
 fn cache_root() -> Result<PathBuf, CliError> {
-    let root = absolute_cache_dir()?;
-    create_private_dir(&root)?;
+    let given = absolute_cache_dir()?;
+    create_private_dir(&given)?;
+    let root =
+        std::fs::canonicalize(&given).map_err(|e| CliError(format!("{}: {e}", given.display())))?;
     #[cfg(unix)]
-    {
-        use std::os::unix::fs::MetadataExt;
-        let meta =
-            std::fs::metadata(&root).map_err(|e| CliError(format!("{}: {e}", root.display())))?;
-        // SAFETY: geteuid has no preconditions and cannot fail.
-        let me = unsafe { libc::geteuid() };
-        if meta.uid() != me {
+    check_private_chain(&root)?;
+    Ok(root)
+}
+
+/// Checks that `root` (a canonical path) is a folder of this user that no one else can write, and that no
+/// folder above it lets another user replace it: each is owned by this user or root and writable by no
+/// one else, unless it is sticky (as `/tmp`), where others cannot rename or delete what they do not own.
+#[cfg(unix)]
+fn check_private_chain(root: &Path) -> Result<(), CliError> {
+    use std::os::unix::fs::MetadataExt;
+    // SAFETY: geteuid has no preconditions and cannot fail.
+    let me = unsafe { libc::geteuid() };
+    let advice = "set EMBEDYN_CACHE_DIR to a folder of your own";
+    let meta_of = |p: &Path| {
+        std::fs::symlink_metadata(p).map_err(|e| CliError(format!("{}: {e}", p.display())))
+    };
+    let meta = meta_of(root)?;
+    if !meta.is_dir() {
+        return Err(CliError(format!(
+            "{}: the cache folder is not a folder; {advice}",
+            root.display()
+        )));
+    }
+    if meta.uid() != me {
+        return Err(CliError(format!(
+            "{}: the cache folder belongs to another user (uid {}); {advice}",
+            root.display(),
+            meta.uid()
+        )));
+    }
+    if meta.mode() & 0o022 != 0 {
+        return Err(CliError(format!(
+            "{}: the cache folder is writable by other users (mode {:o}); `chmod 700` it or {advice}",
+            root.display(),
+            meta.mode() & 0o7777
+        )));
+    }
+    let mut child_owner = meta.uid();
+    for folder in root.ancestors().skip(1) {
+        let meta = meta_of(folder)?;
+        let owner_trusted = meta.uid() == me || meta.uid() == 0;
+        let others_write = meta.mode() & 0o022 != 0;
+        let sticky = meta.mode() & 0o1000 != 0;
+        let child_safe = !others_write || (sticky && (child_owner == me || child_owner == 0));
+        if !owner_trusted || !child_safe {
             return Err(CliError(format!(
-                "{}: the cache folder belongs to another user (uid {}); set EMBEDYN_CACHE_DIR to a folder of your own",
+                "{}: a folder above the cache ({}, owner uid {}, mode {:o}) lets another user replace the cache folder; {advice}",
                 root.display(),
-                meta.uid()
-            )));
-        }
-        if meta.mode() & 0o022 != 0 {
-            return Err(CliError(format!(
-                "{}: the cache folder is writable by other users (mode {:o}); `chmod 700` it or set EMBEDYN_CACHE_DIR to a folder of your own",
-                root.display(),
+                folder.display(),
+                meta.uid(),
                 meta.mode() & 0o7777
             )));
         }
+        child_owner = meta.uid();
     }
-    Ok(root)
+    Ok(())
 }
 
 /// Writes `bytes` to `path` atomically: a fresh temporary file in the same folder, renamed into place.

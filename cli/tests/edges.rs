@@ -366,7 +366,8 @@ fn the_runner_cache_is_private_checked_and_rebuilt() {
 }
 
 /// Without HOME (and no cache variable), the generated engine refuses to build anywhere shared (such as
-/// the temporary folder) and says what to set; a cache folder others can write is refused too.
+/// the temporary folder) and says what to set; a cache folder others can write, or could replace, is
+/// refused too.
 #[test]
 fn no_shared_cache_folder() {
     let model = repo("models/arm7.urdf");
@@ -403,6 +404,24 @@ fn no_shared_cache_folder() {
             0,
             "nothing written"
         );
+        // A private cache folder inside a folder that others can write (not sticky): another user could
+        // rename it away and put their own in its place between the check and the use. Refused, whether
+        // named directly or through a symlink (which is resolved once, and only the resolved path used).
+        let private = shared.join("cache");
+        std::fs::create_dir_all(&private).unwrap();
+        std::fs::set_permissions(&private, std::fs::Permissions::from_mode(0o700)).unwrap();
+        let link = tmp("cache-link");
+        let _ = std::fs::remove_file(&link);
+        std::os::unix::fs::symlink(&private, &link).unwrap();
+        for dir in [&private, &link] {
+            let run = embedyn_env(&args, &input, &[("EMBEDYN_CACHE_DIR", Some(dir))]);
+            let e = run.clean_failure();
+            assert!(
+                e.contains("a folder above the cache") && e.contains("shared-cache"),
+                "{e}"
+            );
+            assert_eq!(std::fs::read_dir(&private).unwrap().count(), 0);
+        }
     }
 }
 

@@ -9,11 +9,11 @@
 //! factor of `D`, and `ε` (n entries). There is no shared "floating root" buffer, so a scene with several
 //! free bodies is as correct as one robot.
 
-#[allow(unused_imports)]
-use crate::alloc_prelude::*;
 use super::{
     check_configuration, check_input, gravity_in, velocity_sweep, DynamicsError, Workspace,
 };
+#[allow(unused_imports)]
+use crate::alloc_prelude::*;
 use crate::linalg::{cholesky_in_place, cholesky_solve_in_place};
 use crate::model::{Joint, Model};
 use crate::spatial::{ArticulatedInertia, Force};

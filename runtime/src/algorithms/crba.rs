@@ -5,9 +5,9 @@
 //! a spatial force, one frame change per ancestor. Body frames keep the zero structure of axis-aligned
 //! joints, which generated code exploits; world frames would fill it in.
 
+use super::{check_configuration, DynamicsError, Workspace};
 #[allow(unused_imports)]
 use crate::alloc_prelude::*;
-use super::{check_configuration, DynamicsError, Workspace};
 use crate::model::Model;
 use crate::Real;
 use nalgebra::DMatrix;

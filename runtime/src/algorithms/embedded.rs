@@ -14,12 +14,12 @@
 //!   closed back onto the tree (URDF+ writes it as a `<loop>` whose successor is an ancestor); both cuts
 //!   are tested to give the same motion (tests/constraint_embedding.rs).
 
-#[allow(unused_imports)]
-use crate::alloc_prelude::*;
 use super::aba::{backward_step, forward_step, init_articulated};
 use super::{
     check_configuration, check_input, crba, forward_kinematics, rnea, DynamicsError, Workspace,
 };
+#[allow(unused_imports)]
+use crate::alloc_prelude::*;
 use crate::constraints::{embed, group_label, GroupWorkspace};
 use crate::linalg::{cholesky_in_place, cholesky_solve_in_place, lu_in_place, lu_solve_in_place};
 use crate::model::Model;

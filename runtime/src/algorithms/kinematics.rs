@@ -1,6 +1,6 @@
+use super::{check_configuration, check_input, velocity_sweep, DynamicsError, Workspace};
 #[allow(unused_imports)]
 use crate::alloc_prelude::*;
-use super::{check_configuration, check_input, velocity_sweep, DynamicsError, Workspace};
 use crate::model::Model;
 use crate::spatial::Transform;
 use crate::Real;

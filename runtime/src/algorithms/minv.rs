@@ -5,10 +5,10 @@
 //! columns of `k`'s subtree, carried inward as spatial forces. The forward sweep applies
 //! `[I − Hψ𝒦]*`, carrying one spatial acceleration per column outward. Cost O(N · nv).
 
-#[allow(unused_imports)]
-use crate::alloc_prelude::*;
 use super::aba::{articulated_inertia_plus, check_pivot, d_block, factor_joint};
 use super::{check_configuration, DynamicsError, Workspace};
+#[allow(unused_imports)]
+use crate::alloc_prelude::*;
 use crate::linalg::cholesky_solve_in_place;
 use crate::model::Model;
 use crate::spatial::{ArticulatedInertia, Force, Motion};

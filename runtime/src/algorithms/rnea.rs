@@ -1,10 +1,10 @@
 //! Inverse dynamics by the recursive Newton–Euler algorithm (the paper's Eqs. 1–3).
 
-#[allow(unused_imports)]
-use crate::alloc_prelude::*;
 use super::{
     check_configuration, check_input, gravity_in, velocity_sweep, DynamicsError, Workspace,
 };
+#[allow(unused_imports)]
+use crate::alloc_prelude::*;
 use crate::model::Model;
 use crate::Real;
 

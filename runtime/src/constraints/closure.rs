@@ -6,9 +6,9 @@
 //! position residual is chosen so that its derivative along the motion is exactly these rows wherever
 //! the loop is assembled, which is what Newton's method and the finite-difference tests rely on.
 
+use crate::algorithms::Workspace;
 #[allow(unused_imports)]
 use crate::alloc_prelude::*;
-use crate::algorithms::Workspace;
 use crate::model::Model;
 use crate::spatial::Transform;
 use crate::Real;

@@ -5,11 +5,11 @@
 //! the world origin, or a gear ratio of 1000, has rounding errors in proportion, and an absolute tolerance
 //! would either reject its exact states or accept wrong ones.
 
-#[allow(unused_imports)]
-use crate::alloc_prelude::*;
 use super::embedding::{fill_y1, group_rows, member, y1_condition_of};
 use super::{embed, jacobian, relative_residual, residuals_scaled};
 use crate::algorithms::{constraint_kinematics, position_kinematics, DynamicsError, Workspace};
+#[allow(unused_imports)]
+use crate::alloc_prelude::*;
 use crate::linalg::{solve_least_squares, solve_pivoted_in_place};
 use crate::model::Model;
 use crate::Real;

@@ -3,10 +3,10 @@
 //! Jacobian `Y = [Y1 Y2]` (Eqs. 35–38). Linear constraints (gears) give a constant `X_G` and `κ_G = 0`
 //! (Eq. 42) through the same code.
 
-#[allow(unused_imports)]
-use crate::alloc_prelude::*;
 use super::{ConstraintKind, Group};
 use crate::algorithms::{DynamicsError, Workspace};
+#[allow(unused_imports)]
+use crate::alloc_prelude::*;
 use crate::linalg::{condition_number_1, lu_in_place, solve_pivoted_in_place};
 use crate::model::Model;
 use crate::spatial::{ArticulatedInertia, Force, Motion, Transform};

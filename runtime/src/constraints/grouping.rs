@@ -2,11 +2,11 @@
 //! system is a tree again; and, once per model, which equations are redundant and which coordinates are
 //! independent.
 
-#[allow(unused_imports)]
-use crate::alloc_prelude::*;
 use super::embedding::{fill_y1, group_rows, y1_condition_of, GroupWorkspace};
 use super::{jacobian, residuals, residuals_scaled, ConstraintKind};
 use crate::algorithms::{forward_kinematics, Workspace};
+#[allow(unused_imports)]
+use crate::alloc_prelude::*;
 use crate::linalg::{independent_columns, independent_rows, solve_least_squares};
 use crate::model::{JointType, Model, ModelError};
 use crate::Real;
