@@ -3,7 +3,7 @@
 //! committed input is checked the same way by both.
 //!
 //! A violated property panics (libFuzzer reports it as a crash; the replay test as a failure naming the
-//! input). The properties (CONTRACT §1 and §3: never a panic, never an abort, never a hang, never a silent
+//! input). The properties (docs/model-format.md and §3: never a panic, never an abort, never a hang, never a silent
 //! NaN):
 //!
 //! - **No panic, abort or hang** on any input: every failure is an `Err`, and the line it names (if
@@ -699,7 +699,7 @@ pub fn eval_input(data: &[u8]) {
                 assert_eq!(len("tau"), Some(nv), "{what}: tau");
                 assert_eq!(len("tau_independent"), Some(ni), "{what}: tau_independent");
                 if !model.has_constraints() {
-                    // CONTRACT §3: for a model without constraints tau_independent equals tau.
+                    // docs/command-line.md: for a model without constraints tau_independent equals tau.
                     assert_eq!(s["tau_independent"], s["tau"], "{what}: a tree's tau");
                 }
             }
@@ -717,7 +717,7 @@ pub fn eval_input(data: &[u8]) {
                     residual <= 1e-9,
                     "{what}: residual {residual:e} in an Ok answer"
                 );
-                // What `complete` prints, `eval` accepts (CONTRACT §3: numbers are read exactly).
+                // What `complete` prints, `eval` accepts (docs/command-line.md: numbers are read exactly).
                 let input = serde_json::json!({"samples": [{"q": s["q"], "v": s["v"], "tau": vec![0.0; nv]}]})
                     .to_string();
                 if let Err(e) = eval_interpreted(loaded, &options, Algo::Aba, Scalar::F64, &input) {

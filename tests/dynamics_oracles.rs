@@ -1,6 +1,6 @@
 //! The interpreted algorithms checked against each other on the bundled models:
 //! ABA against CRBA + Cholesky, RNEA of ABA's result, M symmetric positive definite, M times the
-//! operator inverse of Eq. 6 equal to I. All to 1e-10 relative (CONTRACT §2's definition).
+//! operator inverse of Eq. 6 equal to I. All to 1e-10 relative (docs/conventions.md's definition).
 
 mod common;
 

@@ -415,7 +415,7 @@ fn generated_loop_code_pivots_and_reports_singular_configurations() {
     assert!(cond32 >= singular_four_bar::f32::SINGULARITY_THRESHOLD);
 }
 
-/// One singularity verdict in every engine and scalar (CONTRACT §2 "Singular loops"): approaching the
+/// One singularity verdict in every engine and scalar (docs/conventions.md "Singular loops"): approaching the
 /// toggle, the interpreted and generated solvers refuse at the same configurations in f64 (cond₁(Y1) ≥
 /// 1e10) and in f32 (≥ 10⁻³/ε ≈ 8.4e3, where f32 keeps about three digits). The f32 generated code once
 /// never reported a toggle (the f64 threshold cannot be reached in f32).

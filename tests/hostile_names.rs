@@ -1,4 +1,4 @@
-//! Names are data through the `robot!` macro too (CONTRACT §1 "Strings are data"): a model whose robot,
+//! Names are data through the `robot!` macro too (docs/model-format.md, "Names are data"): a model whose robot,
 //! link and joint names carry quotes, backslashes, newlines, `*/`, `compile_error!`, Rust keywords,
 //! unicode and names that collide after sanitizing expands to code that compiles without a warning (this
 //! file denies warnings), lists the names exactly, and computes what the interpreted solver computes.
@@ -64,4 +64,24 @@ fn hostile_names_through_the_macro_mean_what_the_model_says() {
         let e = relative_error(&qdd, &want);
         assert!(e <= 1e-12, "generated vs interpreted: {e:e}");
     }
+}
+
+/// Messages are for a terminal: a control character in a file name (or in a name written `&#13;` in the
+/// XML) is shown as an escape, never written raw, so a hostile file cannot recolour, clear or forge
+/// lines on the reader's screen.
+#[test]
+fn messages_show_control_characters_as_escapes() {
+    let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR"));
+    let missing = dir.join("no\u{1b}[2J\rsuch.urdf");
+    let e = embedyn::load(&missing).unwrap_err().to_string();
+    assert!(!e.contains('\u{1b}') && !e.contains('\r'), "{e:?}");
+    assert!(e.contains("no\\u{1b}[2J\\rsuch.urdf"), "{e:?}");
+    let text = r#"<robot name="r"><link name="a"/><link name="b"/>
+      <joint name="j&#13;forged" type="revolute"><parent link="a"/><child link="zz"/></joint></robot>"#;
+    let e = embedyn::codegen::parse_urdf(text, "r.urdf".as_ref())
+        .and_then(|l| l.model::<f64>(&Default::default()))
+        .map(|_| ())
+        .unwrap_err()
+        .to_string();
+    assert!(!e.contains('\r') && e.contains("j\\rforged"), "{e:?}");
 }

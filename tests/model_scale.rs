@@ -1,5 +1,5 @@
 //! Load-time checks are relative to the scale of what they check and to the precision of the scalar type
-//! (CONTRACT §1 "Tolerances"): models at unusual scales load in f64 and f32 and their dynamics are right;
+//! (docs/model-format.md "Tolerances"): models at unusual scales load in f64 and f32 and their dynamics are right;
 //! the structure of a model (redundant equations, independent coordinates) is decided once, in f64, for
 //! every scalar; a constant that does not fit the scalar is an error naming it, not another model.
 
@@ -10,7 +10,7 @@ use embedyn::codegen::{generate_tokens, GenerateOptions};
 use embedyn::linalg::{cholesky_in_place, cholesky_solve_in_place};
 use embedyn::{aba, crba, load, relative_error, rnea, Model, ModelOptions, Real, Workspace};
 
-/// The largest relative error (CONTRACT §2) between ABA and a CRBA + Cholesky solve of M qdd = τ − h over
+/// The largest relative error (docs/conventions.md) between ABA and a CRBA + Cholesky solve of M qdd = τ − h over
 /// random states, in `T`, with each τ_k scaled by the joint's own M_kk so that accelerations are O(1)
 /// whatever the model's units.
 fn aba_against_crba_solve<T: Real>(model: &Model<T>, samples: usize) -> f64 {

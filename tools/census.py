@@ -26,7 +26,7 @@ import time
 sys.dont_write_bytecode = True
 REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
-# Expected refusals (CONTRACT §1): the file, and a phrase embedyn's error must contain.
+# Expected refusals (docs/model-format.md): the file, and a phrase embedyn's error must contain.
 EXPECTED_REFUSALS = {
     "romeo_description/urdf/romeo.urdf": "no inertia about its axis",
     "romeo_description/urdf/romeo_laas_small.urdf": "no inertia about its axis",
@@ -130,7 +130,7 @@ def main():
         "",
         f"- files: {len(rows)}; Pinocchio loads {len(pin_ok)}; embedyn loads {len(both)} of those "
         f"and refuses {len(refused)} ({', '.join(os.path.basename(r[0]) for r in refused) or 'none'}); "
-        f"nq/nv disagree on {len(mismatched)}; refusals not expected by CONTRACT §1: {len(unexpected)}; "
+        f"nq/nv disagree on {len(mismatched)}; refusals not expected by docs/model-format.md: {len(unexpected)}; "
         f"crashes: {len(crashed)}.",
         f"- embedyn load time per file: at most {max(r[2]['seconds'] for r in rows):.2f} s.",
         "",

@@ -145,7 +145,7 @@ fn eval_generated(
             };
             if condition.is_nan() || condition >= threshold {
                 return Err(CliError(format!(
-                    "sample {i}: the loops are at or too near a singular configuration: cond(Y1) = {condition:.3e} ≥ {threshold:.1e}, the limit in {scalar_name} (the dependent joints are not determined by the independent ones here)"
+                    "sample {i}: a loop is at or too near a singular configuration: cond(Y1) = {condition:.3e} ≥ {threshold:.1e}, the limit in this scalar type, {scalar_name} (the dependent joints are not determined by the independent ones here; the generated code gives the worst loop's measure, the interpreted engine names the loop)"
                 )));
             }
         }
@@ -261,7 +261,7 @@ fn eval_in<T: Real>(model: &Model<T>, algo: Algo, samples: &Samples) -> Result<V
     Ok(json!({ "joints": joints, "samples": out }))
 }
 
-/// CONTRACT §2: `q` and `v` must satisfy the constraints to 1e-9 (`embedyn complete` makes them so).
+/// docs/conventions.md: `q` and `v` must satisfy the constraints to 1e-9 (`embedyn complete` makes them so).
 fn check_consistent(
     model: &Model<f64>,
     ws: &mut Workspace<f64>,

@@ -21,7 +21,7 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 /// The program: parses the command line, runs the command and writes its result or error through the
-/// one output module. Every way out is an exit status (CONTRACT §3): 0, 1 for an error, 2 for a bad
+/// one output module. Every way out is an exit status (docs/command-line.md): 0, 1 for an error, 2 for a bad
 /// command line, never a panic's 101 or a signal.
 pub fn main() -> ExitCode {
     let cli = match Cli::try_parse() {

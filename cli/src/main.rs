@@ -1,4 +1,4 @@
-//! The `embedyn` command line; see `embedyn --help` and CONTRACT.md §3.
+//! The `embedyn` command line; see `embedyn --help` and docs/command-line.md.
 
 fn main() -> std::process::ExitCode {
     embedyn_cli::main()

@@ -1,11 +1,11 @@
 //! The one place the command line writes: the JSON document on stdout, warnings, progress and errors on
-//! stderr (CONTRACT §3). Nothing here panics: output into a closed pipe ends the program quietly, as Unix
+//! stderr (docs/command-line.md). Nothing here panics: output into a closed pipe ends the program quietly, as Unix
 //! tools do, and a closed stderr never stops the work.
 
 use std::io::{ErrorKind, Write};
 use std::process::ExitCode;
 
-/// Exit status of an error (CONTRACT §3: non-zero, below 128).
+/// Exit status of an error (docs/command-line.md: non-zero, below 128).
 pub const FAILURE: u8 = 1;
 
 /// Exit status of a bug caught at the last line of defence (EX_SOFTWARE of sysexits.h).

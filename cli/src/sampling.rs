@@ -15,7 +15,7 @@ use embedyn_runtime::{JointType, Model, Workspace};
 use std::f64::consts::PI;
 
 /// A state satisfies the constraints when `constraint_violation` is at most this, at position and at
-/// velocity level (CONTRACT §2).
+/// velocity level (docs/conventions.md).
 pub const CONSISTENT: f64 = 1e-9;
 
 /// Attempts allowed per state asked for (a draw or a perturbation, each followed by a completion).

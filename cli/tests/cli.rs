@@ -1,4 +1,4 @@
-//! The `embedyn` command line as a user runs it (CONTRACT §3): JSON on stdout, clear errors on stderr.
+//! The `embedyn` command line as a user runs it (docs/command-line.md): JSON on stdout, clear errors on stderr.
 
 use serde_json::{json, Value};
 use std::io::Write;
@@ -523,16 +523,24 @@ fn constants_that_do_not_fit_f32_are_refused_only_in_f32() {
     }
 }
 
-/// A model path or `--input` naming an endless stream ends with an error naming the limit, instead of
-/// reading until memory runs out (once a hang and an out-of-memory abort).
+/// A model path naming a device or a FIFO is refused before it is opened (opening a FIFO waits for a
+/// writer: a hang), and an `--input` naming an endless stream ends with an error naming the limit, instead
+/// of reading until memory runs out (once a hang and an out-of-memory abort).
 #[cfg(unix)]
 #[test]
 fn endless_inputs_end_with_an_error() {
     let (ok, _, err) = embedyn(&["info", "/dev/zero"], "");
     assert!(
-        !ok && err.contains("/dev/zero") && err.contains("larger than"),
+        !ok && err.contains("/dev/zero") && err.contains("not a regular file"),
         "{err}"
     );
+    let fifo = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("model.fifo");
+    let _ = std::fs::remove_file(&fifo);
+    let made = std::process::Command::new("mkfifo").arg(&fifo).status();
+    if made.is_ok_and(|s| s.success()) {
+        let (ok, _, err) = embedyn(&["info", fifo.to_str().unwrap()], "");
+        assert!(!ok && err.contains("not a regular file"), "{err}");
+    }
     let (ok, _, err) = embedyn(
         &[
             "eval",

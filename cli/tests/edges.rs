@@ -1,4 +1,4 @@
-//! The command line at its edges (issue 8, CONTRACT §1 "Strings are data" and §3): hostile names, the
+//! The command line at its edges (issue 8, docs/model-format.md, "Names are data" and docs/command-line.md): hostile names, the
 //! cache of compiled runners, closed pipes, models without coordinates or that assemble on a narrow
 //! range, non-finite results, zero quaternions and exact JSON numbers.
 
@@ -33,7 +33,7 @@ impl Run {
         self.code == Some(0)
     }
 
-    /// A failure as CONTRACT §3 wants it: exit status 1..127, nothing on stdout, a message on stderr.
+    /// A failure as docs/command-line.md wants it: exit status 1..127, nothing on stdout, a message on stderr.
     fn clean_failure(&self) -> &str {
         let code = self.code.expect("ended by a signal");
         assert!(

@@ -97,6 +97,13 @@ fn build_model_f64(robot: &Robot, options: &ModelOptions) -> Result<Model<f64>, 
                 "--floating makes the root free, but the file already has a floating joint",
             ));
         }
+        // Coordinates are matched to joints by name: two joints of one name would be ambiguous.
+        if let Some(j) = robot.joints.iter().position(|j| j.name == ROOT_JOINT) {
+            return Err(LoadError::new(
+                joint_loc(j),
+                format!("--floating adds the root's joint \"{ROOT_JOINT}\", but the file already has a joint of that name; rename it"),
+            ));
+        }
     }
     let mut children: Vec<Vec<usize>> = vec![Vec::new(); robot.links.len()];
     for (j, joint) in robot.joints.iter().enumerate() {
@@ -362,7 +369,7 @@ fn common_ancestor(
     None
 }
 
-/// URDF+ loops and couplings and URDF mimic joints, as runtime constraints (CONTRACT §1).
+/// URDF+ loops and couplings and URDF mimic joints, as runtime constraints (docs/model-format.md).
 fn add_constraints(
     robot: &Robot,
     link_frames: &[(Option<usize>, Transform<f64>)],

@@ -37,6 +37,17 @@ pub fn read_file_limited(path: &std::path::Path, limit: u64) -> Result<String, S
     read_to_string_limited(file, limit)
 }
 
+/// A model file's text: a regular file (or a link to one) of at most [`MAX_MODEL_BYTES`]. A device
+/// (`/dev/zero`) or a FIFO is refused before it is opened: opening a FIFO waits for a writer, which would
+/// hang a build that expands `robot!`.
+pub fn read_model_file(path: &std::path::Path) -> Result<String, String> {
+    let meta = std::fs::metadata(path).map_err(|e| e.to_string())?;
+    if !meta.is_file() {
+        return Err("not a regular file".into());
+    }
+    read_file_limited(path, MAX_MODEL_BYTES)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -49,5 +60,14 @@ mod tests {
         let e = read_to_string_limited(&[b'a', 0xff, b'b'][..], 10).unwrap_err();
         assert!(e.contains("not UTF-8") && e.contains("offset 1"), "{e}");
         assert_eq!(read_to_string_limited(&b"abc"[..], 3).unwrap(), "abc");
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn a_model_file_must_be_a_regular_file() {
+        let e = read_model_file("/dev/zero".as_ref()).unwrap_err();
+        assert_eq!(e, "not a regular file");
+        let e = read_model_file("/".as_ref()).unwrap_err();
+        assert_eq!(e, "not a regular file");
     }
 }

@@ -23,14 +23,32 @@ impl Location {
     }
 }
 
+/// Text for a terminal: control characters (from a file name, or a name written with `&#10;` or `&#27;`
+/// in the XML) shown as escapes, so that a message cannot move the cursor, recolour or clear the screen
+/// of whoever reads it, nor forge a line of its own.
+pub(crate) struct Printable<'a>(pub &'a str);
+
+impl fmt::Display for Printable<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        for c in self.0.chars() {
+            if c.is_control() {
+                write!(f, "{}", c.escape_default())?;
+            } else {
+                write!(f, "{c}")?;
+            }
+        }
+        Ok(())
+    }
+}
+
 impl fmt::Display for Location {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{}", self.file.display())?;
+        write!(f, "{}", Printable(&self.file.to_string_lossy()))?;
         if let Some(l) = self.line {
             write!(f, ":{l}")?;
         }
         if !self.element.is_empty() {
-            write!(f, ": {}", self.element)?;
+            write!(f, ": {}", Printable(&self.element))?;
         }
         Ok(())
     }
@@ -54,7 +72,7 @@ impl LoadError {
 
 impl fmt::Display for LoadError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{}: {}", self.location, self.message)
+        write!(f, "{}: {}", self.location, Printable(&self.message))
     }
 }
 
@@ -70,6 +88,11 @@ pub struct Warning {
 
 impl fmt::Display for Warning {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "warning: {}: {}", self.location, self.message)
+        write!(
+            f,
+            "warning: {}: {}",
+            self.location,
+            Printable(&self.message)
+        )
     }
 }

@@ -256,7 +256,7 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
         .collect();
     let nf = frames.len();
     let ni = model64.independent_nv();
-    // Names reach the docs as escaped code spans (CONTRACT §1 "Strings are data"); `JOINTS` and
+    // Names reach the docs as escaped code spans (docs/model-format.md, "Names are data"); `JOINTS` and
     // `FRAMES` below hold them exactly, as string literals that `quote` escapes.
     let shown: Vec<String> = names.iter().map(|n| code_span(n)).collect();
     let doc = format!(
@@ -268,17 +268,23 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
     );
     let header = quote! {
         #[doc = #doc]
+        #[allow(dead_code)]
         pub const NQ: usize = #nq;
         /// Length of `v`, `tau` and `qdd`.
+        #[allow(dead_code)]
         pub const NV: usize = #nv;
         /// Number of independent velocity coordinates (`NV` for a tree).
+        #[allow(dead_code)]
         pub const NI: usize = #ni;
-        /// Joint names in coordinate order (CONTRACT §2).
+        /// Joint names in coordinate order (embedyn's docs/conventions.md).
+        #[allow(dead_code)]
         pub const JOINTS: [&str; #nj] = [#(#names),*];
         /// Whether each joint's coordinate is independent (false for gear- or mimic-driven joints).
+        #[allow(dead_code)]
         pub const INDEPENDENT: [bool; #nj] = [#(#independent),*];
         /// The links whose poses `kinematics` returns, in its order (every link on a moving body; links
         /// fixed to the world are constant and not listed).
+        #[allow(dead_code)]
         pub const FRAMES: [&str; #nf] = [#(#frames),*];
     };
     Ok(Generated {
@@ -329,7 +335,8 @@ fn scalar_module(scalar: &str, constrained: bool, functions: &[TokenStream]) -> 
     };
     quote! {
         #[doc = #doc]
-        #[allow(clippy::all, clippy::pedantic, unused_parens, non_snake_case)]
+        // A program uses some of the functions generated for it; the others are not dead code to fix.
+        #[allow(clippy::all, clippy::pedantic, unused_parens, non_snake_case, dead_code)]
         pub mod #module {
             type S = #module;
             #threshold

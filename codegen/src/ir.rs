@@ -75,7 +75,7 @@ pub struct Joint {
     pub line: Option<u32>,
 }
 
-/// URDF+ `<loop type>`: what the cut joint keeps (CONTRACT §1).
+/// URDF+ `<loop type>`: what the cut joint keeps (docs/model-format.md).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum LoopKind {
     /// Origins coincide, axes stay aligned (`revolute` and `continuous`).

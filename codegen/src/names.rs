@@ -1,4 +1,4 @@
-//! Model strings (robot, link, joint and file names) are data, never code (CONTRACT §1 "Strings are data").
+//! Model strings (robot, link, joint and file names) are data, never code (docs/model-format.md, "Names are data").
 //!
 //! Everything generated from a name goes through this module: the one sanitizer that derives Rust
 //! identifiers and crate names, and the escaping of names shown in doc comments and Markdown. (TOML goes

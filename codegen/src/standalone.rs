@@ -168,7 +168,7 @@ pub fn crate_files(
         readme.push_str(&format!("- `{sig}`{note}\n"));
     }
     readme.push_str(&format!(
-        "\nnq = {}, nv = {}. Coordinates (CONTRACT §2: revolute angles in rad, prismatic in m; a floating base is\n\
+        "\nnq = {}, nv = {}. Coordinates (as embedyn's docs/conventions.md says: revolute angles in rad, prismatic in m; a floating base is\n\
          `q = [x y z qx qy qz qw …]`, `v = [v_lin ω …]` in the body frame; gravity (0, 0, −9.81)):\n\n\
          | joint | type | q index | v index | independent |\n|---|---|---:|---:|---|\n",
         model.nq(),

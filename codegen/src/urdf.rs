@@ -3,7 +3,7 @@
 //! `urdf-rs` is not used: it drops URDF+ elements, keeps no source positions and rejects a joint with two
 //! `<mimic>` children (a differential).
 
-use crate::bounded_read::{read_file_limited, MAX_MODEL_BYTES};
+use crate::bounded_read::read_model_file;
 use crate::error::{LoadError, Location, Warning};
 use crate::ir::{
     Coupling, Inertial, Joint, JointKind, Link, Loop, LoopFrame, LoopKind, Mimic, Origin, Robot,
@@ -21,9 +21,35 @@ pub struct Loaded {
     pub warnings: Vec<Warning>,
 }
 
+/// Warnings of one message at several elements (talos_reduced's twelve `<mimic>` leftovers on fixed
+/// joints) become one, at the first, naming the others: a screen of identical lines hides what differs.
+fn fold_repeated_warnings(warnings: &mut Vec<Warning>) {
+    const LISTED: usize = 5;
+    let mut folded: Vec<(Warning, Vec<String>)> = Vec::new();
+    for w in warnings.drain(..) {
+        match folded
+            .iter_mut()
+            .find(|(first, _)| first.message == w.message)
+        {
+            Some((_, others)) => others.push(w.location.element),
+            None => folded.push((w, Vec::new())),
+        }
+    }
+    for (mut w, others) in folded {
+        if !others.is_empty() {
+            let mut list = others[..others.len().min(LISTED)].join(", ");
+            if others.len() > LISTED {
+                list += &format!(" and {} more", others.len() - LISTED);
+            }
+            w.message += &format!(" (the same for {list})");
+        }
+        warnings.push(w);
+    }
+}
+
 /// Reads and checks a URDF file.
 pub fn load_urdf(path: &Path) -> Result<Loaded, LoadError> {
-    let text = read_file_limited(path, MAX_MODEL_BYTES).map_err(|e| {
+    let text = read_model_file(path).map_err(|e| {
         LoadError::new(
             Location::new(path, None, ""),
             format!("cannot read the model file: {e}"),
@@ -248,6 +274,8 @@ impl<'a, 'input> Parser<'a, 'input> {
             constraint_names.insert(name, (tag, line));
         }
         self.warn_ignored_joint_dynamics(root);
+        self.warn_ignored_armature(root);
+        fold_repeated_warnings(&mut self.warnings);
         Ok(Robot {
             name,
             source: self.path.to_path_buf(),
@@ -504,6 +532,28 @@ impl<'a, 'input> Parser<'a, 'input> {
         );
         let (joint, dynamics) = first;
         self.warn(dynamics, format!("joint \"{joint}\" <dynamics>"), message);
+    }
+
+    /// A motor's armature (`<dynamics armature>`, or a transmission's `<drake:rotor_inertia>`) is not
+    /// read yet: it would add to M's diagonal, so ignoring it changes the numbers. One warning per file, at
+    /// the first element that has a non-zero one, until armature is supported.
+    fn warn_ignored_armature(&mut self, root: Node) {
+        let nonzero = |v: Option<&str>| v.is_some_and(|v| v.trim().parse::<f64>() != Ok(0.0));
+        let armature = root
+            .descendants()
+            .filter(|d| d.has_tag_name("dynamics") && nonzero(d.attribute("armature")))
+            .chain(root.descendants().filter(|d| {
+                d.tag_name().name() == "rotor_inertia" && nonzero(d.attribute("value"))
+            }))
+            .min_by_key(|d| d.range().start);
+        if let Some(node) = armature {
+            let what = format!("<{}>", node.tag_name().name());
+            self.warn(
+                node,
+                what,
+                "armature (a motor's reflected rotor inertia) is not supported yet and is ignored: the dynamics computed are those without it",
+            );
+        }
     }
 
     fn loop_element(&self, node: Node, links: &HashMap<String, usize>) -> Result<Loop, LoadError> {

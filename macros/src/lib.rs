@@ -110,7 +110,7 @@ fn expand(args: &Args) -> Result<proc_macro2::TokenStream, String> {
         .or_else(|_| std::env::var("CARGO_MANIFEST_DIR"))
         .unwrap_or_else(|_| ".".into());
     let full = std::path::Path::new(&base).join(&given);
-    let text = std::fs::read_to_string(&full)
+    let text = embedyn_codegen::bounded_read::read_model_file(&full)
         .map_err(|e| format!("embedyn: cannot read the model file `{given}`: {e}"))?;
     // Messages name the file as the user wrote it, not the absolute path.
     let loaded =

@@ -7,7 +7,7 @@
 //! These are the oracle every generated function is tested against. Every algorithm works on a
 //! [`Workspace`] allocated once per model, so calls never allocate.
 //!
-//! Conventions (see CONTRACT.md §2): spatial vectors are `[angular; linear]`, SI units, gravity
+//! Conventions (docs/conventions.md): spatial vectors are `[angular; linear]`, SI units, gravity
 //! (0, 0, −9.81) m/s² by default; a floating base uses Pinocchio's free-flyer layout.
 
 #![no_std]
@@ -62,7 +62,7 @@ pub use spatial::{ArticulatedInertia, Force, Motion, SpatialInertia, Transform};
 /// Re-exported so that users of the model API need not depend on nalgebra themselves.
 pub use nalgebra;
 
-/// "Relative error" as CONTRACT §2 defines it: `max|a − b| / max(1, max|b|)`.
+/// "Relative error" as docs/conventions.md defines it: `max|a − b| / max(1, max|b|)`.
 pub fn relative_error<T: Real>(a: &[T], b: &[T]) -> f64 {
     assert_eq!(
         a.len(),

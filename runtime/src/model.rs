@@ -2,7 +2,7 @@
 //!
 //! Bodies are numbered so that a parent precedes its children and every subtree occupies a contiguous
 //! range of indices (depth-first order). Body `i` is moved by joint `i`. A URDF's fixed joints are already
-//! merged away: every joint here moves. Coordinates follow CONTRACT §2.
+//! merged away: every joint here moves. Coordinates follow docs/conventions.md.
 //!
 //! Design note: the algorithms walk the tree node by node, and each step touches only the node's parent.
 //! Constraint embedding replaces a group of bodies by one *aggregate link* with a configuration-dependent
@@ -551,7 +551,7 @@ impl<T: Real> ModelBuilder<T> {
         self.bodies[body].link_placements = placements;
     }
 
-    /// Numbers the bodies depth-first (siblings in the order they were added; CONTRACT §2), assigns
+    /// Numbers the bodies depth-first (siblings in the order they were added; docs/conventions.md), assigns
     /// the coordinate indices, and checks that every joint's acceleration is determined: `D(k) > 0` at
     /// two unrelated configurations (a joint singular at both is singular everywhere but on a null set).
     pub fn build(self) -> Result<Model<T>, ModelError> {

@@ -310,7 +310,7 @@ fn fill_embedding<T: Real>(
     result
 }
 
-/// The reduced mass matrix `Xᵀ M X` over the independent coordinates (CONTRACT §3 `crba` for models with
+/// The reduced mass matrix `Xᵀ M X` over the independent coordinates (docs/command-line.md `crba` for models with
 /// loops); allocates its result (see [`reduced_mass_matrix_in`]).
 pub fn reduced_mass_matrix<T: Real>(
     model: &Model<T>,

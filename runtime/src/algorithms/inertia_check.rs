@@ -28,7 +28,7 @@ use crate::Real;
 
 /// The smallest fraction of its reference a quantity must keep to be more than rounding in `T`: 1000 ε
 /// (2.2e-13 in f64, 1.2e-4 in f32). Below it, fewer than three digits of the joint's acceleration
-/// survive in `T` (the rule CONTRACT §2 uses for a loop's conditioning, 1e-3/ε, read the other way).
+/// survive in `T` (the rule docs/conventions.md uses for a loop's conditioning, 1e-3/ε, read the other way).
 fn resolvable_fraction<T: Real>() -> f64 {
     1e3 * T::epsilon().to_f64()
 }

@@ -14,7 +14,7 @@ use crate::spatial::Transform;
 use crate::Real;
 use nalgebra::{DMatrix, Matrix3, Vector3};
 
-/// What a cut joint keeps (CONTRACT §1).
+/// What a cut joint keeps (docs/model-format.md).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum LoopType {
     /// Origins coincide, axes stay aligned: 5 equations.
@@ -172,7 +172,7 @@ impl<T: Real> LoopClosure<T> {
 
     /// [`Self::residual`] and, per row, the magnitude of the numbers it was computed from (what rounding
     /// errors scale with): the larger world coordinate of the two frame origins for a position row (m), 1
-    /// for an orientation row. A residual is judged against `max(1, magnitude)` (CONTRACT §2).
+    /// for an orientation row. A residual is judged against `max(1, magnitude)` (docs/conventions.md).
     pub fn residual_scaled(&self, ws: &Workspace<T>, out: &mut [T], scale: &mut [T]) {
         let p = Self::frame(ws, self.predecessor, &self.predecessor_frame, false);
         let s = Self::frame(ws, self.successor, &self.successor_frame, false);

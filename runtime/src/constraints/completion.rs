@@ -1,7 +1,7 @@
 //! Completing a state: the dependent coordinates from the independent ones, at position level (Newton's
 //! method from the given guess, so it stays on that assembly branch) and at velocity level (`X_G`).
 //!
-//! Residuals are judged relative to the magnitudes they are computed from (CONTRACT §2): a loop far from
+//! Residuals are judged relative to the magnitudes they are computed from (docs/conventions.md): a loop far from
 //! the world origin, or a gear ratio of 1000, has rounding errors in proportion, and an absolute tolerance
 //! would either reject its exact states or accept wrong ones.
 
@@ -19,7 +19,7 @@ use crate::Real;
 pub const COMPLETION_MAX_STEPS: usize = 50;
 
 /// Largest constraint residual at position level (all equations, redundant ones included) and at velocity
-/// level (`J v`), each relative to the magnitudes in its equation: `|r| / max(1, magnitude)` (CONTRACT §2,
+/// level (`J v`), each relative to the magnitudes in its equation: `|r| / max(1, magnitude)` (docs/conventions.md,
 /// so 1e-9 means 1e-9 relative, and at least 1e-9 absolute in m, rad, m/s, rad/s). NaN where a residual is
 /// not a number.
 pub fn constraint_violation<T: Real>(

@@ -17,7 +17,7 @@ use nalgebra::DMatrix;
 /// `min(1e10, 10⁻³ / ε)` with ε the scalar's unit roundoff — 1e10 in `f64` (and wider types), about 8.4e3 in
 /// `f32`. Below it the dependent accelerations keep about three correct digits or more (the solve loses up
 /// to cond · ε of relative accuracy); at or above it the dependent joints are not determined by the
-/// independent ones to any useful accuracy (CONTRACT §2, "Singular loops"). One rule for every engine.
+/// independent ones to any useful accuracy (docs/conventions.md, "Singular loops"). One rule for every engine.
 pub fn singularity_threshold<T: Real>() -> f64 {
     (1e-3 / T::epsilon().to_f64()).min(1e10)
 }

@@ -276,7 +276,7 @@ pub(crate) fn assemble<T: Real>(
     let mut r = vec![T::zero(); model.constraint_raw_rows()];
     let mut scale = r.clone();
     let zeros = vec![T::zero(); model.nv()];
-    // Relative to the magnitudes of each equation (CONTRACT §2), and reachable in the scalar at hand.
+    // Relative to the magnitudes of each equation (docs/conventions.md), and reachable in the scalar at hand.
     let tolerance = (64.0 * T::epsilon().to_f64()).max(1e-12);
     for _ in 0..iterations {
         forward_kinematics(model, ws, q, &zeros).expect("sizes match");

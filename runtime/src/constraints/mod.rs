@@ -89,7 +89,7 @@ pub fn residuals<T: Real>(model: &Model<T>, ws: &Workspace<T>, q: &[T], out: &mu
 
 /// [`residuals`] and the magnitude each row was computed from (see [`LoopClosure::residual_scaled`]; for
 /// a linear row the largest of its terms and its offset): a row is satisfied to tolerance `tol` when
-/// `|r| ≤ tol · max(1, magnitude)` (CONTRACT §2).
+/// `|r| ≤ tol · max(1, magnitude)` (docs/conventions.md).
 pub fn residuals_scaled<T: Real>(
     model: &Model<T>,
     ws: &Workspace<T>,
