@@ -1,23 +1,40 @@
 //! `embedyn complete`: dependent coordinates solved from the independent ones, velocities projected.
 
-use super::samples::{vector, Samples};
+use super::samples::Samples;
 use super::CliError;
 use embedyn_codegen::{Loaded, ModelOptions};
 use embedyn_runtime::constraints::{
     complete_configuration, complete_velocity, constraint_violation,
 };
 use embedyn_runtime::{JointType, Model, Workspace};
-use serde_json::{json, Value};
+use serde::Serialize;
 
-pub fn complete(loaded: &Loaded, options: &ModelOptions, input: &str) -> Result<Value, CliError> {
-    let samples = Samples::parse(input)?;
+/// What `complete` prints: `{"samples": [{"q", "v", "residual"}]}`.
+#[derive(Serialize)]
+pub struct Completed {
+    samples: Vec<CompletedSample>,
+}
+
+#[derive(Serialize)]
+struct CompletedSample {
+    q: Vec<f64>,
+    v: Vec<f64>,
+    residual: f64,
+}
+
+pub fn complete(
+    loaded: &Loaded,
+    options: &ModelOptions,
+    input: &str,
+) -> Result<Completed, CliError> {
     let model = loaded.model::<f64>(options)?;
+    let samples = Samples::parse(input, &[("q", model.nq()), ("v", model.nv())])?;
     let mut ws = Workspace::new(&model);
-    let mut out = Vec::with_capacity(samples.samples.len());
-    for (i, s) in samples.samples.iter().enumerate() {
+    let mut out = Vec::with_capacity(samples.len());
+    for i in 0..samples.len() {
         let at = |e: embedyn_runtime::DynamicsError| CliError(format!("sample {i}: {e}"));
-        let mut q = vector(s, i, "q", model.nq())?;
-        let mut v = vector(s, i, "v", model.nv())?;
+        let mut q = samples.vector(i, "q")?.to_vec();
+        let mut v = samples.vector(i, "v")?.to_vec();
         normalize_quaternions(&model, &mut q, i)?;
         complete_configuration(&model, &mut ws, &mut q).map_err(at)?;
         complete_velocity(&model, &mut ws, &q, &mut v).map_err(at)?;
@@ -28,9 +45,9 @@ pub fn complete(loaded: &Loaded, options: &ModelOptions, input: &str) -> Result<
                 "sample {i}: the loop constraints could not be solved from this guess (residual {residual:e}); the independent coordinates may be outside the mechanism's range, or the guess too far from an assembly"
             )));
         }
-        out.push(json!({ "q": q, "v": v, "residual": residual }));
+        out.push(CompletedSample { q, v, residual });
     }
-    Ok(json!({ "samples": out }))
+    Ok(Completed { samples: out })
 }
 
 /// Rescales every free joint's quaternion to unit length (`complete` accepts any non-zero one); a zero

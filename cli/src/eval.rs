@@ -1,7 +1,7 @@
 //! `embedyn eval`: ABA, RNEA or CRBA on every sample.
 
 use super::runner::RowShape;
-use super::samples::{vector, Samples};
+use super::samples::Samples;
 use super::{Algo, CliError, Engine, Scalar};
 use embedyn_codegen::{Loaded, ModelOptions};
 use embedyn_runtime::constraints::{constraint_violation, singularity_threshold};
@@ -10,7 +10,39 @@ use embedyn_runtime::{
     aba, crba, embedding_map, reduced_mass_matrix, rnea, DynamicsError, JointType, Model, Real,
     Workspace,
 };
-use serde_json::{json, Value};
+use serde::Serialize;
+
+/// What `eval` prints: `{"joints": [names], "samples": [...]}`, one output per input sample.
+#[derive(Serialize)]
+pub struct Evaluated {
+    joints: Vec<String>,
+    samples: Vec<Output>,
+}
+
+/// One sample's output (the algorithm's fields, without a tag).
+#[derive(Serialize)]
+#[serde(untagged)]
+enum Output {
+    Aba {
+        qdd: Vec<f64>,
+        qdd_independent: Vec<f64>,
+    },
+    Rnea {
+        tau: Vec<f64>,
+        tau_independent: Vec<f64>,
+    },
+    Crba {
+        #[serde(rename = "M")]
+        m: Vec<Vec<f64>>,
+    },
+}
+
+impl Evaluated {
+    fn new<T: Real>(model: &Model<T>, samples: Vec<Output>) -> Self {
+        let joints = model.joints.iter().map(|j| j.name.clone()).collect();
+        Evaluated { joints, samples }
+    }
+}
 
 /// `embedyn eval` on the samples of `input`; `max_compile_memory_mb` is the generated engine's limit
 /// (`--max-compile-memory`).
@@ -22,20 +54,27 @@ pub fn eval(
     scalar: Scalar,
     input: &str,
     max_compile_memory_mb: u64,
-) -> Result<Value, CliError> {
-    let samples = Samples::parse(input)?;
+) -> Result<Evaluated, CliError> {
     // Consistency with the constraints is judged in f64 whatever the scalar (1e-9 is below f32's
     // resolution of typical angles).
     let model64 = loaded.model::<f64>(options)?;
+    // Only the fields the algorithm uses are read, at the lengths the model needs.
+    let (nq, nv) = (model64.nq(), model64.nv());
+    let samples = match algo {
+        Algo::Aba => Samples::parse(input, &[("q", nq), ("v", nv), ("tau", nv)])?,
+        Algo::Rnea => Samples::parse(input, &[("q", nq), ("v", nv), ("qdd", nv)])?,
+        Algo::Crba => Samples::parse(input, &[("q", nq)])?,
+    };
     if model64.has_constraints() {
         let mut ws = Workspace::new(&model64);
-        for (i, s) in samples.samples.iter().enumerate() {
-            let q = vector(s, i, "q", model64.nq())?;
+        let zero = vec![0.0; nv];
+        for i in 0..samples.len() {
+            let q = samples.vector(i, "q")?;
             let v = match algo {
-                Algo::Crba => vec![0.0; model64.nv()],
-                _ => vector(s, i, "v", model64.nv())?,
+                Algo::Crba => &zero[..],
+                _ => samples.vector(i, "v")?,
             };
-            check_consistent(&model64, &mut ws, &q, &v, i)?;
+            check_consistent(&model64, &mut ws, q, v, i)?;
         }
     }
     if engine == Engine::Generated {
@@ -65,7 +104,7 @@ fn eval_generated(
     scalar: Scalar,
     samples: &Samples,
     max_compile_memory_mb: u64,
-) -> Result<Value, CliError> {
+) -> Result<Evaluated, CliError> {
     // The function and scalar asked for only: a fraction of the compile time and memory, and a model
     // whose constants do not fit f32 can still be evaluated in f64.
     let algorithms = match algo {
@@ -91,17 +130,18 @@ fn eval_generated(
     };
     let binary = super::runner::build_runner(loaded, &gen_options)?;
     let (nq, nv) = (model.nq(), model.nv());
-    let mut rows = Vec::with_capacity(samples.samples.len());
-    for (i, s) in samples.samples.iter().enumerate() {
-        let mut row = vector(s, i, "q", nq)?;
+    let mut rows = Vec::with_capacity(samples.len());
+    let zero = vec![0.0; nv];
+    for i in 0..samples.len() {
+        let mut row = samples.vector(i, "q")?.to_vec();
         check_quaternions(model, &row, i)?;
         let (a, b) = match algo {
-            Algo::Aba => (vector(s, i, "v", nv)?, vector(s, i, "tau", nv)?),
-            Algo::Rnea => (vector(s, i, "v", nv)?, vector(s, i, "qdd", nv)?),
-            Algo::Crba => (vec![0.0; nv], vec![0.0; nv]),
+            Algo::Aba => (samples.vector(i, "v")?, samples.vector(i, "tau")?),
+            Algo::Rnea => (samples.vector(i, "v")?, samples.vector(i, "qdd")?),
+            Algo::Crba => (&zero[..], &zero[..]),
         };
-        row.extend(a);
-        row.extend(b);
+        row.extend_from_slice(a);
+        row.extend_from_slice(b);
         rows.push(row);
     }
     let name = match algo {
@@ -152,9 +192,10 @@ fn eval_generated(
         let o = finite(&o, i, name)?;
         let q = &row[..nq];
         out.push(match algo {
-            Algo::Aba => {
-                json!({ "qdd": o, "qdd_independent": independent.iter().map(|&k| o[k]).collect::<Vec<_>>() })
-            }
+            Algo::Aba => Output::Aba {
+                qdd_independent: independent.iter().map(|&k| o[k]).collect(),
+                qdd: o,
+            },
             Algo::Rnea => {
                 // Xᵀ τ with X in the scalar asked for, so that the singularity verdict is that scalar's.
                 let tau_independent: Vec<f64> = match model32.as_mut() {
@@ -163,18 +204,28 @@ fn eval_generated(
                     _ => o.clone(),
                 };
                 let tau_independent = finite(&tau_independent, i, "tau_independent")?;
-                json!({ "tau": o, "tau_independent": tau_independent })
+                Output::Rnea {
+                    tau: o,
+                    tau_independent,
+                }
             }
             Algo::Crba => {
                 // Xᵀ M X for a model with constraints (the generated `crba_independent`).
-                let n = if model.has_constraints() { model.independent_nv() } else { nv };
+                let n = if model.has_constraints() {
+                    model.independent_nv()
+                } else {
+                    nv
+                };
                 let m = nalgebra::DMatrix::from_row_slice(n, n, &o);
-                json!({ "M": (0..n).map(|r| (0..n).map(|c| m[(r, c)]).collect::<Vec<f64>>()).collect::<Vec<_>>() })
+                Output::Crba {
+                    m: (0..n)
+                        .map(|r| (0..n).map(|c| m[(r, c)]).collect())
+                        .collect(),
+                }
             }
         });
     }
-    let joints: Vec<&str> = model.joints.iter().map(|j| j.name.as_str()).collect();
-    Ok(json!({ "joints": joints, "samples": out }))
+    Ok(Evaluated::new(model, out))
 }
 
 /// `Xᵀ τ` (the generalized force on the independent coordinates) with `X` of `model` at `q`.
@@ -204,29 +255,36 @@ pub(super) fn independent_indices<T: Real>(model: &Model<T>) -> Vec<usize> {
         .collect()
 }
 
-fn eval_in<T: Real>(model: &Model<T>, algo: Algo, samples: &Samples) -> Result<Value, CliError> {
+fn eval_in<T: Real>(
+    model: &Model<T>,
+    algo: Algo,
+    samples: &Samples,
+) -> Result<Evaluated, CliError> {
     let mut ws = Workspace::new(model);
-    let (nq, nv) = (model.nq(), model.nv());
+    let nv = model.nv();
     let independent = independent_indices(model);
     let pick = |x: &[f64]| -> Vec<f64> { independent.iter().map(|&i| x[i]).collect() };
-    let mut out = Vec::with_capacity(samples.samples.len());
-    for (i, s) in samples.samples.iter().enumerate() {
+    let mut out = Vec::with_capacity(samples.len());
+    for i in 0..samples.len() {
         let at = |e: DynamicsError| CliError(format!("sample {i}: {e}"));
-        let q = vector(s, i, "q", nq)?;
-        check_quaternions(model, &q, i)?;
-        let q = cast::<T>(&q);
+        let q = samples.vector(i, "q")?;
+        check_quaternions(model, q, i)?;
+        let q = cast::<T>(q);
         let v = match algo {
             Algo::Crba => vec![T::zero(); nv],
-            _ => cast::<T>(&vector(s, i, "v", nv)?),
+            _ => cast::<T>(samples.vector(i, "v")?),
         };
         let value = match algo {
             Algo::Aba => {
-                let tau = cast::<T>(&vector(s, i, "tau", nv)?);
+                let tau = cast::<T>(samples.vector(i, "tau")?);
                 let qdd = finite(aba(model, &mut ws, &q, &v, &tau).map_err(at)?, i, "qdd")?;
-                json!({ "qdd": qdd, "qdd_independent": pick(&qdd) })
+                Output::Aba {
+                    qdd_independent: pick(&qdd),
+                    qdd,
+                }
             }
             Algo::Rnea => {
-                let qdd = cast::<T>(&vector(s, i, "qdd", nv)?);
+                let qdd = cast::<T>(samples.vector(i, "qdd")?);
                 let tau = finite(rnea(model, &mut ws, &q, &v, &qdd).map_err(at)?, i, "tau")?;
                 let tau_independent: Vec<f64> = if model.has_constraints() {
                     // Only Xᵀ τ acts on the independent coordinates.
@@ -238,7 +296,10 @@ fn eval_in<T: Real>(model: &Model<T>, algo: Algo, samples: &Samples) -> Result<V
                     tau.clone()
                 };
                 let tau_independent = finite(&tau_independent, i, "tau_independent")?;
-                json!({ "tau": tau, "tau_independent": tau_independent })
+                Output::Rnea {
+                    tau,
+                    tau_independent,
+                }
             }
             Algo::Crba => {
                 let m = if model.has_constraints() {
@@ -252,13 +313,12 @@ fn eval_in<T: Real>(model: &Model<T>, algo: Algo, samples: &Samples) -> Result<V
                 let rows: Vec<Vec<f64>> = (0..n)
                     .map(|r| (0..n).map(|c| m[(r, c)].to_f64()).collect())
                     .collect();
-                json!({ "M": rows })
+                Output::Crba { m: rows }
             }
         };
         out.push(value);
     }
-    let joints: Vec<&str> = model.joints.iter().map(|j| j.name.as_str()).collect();
-    Ok(json!({ "joints": joints, "samples": out }))
+    Ok(Evaluated::new(model, out))
 }
 
 /// docs/conventions.md: `q` and `v` must satisfy the constraints to 1e-9 (`embedyn complete` makes them so).

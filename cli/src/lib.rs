@@ -34,8 +34,10 @@ pub fn main() -> ExitCode {
     };
     // The last line of defence: a panic (a bug) still ends with a clear status, not 101.
     match std::panic::catch_unwind(|| run(cli)) {
-        Ok(Ok(serde_json::Value::String(text))) => output::document(&text),
-        Ok(Ok(json)) => output::document(&format!("{json}\n")),
+        Ok(Ok(Printed::Text(text))) => output::document(&text),
+        Ok(Ok(Printed::Json(json))) => output::json_document(&json),
+        Ok(Ok(Printed::Evaluated(document))) => output::json_document(&document),
+        Ok(Ok(Printed::Completed(document))) => output::json_document(&document),
         Ok(Err(e)) => {
             output::note(&format!("error: {}", e.0));
             ExitCode::from(output::FAILURE)
@@ -169,12 +171,24 @@ impl From<LoadError> for CliError {
     }
 }
 
-/// Runs a parsed command, returning the JSON to print.
-pub fn run(cli: Cli) -> Result<serde_json::Value, CliError> {
+/// What a command prints on success.
+pub enum Printed {
+    /// A JSON document.
+    Json(serde_json::Value),
+    /// `eval`'s results, typed: one sample's output costs its numbers, not a tree of JSON values.
+    Evaluated(eval::Evaluated),
+    /// `complete`'s results, typed likewise.
+    Completed(complete::Completed),
+    /// Text for people (`bench`'s table).
+    Text(String),
+}
+
+/// Runs a parsed command, returning what to print.
+pub fn run(cli: Cli) -> Result<Printed, CliError> {
     match cli.command {
         Command::Info { model, floating } => {
             let loaded = load_reporting(&model)?;
-            info::info(&loaded, &options(floating))
+            info::info(&loaded, &options(floating)).map(Printed::Json)
         }
         Command::Bench {
             model,
@@ -185,9 +199,9 @@ pub fn run(cli: Cli) -> Result<serde_json::Value, CliError> {
             let loaded = load_reporting(&model)?;
             let result = bench::bench(&loaded, &options(floating), max_compile_memory)?;
             Ok(if json {
-                result
+                Printed::Json(result)
             } else {
-                serde_json::Value::String(bench::table(&result))
+                Printed::Text(bench::table(&result))
             })
         }
         Command::Generate {
@@ -226,11 +240,11 @@ pub fn run(cli: Cli) -> Result<serde_json::Value, CliError> {
                 options.algorithms.push(embedyn_codegen::Algorithm::Minv);
             }
             let files = embedyn_codegen::standalone::write_crate(&loaded, &options, &out)?;
-            Ok(serde_json::json!({
+            Ok(Printed::Json(serde_json::json!({
                 "crate": embedyn_codegen::standalone::crate_name(&loaded.robot.name),
                 "out": out,
                 "files": files,
-            }))
+            })))
         }
         Command::Complete {
             model,
@@ -239,7 +253,7 @@ pub fn run(cli: Cli) -> Result<serde_json::Value, CliError> {
         } => {
             let loaded = load_reporting(&model)?;
             let text = read_input(input.as_deref())?;
-            complete::complete(&loaded, &options(floating), &text)
+            complete::complete(&loaded, &options(floating), &text).map(Printed::Completed)
         }
         Command::Eval {
             model,
@@ -261,6 +275,7 @@ pub fn run(cli: Cli) -> Result<serde_json::Value, CliError> {
                 &text,
                 max_compile_memory,
             )
+            .map(Printed::Evaluated)
         }
     }
 }
@@ -274,7 +289,8 @@ pub fn eval_interpreted(
     scalar: Scalar,
     input: &str,
 ) -> Result<serde_json::Value, CliError> {
-    eval::eval(loaded, options, algo, Engine::Interpreted, scalar, input, 0)
+    let document = eval::eval(loaded, options, algo, Engine::Interpreted, scalar, input, 0)?;
+    as_value(&document)
 }
 
 /// `embedyn complete` on input text already read: the JSON document the command prints, or its error.
@@ -283,7 +299,16 @@ pub fn complete_text(
     options: &ModelOptions,
     input: &str,
 ) -> Result<serde_json::Value, CliError> {
-    complete::complete(loaded, options, input)
+    as_value(&complete::complete(loaded, options, input)?)
+}
+
+/// The document as a JSON tree (for the fuzzer, which inspects it; inputs there are small).
+fn as_value<T: serde::Serialize>(document: &T) -> Result<serde_json::Value, CliError> {
+    serde_json::to_value(document).map_err(|e| {
+        CliError(format!(
+            "internal error: the result is not JSON: {e} (a bug)"
+        ))
+    })
 }
 
 fn options(floating: bool) -> ModelOptions {

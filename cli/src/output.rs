@@ -2,7 +2,8 @@
 //! stderr (docs/command-line.md). Nothing here panics: output into a closed pipe ends the program quietly, as Unix
 //! tools do, and a closed stderr never stops the work.
 
-use std::io::{ErrorKind, Write};
+use serde::Serialize;
+use std::io::{BufWriter, ErrorKind, Write};
 use std::process::ExitCode;
 
 /// Exit status of an error (docs/command-line.md: non-zero, below 128).
@@ -23,7 +24,25 @@ pub fn note(text: &str) {
 /// (a full disk).
 pub fn document(text: &str) -> ExitCode {
     let mut out = std::io::stdout().lock();
-    match out.write_all(text.as_bytes()).and_then(|()| out.flush()) {
+    ending(out.write_all(text.as_bytes()).and_then(|()| out.flush()))
+}
+
+/// Writes `value` as one line of compact JSON to stdout, serialized as it is written (a million samples'
+/// results are never held as text), ending as [`document`] does.
+pub fn json_document<T: Serialize>(value: &T) -> ExitCode {
+    let mut out = BufWriter::new(std::io::stdout().lock());
+    let written = serde_json::to_writer(&mut out, value)
+        .map_err(|e| match e.io_error_kind() {
+            Some(kind) => std::io::Error::new(kind, e),
+            None => std::io::Error::other(e),
+        })
+        .and_then(|()| out.write_all(b"\n"))
+        .and_then(|()| out.flush());
+    ending(written)
+}
+
+fn ending(written: std::io::Result<()>) -> ExitCode {
+    match written {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) if e.kind() == ErrorKind::BrokenPipe => ExitCode::SUCCESS,
         Err(e) => {

@@ -222,6 +222,108 @@ fn bad_input_names_the_sample_and_the_field() {
     );
 }
 
+/// The input was parsed whole into a `serde_json::Value` tree (about 70 bytes per byte of text) before any
+/// length was checked: a `q` of 25 million zeros took 3.6 GB to be refused, and an input near the 512 MiB
+/// limit was killed for memory instead of refused. The samples are now read straight into the numbers
+/// the model needs, and a vector is refused at its first entry beyond the model's length. That it is
+/// refused while reading shows without timing: the same vector in a document cut off after it is still
+/// refused for its length, not for the end of the text.
+#[test]
+fn an_overlong_vector_is_refused_while_reading() {
+    let model = repo("models/arm7.urdf");
+    let zeros = vec!["0"; 10_000_000].join(",");
+    let long_q = format!("{{\"samples\": [{{\"q\": [{zeros}]");
+    let complete_document =
+        format!("{long_q}, \"v\": [0,0,0,0,0,0,0], \"tau\": [0,0,0,0,0,0,0]}}]}}");
+    let expected = "sample 0: field `q` has more than 7 entries, the model needs 7";
+    for text in [&complete_document, &long_q] {
+        for args in [
+            &["eval", &model, "--algo", "aba"][..],
+            &["eval", &model, "--algo", "crba", "--scalar", "f32"],
+            &["complete", &model],
+        ] {
+            let e = error_of(args, text);
+            assert!(e.contains(expected), "{args:?}: {e}");
+        }
+    }
+    // The same in a later sample and a later field.
+    let ok = json!({"q": vec![0.0; 7], "v": vec![0.0; 7], "tau": vec![0.0; 7]});
+    let long_v = json!({"q": vec![0.0; 7], "v": vec![0.0; 8], "tau": vec![0.0; 7]});
+    let e = error_of(
+        &["eval", &model, "--algo", "aba"],
+        &json!({"samples": [ok, long_v]}).to_string(),
+    );
+    assert!(
+        e.contains("sample 1: field `v` has more than 7 entries, the model needs 7"),
+        "{e}"
+    );
+}
+
+/// What the typed reading of the samples keeps from reading a JSON tree: fields a command does not use
+/// are ignored whatever they hold, a sample that is not an object has no fields, a repeated key counts
+/// once with its last value, the length is judged before the entries, and invalid JSON anywhere (even
+/// after a sample with a problem) is reported as such.
+#[test]
+fn samples_are_read_as_a_json_object_would_be() {
+    let model = repo("models/arm7.urdf");
+    let zeros = vec![0.0; 7];
+    let q = [0.1, -0.4, 0.3, -1.2, 0.5, 0.9, -0.2];
+    let plain = json_of(
+        &["eval", &model, "--algo", "aba"],
+        &json!({"samples": [{"q": q, "v": zeros, "tau": zeros}]}).to_string(),
+    );
+    // (A repeated key cannot be written with `json!`, which keeps one.)
+    let text = format!(
+        r#"{{"note": [1, {{"a": null}}], "samples": [{{"q": [9, 9, 9], "qdd": "unused", "v": {zeros}, "tau": {zeros}, "label": {{"x": [[1]]}}, "q": {q}}}], "more": true}}"#,
+        zeros = json!(zeros),
+        q = json!(q),
+    );
+    let with_extras = json_of(&["eval", &model, "--algo", "aba"], &text);
+    assert_eq!(with_extras, plain);
+    assert_eq!(plain["samples"][0]["qdd"].as_array().unwrap().len(), 7);
+    // `crba` reads `q` only; `complete` reads `q` and `v`.
+    let crba = json_of(
+        &["eval", &model, "--algo", "crba"],
+        &json!({"samples": [{"q": q, "v": "junk", "tau": [1]}]}).to_string(),
+    );
+    assert_eq!(crba["samples"][0]["M"].as_array().unwrap().len(), 7);
+    let done = json_of(
+        &["complete", &model],
+        &json!({"samples": [{"q": q, "v": zeros, "tau": null}]}).to_string(),
+    );
+    assert_eq!(done["samples"][0]["q"], json!(q));
+    for (text, expected) in [
+        (r#"{"samples": [5]}"#, "sample 0: missing field `q`"),
+        (r#"{"samples": [[0, 0]]}"#, "sample 0: missing field `q`"),
+        (
+            r#"{"samples": [{"q": null}]}"#,
+            "sample 0: field `q` must be an array of numbers",
+        ),
+        (
+            r#"{"samples": [{"q": [0, "x", 0]}]}"#,
+            "sample 0: field `q` has 3 entries, the model needs 7",
+        ),
+        (
+            r#"{"samples": [{"q": [0, 0, 0, 0, 0, true, 0], "v": [0, 0, 0, 0, 0, 0, 0]}]}"#,
+            "sample 0: field `q`[5] is not a finite number: true",
+        ),
+        (
+            r#"{"samples": [{"q": [0, 0, 0, 0, 0, 0, 0], "v": [0, 0, 0, 0, 0, 0, 0], "v": {}}]}"#,
+            "sample 0: field `v` must be an array of numbers",
+        ),
+        (r#"{"samples": [{"v": []}], "#, "not valid JSON"),
+        (r#"{"samples": [{}]} x"#, "not valid JSON"),
+        (
+            r#"{"samples": [], "samples": 3}"#,
+            "`samples` must be an array",
+        ),
+        (r#"[{"samples": []}]"#, "no field `samples`"),
+    ] {
+        let e = error_of(&["complete", &model], text);
+        assert!(e.contains(expected), "{text}: {e}");
+    }
+}
+
 #[test]
 fn non_unit_quaternion_is_rejected() {
     let model = repo("models/quadruped.urdf");
