@@ -78,6 +78,8 @@ pub fn eval(
         }
     }
     if engine == Engine::Generated {
+        // Before anything is compiled.
+        samples.check_all()?;
         return eval_generated(
             loaded,
             options,

@@ -134,6 +134,17 @@ impl Samples {
         self.count
     }
 
+    /// The first problem of any sample, in sample and field order: `--engine generated` checks the
+    /// whole input before it compiles anything, so a wrong length is reported at once.
+    pub fn check_all(&self) -> Result<(), CliError> {
+        for index in 0..self.count {
+            for &(name, _) in &self.request {
+                self.vector(index, name)?;
+            }
+        }
+        Ok(())
+    }
+
     /// Field `name` (one of the request) of sample `index` as exactly the requested number of finite
     /// numbers.
     pub fn vector(&self, index: usize, name: &str) -> Result<&[f64], CliError> {

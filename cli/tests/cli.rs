@@ -446,6 +446,30 @@ fn complete_then_eval_a_loop_model() {
 }
 
 /// Runs `embedyn args` with a cache folder inside the target directory.
+/// `--engine generated` checks the whole input before it compiles anything: a wrong length in the last
+/// field of the last sample is reported at once, and the cache stays empty (it once compiled first).
+#[test]
+fn generated_engine_checks_the_input_before_compiling() {
+    let cache = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("cache-input-first");
+    let _ = std::fs::remove_dir_all(&cache);
+    let model = repo("models/arm7.urdf");
+    let good = json!({"q": vec![0.0; 7], "v": vec![0.0; 7], "tau": vec![0.0; 7]});
+    let short = json!({"q": vec![0.0; 7], "v": vec![0.0; 7], "tau": vec![0.0; 6]});
+    let input = json!({ "samples": [good, short] }).to_string();
+    let (ok, _, err) = embedyn_with_env(
+        &["eval", &model, "--algo", "aba", "--engine", "generated"],
+        &input,
+        &[("EMBEDYN_CACHE_DIR", cache.clone())],
+    );
+    assert!(
+        !ok && err.contains("sample 1: field `tau` has 6 entries, the model needs 7"),
+        "{err}"
+    );
+    assert!(!err.contains("compiling"), "{err}");
+    let built = std::fs::read_dir(&cache).map_or(0, |d| d.count());
+    assert_eq!(built, 0, "nothing is compiled for an input that is refused");
+}
+
 fn embedyn_cached(args: &[&str], stdin: &str) -> (bool, String, String) {
     let cache = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("embedyn-cache");
     embedyn_with_env(args, stdin, &[("EMBEDYN_CACHE_DIR", cache)])
