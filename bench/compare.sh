@@ -18,13 +18,13 @@ if [[ "${1:-}" != "--skip-pinocchio" ]]; then
   TALOS="$ERD_ROBOTS/talos_data/robots/talos_reduced.urdf"
   if [[ -f "$TALOS" ]]; then
     "$PINOCCHIO_BENCH" --floating "$TALOS" | sed 's/"model": "talos_reduced"/"model": "talos_reduced_floating"/' >> bench/results/pinocchio.jsonl
-    cargo run --release -q -p embedyn-codegen --bin embedyn -- bench "$TALOS" --floating --json > bench/results/talos_embedyn.json 2>/dev/null || true
+    cargo run --release -q -p embedyn-cli --bin embedyn -- bench "$TALOS" --floating --json > bench/results/talos_embedyn.json 2>/dev/null || true
   fi
 fi
 # Generated code on GRBDA's own URDF+ files (the models of the constraint-embedding table), through the CLI.
 : > bench/results/loops_embedyn.jsonl
 for m in four_bar six_bar revolute_rotor_chain mini_cheetah mit_humanoid jvrc1_humanoid; do
-  out=$(cargo run --release -q -p embedyn-codegen --bin embedyn -- bench "tests/data/grbda/$m.urdf" --json 2>/dev/null)
+  out=$(cargo run --release -q -p embedyn-cli --bin embedyn -- bench "tests/data/grbda/$m.urdf" --json 2>/dev/null)
   echo "{\"model\": \"$m\", \"bench\": $out}" >> bench/results/loops_embedyn.jsonl
 done
 # The whole log is kept: a benchmark that panics must stop the script, not leave stale rows in the table.

@@ -12,7 +12,8 @@ only="${ONLY:-aba}"
 extra="${EXTRA:-}"
 sizes=("$@")
 [[ ${#sizes[@]} -gt 0 ]] || sizes=(10 100 1000)
-cargo build --release -q -p embedyn-codegen --bin embedyn --example chain_urdf
+cargo build --release -q -p embedyn-cli --bin embedyn
+cargo build --release -q -p embedyn-codegen --example chain_urdf
 work=target/scale
 mkdir -p "$work"
 # Seconds from GNU time's "Elapsed (wall clock)" (h:mm:ss or m:ss), MB from its kilobytes.

@@ -9,7 +9,7 @@ default) and prints a summary.
 
 Needs the PyPI packages `example-robot-data` (6.0.0) and `pin` (Pinocchio 4.1), and a built embedyn:
     pip install example-robot-data==6.0.0 pin==4.1.0
-    cargo build --release -p embedyn-codegen --bin embedyn
+    cargo build --release -p embedyn-cli --bin embedyn
     python3 tools/census.py [--embedyn target/release/embedyn] [--out docs/census.md]
 
 Original to this project. Licence: MIT OR Apache-2.0.
