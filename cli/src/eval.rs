@@ -68,18 +68,8 @@ fn eval_generated(
 ) -> Result<Value, CliError> {
     // The function and scalar asked for only: a fraction of the compile time and memory, and a model
     // whose constants do not fit f32 can still be evaluated in f64.
-    let algorithms = match algo {
-        Algo::Aba => vec![embedyn_codegen::Algorithm::Aba],
-        Algo::Rnea => vec![embedyn_codegen::Algorithm::Rnea],
-        // What the command reports for a model with constraints is Xᵀ M X.
-        Algo::Crba if model.has_constraints() => {
-            vec![
-                embedyn_codegen::Algorithm::Crba,
-                embedyn_codegen::Algorithm::CrbaIndependent,
-            ]
-        }
-        Algo::Crba => vec![embedyn_codegen::Algorithm::Crba],
-    };
+    // What the command reports for a model with constraints may be another function's (`crba`: Xᵀ M X).
+    let algorithms = super::runner::runner_algorithms(&[algo], model.has_constraints());
     let gen_options = embedyn_codegen::GenerateOptions {
         model: options.clone(),
         algorithms,
@@ -99,16 +89,13 @@ fn eval_generated(
             Algo::Aba => (vector(s, i, "v", nv)?, vector(s, i, "tau", nv)?),
             Algo::Rnea => (vector(s, i, "v", nv)?, vector(s, i, "qdd", nv)?),
             Algo::Crba => (vec![0.0; nv], vec![0.0; nv]),
+            other => return Err(not_evaluated(other)),
         };
         row.extend(a);
         row.extend(b);
         rows.push(row);
     }
-    let name = match algo {
-        Algo::Aba => "aba",
-        Algo::Rnea => "rnea",
-        Algo::Crba => "crba",
-    };
+    let name = algo.name();
     let scalar_name = match scalar {
         Scalar::F64 => "f64",
         Scalar::F32 => "f32",
@@ -119,6 +106,7 @@ fn eval_generated(
         Algo::Aba | Algo::Rnea => nv,
         Algo::Crba if model.has_constraints() => model.independent_nv().pow(2) + 1,
         Algo::Crba => nv * nv,
+        other => return Err(not_evaluated(other)),
     };
     let outputs = super::runner::run(&binary, name, scalar_name, RowShape::Eval { len }, &rows)?;
     let mut ws = Workspace::new(model);
@@ -171,6 +159,7 @@ fn eval_generated(
                 let m = nalgebra::DMatrix::from_row_slice(n, n, &o);
                 json!({ "M": (0..n).map(|r| (0..n).map(|c| m[(r, c)]).collect::<Vec<f64>>()).collect::<Vec<_>>() })
             }
+            other => return Err(not_evaluated(other)),
         });
     }
     let joints: Vec<&str> = model.joints.iter().map(|j| j.name.as_str()).collect();
@@ -254,6 +243,7 @@ fn eval_in<T: Real>(model: &Model<T>, algo: Algo, samples: &Samples) -> Result<V
                     .collect();
                 json!({ "M": rows })
             }
+            other => return Err(not_evaluated(other)),
         };
         out.push(value);
     }
@@ -312,4 +302,13 @@ fn check_quaternions<T: Real>(model: &Model<T>, q: &[f64], sample: usize) -> Res
         }
     }
     Ok(())
+}
+
+/// An algorithm the command line does not evaluate (`--algo` offers only those with a command-line entry
+/// in their descriptor).
+fn not_evaluated(algo: Algo) -> CliError {
+    CliError(format!(
+        "`embedyn eval` does not evaluate `{}`",
+        algo.name()
+    ))
 }
