@@ -783,6 +783,31 @@ mod tests {
     }
 
     #[test]
+    fn the_runner_runs_what_the_command_line_reports() {
+        use Algorithm::{Aba, Crba, CrbaIndependent, Rnea};
+        assert_eq!(
+            runner_algorithms(&[Aba, Rnea, Crba], false),
+            [Aba, Rnea, Crba]
+        );
+        assert_eq!(
+            runner_algorithms(&[Aba, Rnea, Crba], true),
+            [Aba, Rnea, Crba, CrbaIndependent]
+        );
+        // `crba` of a model with constraints runs `crba_independent` and prints its measure after M.
+        let src = runner_main("arm_dynamics", &[Crba], true, &["f64"]).unwrap();
+        assert!(
+            src.contains("let condition = m::crba_independent(q, &mut mat_i);"),
+            "{src}"
+        );
+        // Functions the runner has no buffers or name for get no arm.
+        let src = runner_main("arm_dynamics", &Algorithm::ALL, false, &["f64"]).unwrap();
+        for absent in ["kinematics", "complete", "embedding"] {
+            assert!(!src.contains(&format!("m::{absent}")), "{absent}: {src}");
+        }
+        assert!(src.contains("m::minv(q, &mut mat);"), "{src}");
+    }
+
+    #[test]
     fn runner_source_parses_for_every_algorithm() {
         for constrained in [false, true] {
             let src = runner_main(

@@ -196,7 +196,7 @@ pub struct AlgorithmSpec {
     pub traced_name: &'static str,
     /// The items written after the traced function, which call it (`complete`'s Newton iteration).
     pub wrapper: Option<fn() -> proc_macro2::TokenStream>,
-    /// One line: what it computes.
+    /// One line: what it computes (docs/generated-code.md's table).
     pub summary: &'static str,
     /// The generated function's documentation.
     pub doc: &'static str,
@@ -440,7 +440,7 @@ pub const ALGORITHMS: &[AlgorithmSpec] = &[
         name: "complete",
         traced_name: "complete_step",
         wrapper: Some(crate::generate::complete_loop),
-        summary: "dependent coordinates solved from the independent ones by Newton's method",
+        summary: "dependent coordinates solved from the independent ones by Newton's method from `q`'s dependent entries, until the relative residual is below 64 ε or for at most `COMPLETION_MAX_STEPS` steps; returns the residual — check it",
         doc: "One Newton step of the position completion: `q_out` is `q` with its dependent coordinates moved towards the solution of the loop, gear and mimic equations (loop coordinates by at most 0.5 rad or m). Returns the largest residual at `q`, relative to the magnitudes in each equation (`complete` iterates this).",
         doc_with_constraints: None,
         inputs: &[Q],
@@ -675,9 +675,17 @@ impl AlgorithmSpec {
 mod tests {
     use super::*;
 
-    /// The rows of the markdown tables of docs/generated-code.md's "What a module holds": (first cell,
-    /// whether the row is in the table of functions for models with constraints).
-    fn documented_functions() -> Vec<(String, bool)> {
+    /// A row of the function tables of docs/generated-code.md.
+    #[derive(Debug, PartialEq)]
+    struct Row {
+        signature: String,
+        what: String,
+        /// In the table of functions a model with constraints also has.
+        constrained: bool,
+    }
+
+    /// The rows of the markdown tables of docs/generated-code.md's "What a module holds".
+    fn documented_functions() -> Vec<Row> {
         let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../docs/generated-code.md");
         let text =
             std::fs::read_to_string(path).expect("docs/generated-code.md is in the repository");
@@ -695,8 +703,12 @@ mod tests {
             let Some(cell) = line.strip_prefix("| `") else {
                 continue;
             };
-            if let Some((first, _)) = cell.split_once("` |") {
-                rows.push((first.to_string(), constrained));
+            if let Some((signature, what)) = cell.split_once("` | ") {
+                rows.push(Row {
+                    signature: signature.to_string(),
+                    what: what.trim_end_matches(" |").to_string(),
+                    constrained,
+                });
             }
         }
         rows
@@ -710,11 +722,9 @@ mod tests {
             .map(|i| i.name)
             .chain(spec.outputs.iter().map(|o| o.name))
             .collect();
-        let returned = if spec.returns_value(false) || spec.needs_constraints {
-            spec.returns_value(true)
-        } else {
-            false
-        };
+        // The docs show ` -> S` where the function always returns a scalar (`aba`'s measure for a model
+        // with constraints is in the prose).
+        let returned = spec.returns_value(spec.needs_constraints);
         format!(
             "{name}({}){}",
             arguments.join(", "),
@@ -725,29 +735,77 @@ mod tests {
     #[test]
     fn the_docs_table_lists_every_algorithm_as_described() {
         let rows = documented_functions();
-        let mut expected = Vec::new();
+        let mut described = Vec::new();
         for spec in ALGORITHMS {
-            expected.push((
-                documented_signature(spec.name, spec),
-                spec.needs_constraints,
-            ));
+            let signature = documented_signature(spec.name, spec);
+            let row = rows.iter().find(|r| r.signature == signature);
+            assert_eq!(
+                row,
+                Some(&Row {
+                    signature,
+                    what: spec.summary.to_string(),
+                    constrained: spec.needs_constraints
+                }),
+                "docs/generated-code.md's row of `{}` differs from its descriptor",
+                spec.name
+            );
+            described.push(row);
             if spec.traced_name != spec.name {
-                expected.push((
-                    documented_signature(spec.traced_name, spec),
-                    spec.needs_constraints,
-                ));
+                // The traced step of an iterated algorithm is a function of its own.
+                let step = documented_signature(spec.traced_name, spec);
+                let row = rows.iter().find(|r| r.signature == step);
+                assert!(
+                    row.is_some_and(|r| r.constrained == spec.needs_constraints),
+                    "docs/generated-code.md does not list `{step}` with `{}`",
+                    spec.name
+                );
+                described.push(row);
             }
         }
         for row in &rows {
             assert!(
-                expected.contains(row),
-                "docs/generated-code.md lists {row:?}, which no descriptor describes (expected one of {expected:?})"
+                described.contains(&Some(row)),
+                "docs/generated-code.md lists {row:?}, which no descriptor describes"
             );
         }
-        for e in &expected {
-            assert!(
-                rows.contains(e),
-                "docs/generated-code.md does not list {e:?} (its rows: {rows:?})"
+    }
+
+    #[test]
+    fn the_descriptors_agree_with_each_other() {
+        for spec in ALGORITHMS {
+            // Generated with constraints only for a model that has them; an iterated algorithm names its
+            // step.
+            if spec.generated == WhenGenerated::WithConstraints {
+                assert!(spec.needs_constraints, "{}", spec.name);
+            }
+            assert_eq!(
+                spec.wrapper.is_some(),
+                spec.traced_name != spec.name,
+                "{}",
+                spec.name
+            );
+            // What the command line reports with constraints is computed by a function that exists then.
+            if let Some(CliSpec {
+                with_constraints: Some(other),
+                ..
+            }) = spec.cli
+            {
+                assert!(
+                    other.needs_constraints() && other.spec().cli.is_none(),
+                    "{}",
+                    spec.name
+                );
+            }
+            // A singularity measure is what a function for a model with constraints returns; a tree's
+            // functions return nothing but a residual.
+            if spec.needs_constraints {
+                assert!(spec.returns_value(true), "{}", spec.name);
+            }
+            assert_eq!(
+                spec.inputs.first().map(|i| i.len),
+                Some(Dim::Nq),
+                "{}",
+                spec.name
             );
         }
     }

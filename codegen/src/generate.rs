@@ -510,3 +510,47 @@ pub fn generate_file(
 pub fn generation_model(loaded: &Loaded, options: &ModelOptions) -> Result<Model<f64>, LoadError> {
     Ok(snapped(&build_model::<f64>(&loaded.robot, options)?))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn requested_functions_are_merged_alike_for_the_macro_and_the_command_line() {
+        // `only(aba, aba, crba)` with `minv`: exactly those, each once, in the order given.
+        let only = GenerateOptions::default().with_requested(
+            Some(vec![Algorithm::Aba, Algorithm::Aba, Algorithm::Crba]),
+            &[Algorithm::Minv],
+        );
+        assert_eq!(
+            only.algorithms,
+            [Algorithm::Aba, Algorithm::Crba, Algorithm::Minv]
+        );
+        assert!(only.exact);
+        assert_eq!(only.generated_algorithms(true), only.algorithms);
+        // Without `only`: the default functions, `minv` once, and for a model with constraints the
+        // functions it also gets.
+        let default =
+            GenerateOptions::default().with_requested(None, &[Algorithm::Minv, Algorithm::Minv]);
+        assert!(!default.exact);
+        let names =
+            |list: Vec<Algorithm>| list.into_iter().map(Algorithm::name).collect::<Vec<_>>();
+        assert_eq!(
+            names(default.generated_algorithms(false)),
+            ["kinematics", "aba", "rnea", "crba", "minv"]
+        );
+        assert_eq!(
+            names(default.generated_algorithms(true)),
+            [
+                "kinematics",
+                "aba",
+                "rnea",
+                "crba",
+                "minv",
+                "complete",
+                "embedding",
+                "crba_independent"
+            ]
+        );
+    }
+}
