@@ -709,6 +709,12 @@ pub fn eval_input(data: &[u8]) {
                 assert_eq!(rows.len(), n, "{what}: rows of M");
                 assert!(rows.iter().all(|r| r.as_array().map(Vec::len) == Some(n)));
             }
+            Command::Eval(other, _) => {
+                panic!(
+                    "{what}: `eval` evaluated `{}`, which it does not offer",
+                    other.name()
+                )
+            }
             Command::Complete => {
                 assert_eq!(len("q"), Some(nq), "{what}: q");
                 assert_eq!(len("v"), Some(nv), "{what}: v");

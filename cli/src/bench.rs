@@ -6,7 +6,7 @@ use super::runner::{build_runner, run, RowShape};
 use super::CliError;
 use crate::sampling::{consistent_states, Rng};
 use embedyn_codegen::{Algorithm, GenerateOptions, Loaded, ModelOptions};
-use embedyn_runtime::{aba, crba, reduced_mass_matrix_in, rnea, Model, Workspace};
+use embedyn_runtime::{Model, Workspace};
 use serde_json::{json, Value};
 use std::hint::black_box;
 
@@ -72,46 +72,27 @@ pub fn bench(
     let st = states(&model)?;
     let mut ws = Workspace::new(&model);
     let mut k = 0usize;
-    let mut interpreted = |algo: &str| -> f64 {
+    // What is timed is what `eval --algo` reports: for a model with constraints, `crba` is Xᵀ M X (the
+    // generated engine's `crba_independent`, the interpreted `reduced_mass_matrix_in`).
+    let constrained = model.has_constraints();
+    let mut interpreted = |algo: Algorithm| -> f64 {
+        let run = algo.reported_by(constrained).spec().interpreted;
         let ws = &mut ws;
         let model = &model;
         let st = &st;
-        match algo {
-            "aba" => time(&mut || {
-                k = (k + 1) % st.len();
-                black_box(aba(model, ws, black_box(&st[k].0), &st[k].1, &st[k].2).is_ok());
-            }),
-            "rnea" => time(&mut || {
-                k = (k + 1) % st.len();
-                black_box(rnea(model, ws, black_box(&st[k].0), &st[k].1, &st[k].2).is_ok());
-            }),
-            // What `eval --algo crba` reports: XᵀMX for a model with constraints (as the generated
-            // engine's `crba_independent`), M otherwise.
-            _ if model.has_constraints() => time(&mut || {
-                k = (k + 1) % st.len();
-                black_box(reduced_mass_matrix_in(model, ws, black_box(&st[k].0)).is_ok());
-            }),
-            _ => time(&mut || {
-                k = (k + 1) % st.len();
-                black_box(crba(model, ws, black_box(&st[k].0)).is_ok());
-            }),
-        }
+        time(&mut || {
+            k = (k + 1) % st.len();
+            let (q, v, x) = &st[k];
+            black_box(run(model, ws, &[black_box(q), v, x]).is_ok());
+        })
     };
+    let timed: Vec<Algorithm> = Algorithm::offered_by_cli().collect();
     let binary = build_runner(
         loaded,
         &GenerateOptions {
             model: options.clone(),
-            // What is timed, nothing more (`crba` is Xᵀ M X for a model with constraints).
-            algorithms: if model.has_constraints() {
-                vec![
-                    Algorithm::Aba,
-                    Algorithm::Rnea,
-                    Algorithm::Crba,
-                    Algorithm::CrbaIndependent,
-                ]
-            } else {
-                vec![Algorithm::Aba, Algorithm::Rnea, Algorithm::Crba]
-            },
+            // What is timed, nothing more.
+            algorithms: super::runner::runner_algorithms(&timed, constrained),
             exact: true,
             max_compile_memory_mb: Some(max_compile_memory_mb),
             ..Default::default()
@@ -122,8 +103,9 @@ pub fn bench(
         .map(|(q, v, x)| q.iter().chain(v).chain(x).copied().collect())
         .collect();
     let mut result = serde_json::Map::new();
-    for algo in ["aba", "rnea", "crba"] {
+    for &algo in &timed {
         let i = interpreted(algo);
+        let algo = algo.name();
         let g64 = time_generated(&binary, algo, "f64", &rows)?;
         let g32 = time_generated(&binary, algo, "f32", &rows)?;
         result.insert(
@@ -156,7 +138,7 @@ fn time_generated(
 pub fn table(v: &Value) -> String {
     let mut s =
         String::from("median ns per call   interpreted_f64  generated_f64  generated_f32\n");
-    for algo in ["aba", "rnea", "crba"] {
+    for algo in Algorithm::offered_by_cli().map(Algorithm::name) {
         let r = &v[algo];
         let f = |k: &str| r[k].as_f64().map_or("—".to_string(), |x| format!("{x:.0}"));
         s.push_str(&format!(

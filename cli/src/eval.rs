@@ -59,12 +59,16 @@ pub fn eval(
     // resolution of typical angles).
     let model64 = loaded.model::<f64>(options)?;
     // Only the fields the algorithm uses are read, at the lengths the model needs.
-    let (nq, nv) = (model64.nq(), model64.nv());
-    let samples = match algo {
-        Algo::Aba => Samples::parse(input, &[("q", nq), ("v", nv), ("tau", nv)])?,
-        Algo::Rnea => Samples::parse(input, &[("q", nq), ("v", nv), ("qdd", nv)])?,
-        Algo::Crba => Samples::parse(input, &[("q", nq)])?,
-    };
+    // The sample's fields are the function's inputs (its descriptor's).
+    let nv = model64.nv();
+    let dims = embedyn_codegen::algorithm::Dims::of(&model64);
+    let request: Vec<(&'static str, usize)> = algo
+        .spec()
+        .inputs
+        .iter()
+        .map(|input| (input.name, input.len.len(&dims)))
+        .collect();
+    let samples = Samples::parse(input, &request)?;
     if model64.has_constraints() {
         let mut ws = Workspace::new(&model64);
         let zero = vec![0.0; nv];
@@ -109,18 +113,8 @@ fn eval_generated(
 ) -> Result<Evaluated, CliError> {
     // The function and scalar asked for only: a fraction of the compile time and memory, and a model
     // whose constants do not fit f32 can still be evaluated in f64.
-    let algorithms = match algo {
-        Algo::Aba => vec![embedyn_codegen::Algorithm::Aba],
-        Algo::Rnea => vec![embedyn_codegen::Algorithm::Rnea],
-        // What the command reports for a model with constraints is Xᵀ M X.
-        Algo::Crba if model.has_constraints() => {
-            vec![
-                embedyn_codegen::Algorithm::Crba,
-                embedyn_codegen::Algorithm::CrbaIndependent,
-            ]
-        }
-        Algo::Crba => vec![embedyn_codegen::Algorithm::Crba],
-    };
+    // What the command reports for a model with constraints may be another function's (`crba`: Xᵀ M X).
+    let algorithms = super::runner::runner_algorithms(&[algo], model.has_constraints());
     let gen_options = embedyn_codegen::GenerateOptions {
         model: options.clone(),
         algorithms,
@@ -141,16 +135,13 @@ fn eval_generated(
             Algo::Aba => (samples.vector(i, "v")?, samples.vector(i, "tau")?),
             Algo::Rnea => (samples.vector(i, "v")?, samples.vector(i, "qdd")?),
             Algo::Crba => (&zero[..], &zero[..]),
+            other => return Err(not_evaluated(other)),
         };
         row.extend_from_slice(a);
         row.extend_from_slice(b);
         rows.push(row);
     }
-    let name = match algo {
-        Algo::Aba => "aba",
-        Algo::Rnea => "rnea",
-        Algo::Crba => "crba",
-    };
+    let name = algo.name();
     let scalar_name = match scalar {
         Scalar::F64 => "f64",
         Scalar::F32 => "f32",
@@ -161,6 +152,7 @@ fn eval_generated(
         Algo::Aba | Algo::Rnea => nv,
         Algo::Crba if model.has_constraints() => model.independent_nv().pow(2) + 1,
         Algo::Crba => nv * nv,
+        other => return Err(not_evaluated(other)),
     };
     let outputs = super::runner::run(&binary, name, scalar_name, RowShape::Eval { len }, &rows)?;
     let mut ws = Workspace::new(model);
@@ -225,6 +217,7 @@ fn eval_generated(
                         .collect(),
                 }
             }
+            other => return Err(not_evaluated(other)),
         });
     }
     Ok(Evaluated::new(model, out))
@@ -317,6 +310,7 @@ fn eval_in<T: Real>(
                     .collect();
                 Output::Crba { m: rows }
             }
+            other => return Err(not_evaluated(other)),
         };
         out.push(value);
     }
@@ -374,4 +368,13 @@ fn check_quaternions<T: Real>(model: &Model<T>, q: &[f64], sample: usize) -> Res
         }
     }
     Ok(())
+}
+
+/// An algorithm the command line does not evaluate (`--algo` offers only those with a command-line entry
+/// in their descriptor).
+fn not_evaluated(algo: Algo) -> CliError {
+    CliError(format!(
+        "`embedyn eval` does not evaluate `{}`",
+        algo.name()
+    ))
 }

@@ -91,10 +91,7 @@ pub enum Command {
         /// Also generate `minv` (the O(N²) inverse mass matrix of Eq. 6).
         #[arg(long)]
         minv: bool,
-        /// Generate exactly these functions, comma-separated (kinematics, aba, rnea, crba, minv, complete,
-        /// embedding, crba_independent); default: kinematics, aba, rnea, crba and, for a model with
-        /// constraints, complete, embedding and crba_independent.
-        #[arg(long, value_delimiter = ',')]
+        #[arg(long, value_delimiter = ',', help = only_help())]
         only: Option<Vec<String>>,
         /// Generate only this scalar type's module (default: both `f64` and `f32`).
         #[arg(long, value_enum)]
@@ -119,7 +116,7 @@ pub enum Command {
     /// Evaluate an algorithm on the samples of a JSON file (or stdin).
     Eval {
         model: PathBuf,
-        #[arg(long, value_enum)]
+        #[arg(long, value_parser = algo_parser())]
         algo: Algo,
         #[arg(long, value_enum, default_value = "interpreted")]
         engine: Engine,
@@ -137,14 +134,36 @@ pub enum Command {
     },
 }
 
-#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Algo {
-    /// Forward dynamics (articulated-body algorithm).
-    Aba,
-    /// Inverse dynamics (recursive Newton–Euler).
-    Rnea,
-    /// Mass matrix (composite-rigid-body algorithm).
-    Crba,
+/// An algorithm `embedyn eval --algo` evaluates: one whose descriptor has a command-line entry
+/// ([`embedyn_codegen::algorithm::ALGORITHMS`]).
+pub use embedyn_codegen::Algorithm as Algo;
+
+/// `--algo`'s values, with their help, from the algorithms' descriptors.
+fn algo_parser() -> impl clap::builder::TypedValueParser<Value = Algo> {
+    let values = Algo::offered_by_cli().map(|a| {
+        let help = a.spec().cli.map_or("", |c| c.help);
+        clap::builder::PossibleValue::new(a.name()).help(help)
+    });
+    use clap::builder::TypedValueParser;
+    clap::builder::PossibleValuesParser::new(values).try_map(|name: String| Algo::from_name(&name))
+}
+
+/// `generate --only`'s help: the function names and the defaults, from the algorithms' descriptors.
+fn only_help() -> String {
+    use embedyn_codegen::algorithm::WhenGenerated;
+    let names = |algorithms: &mut dyn Iterator<Item = Algo>| -> Vec<&'static str> {
+        algorithms.map(Algo::name).collect()
+    };
+    let all = names(&mut Algo::ALL.into_iter());
+    let default = names(&mut Algo::generated(WhenGenerated::ByDefault));
+    let constrained = names(&mut Algo::generated(WhenGenerated::WithConstraints));
+    let (last, rest) = constrained.split_last().unwrap_or((&"", &[]));
+    format!(
+        "Generate exactly these functions, comma-separated ({}); default: {} and, for a model with constraints, {} and {last}",
+        all.join(", "),
+        default.join(", "),
+        rest.join(", "),
+    )
 }
 
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
@@ -214,31 +233,28 @@ pub fn run(cli: Cli) -> Result<Printed, CliError> {
             max_compile_memory,
         } => {
             let loaded = load_reporting(&model)?;
-            let mut options = embedyn_codegen::GenerateOptions {
+            let options = embedyn_codegen::GenerateOptions {
                 model: options(floating),
                 f64: scalar != Some(Scalar::F32),
                 f32: scalar != Some(Scalar::F64),
                 max_compile_memory_mb: Some(max_compile_memory),
                 ..Default::default()
             };
-            if let Some(names) = only {
-                options.algorithms = Vec::new();
-                for name in names {
-                    let algo = embedyn_codegen::Algorithm::from_name(name.trim())
-                        .map_err(|e| CliError(format!("--only: {e}")))?;
-                    if !options.algorithms.contains(&algo) {
-                        options.algorithms.push(algo);
-                    }
-                }
-                options.exact = true;
-            }
-            if minv
-                && !options
-                    .algorithms
-                    .contains(&embedyn_codegen::Algorithm::Minv)
-            {
-                options.algorithms.push(embedyn_codegen::Algorithm::Minv);
-            }
+            let only = only
+                .map(|names| {
+                    names
+                        .iter()
+                        .map(|name| embedyn_codegen::Algorithm::from_name(name.trim()))
+                        .collect::<Result<Vec<_>, _>>()
+                })
+                .transpose()
+                .map_err(|e| CliError(format!("--only: {e}")))?;
+            let requested = if minv {
+                &[embedyn_codegen::Algorithm::Minv][..]
+            } else {
+                &[]
+            };
+            let options = options.with_requested(only, requested);
             let files = embedyn_codegen::standalone::write_crate(&loaded, &options, &out)?;
             Ok(Printed::Json(serde_json::json!({
                 "crate": embedyn_codegen::standalone::crate_name(&loaded.robot.name),

@@ -459,6 +459,68 @@ fn parse_rows(stdout: &str, inputs: usize, shape: &RowShape) -> Result<Vec<Vec<f
     Ok(out)
 }
 
+/// The functions the runner needs for the command line's `algorithms` on a model with or without
+/// constraints: each, and the one that computes what the command reports for it when that is another
+/// (`crba_independent` for `crba` with constraints).
+pub fn runner_algorithms(algorithms: &[Algorithm], constrained: bool) -> Vec<Algorithm> {
+    let mut needed = Vec::new();
+    for &a in algorithms {
+        for f in [a, a.reported_by(constrained)] {
+            if !needed.contains(&f) {
+                needed.push(f);
+            }
+        }
+    }
+    needed
+}
+
+/// The runner's code for `algorithm` (evaluating, timing), read from its descriptor: the function that
+/// computes what the command line reports for it, called with `q` and up to two more `NV`-vectors and
+/// writing one `NV`-vector, `NV × NV` or `NI × NI` matrix, whose values are printed, then the returned
+/// singularity measure if any. `None` for a function the runner does not run by its own name: one that
+/// exists only for a model with constraints (the command line reaches `crba_independent` as `crba`), or
+/// whose arguments or outputs the runner has no buffers for (`kinematics`).
+fn runner_calls(algorithm: Algorithm, constrained: bool) -> Option<(TokenStream, TokenStream)> {
+    use embedyn_codegen::algorithm::{Dim, Shape};
+    if algorithm.needs_constraints() {
+        return None;
+    }
+    let spec = algorithm.reported_by(constrained).spec();
+    let [output] = spec.outputs else {
+        return None;
+    };
+    let (buffer, values) = match output.shape {
+        Shape::Vector(Dim::Nv) => (quote!(out), quote!(out)),
+        Shape::Matrix(Dim::Nv, Dim::Nv) => (quote!(mat), quote!(mat.as_flattened())),
+        Shape::Matrix(Dim::Ni, Dim::Ni) => (quote!(mat_i), quote!(mat_i.as_flattened())),
+        _ => return None,
+    };
+    let (first, rest) = spec.inputs.split_first()?;
+    if first.len != Dim::Nq || rest.len() > 2 || rest.iter().any(|i| i.len != Dim::Nv) {
+        return None;
+    }
+    let eval_args = [quote!(q), quote!(a), quote!(b)];
+    let bench_args = [quote!(black_box(&s.0)), quote!(&s.1), quote!(&s.2)];
+    let eval_args = &eval_args[..spec.inputs.len()];
+    let bench_args = &bench_args[..spec.inputs.len()];
+    let function = format_ident!("{}", spec.name);
+    let values = quote!(#values.iter().map(|&x| f64::from(x)));
+    Some(if spec.returns_value(constrained) {
+        (
+            quote! {
+                let condition = m::#function(#(#eval_args,)* &mut #buffer);
+                emit(text, #values.chain([f64::from(condition)]));
+            },
+            quote!(black_box(m::#function(#(#bench_args,)* &mut #buffer));),
+        )
+    } else {
+        (
+            quote! { m::#function(#(#eval_args,)* &mut #buffer); emit(text, #values); },
+            quote!(m::#function(#(#bench_args,)* &mut #buffer);),
+        )
+    })
+}
+
 /// The runner's `main.rs`, generated through `quote` and formatted like all generated code.
 ///
 /// Protocol on stdin: a line `ALGO SCALAR eval|bench`, then one sample per line (q, then two vectors of
@@ -478,62 +540,9 @@ fn runner_main(
     let mut names = Vec::new();
     let mut eval_calls = Vec::new();
     let mut bench_calls = Vec::new();
-    let widen = |m: TokenStream| quote!(#m.iter().map(|&x| f64::from(x)));
-    for a in algorithms {
-        let (eval, bench) = match a {
-            Algorithm::Aba if constrained => {
-                let values = widen(quote!(out));
-                (
-                    quote! {
-                        let condition = m::aba(q, a, b, &mut out);
-                        emit(text, #values.chain([f64::from(condition)]));
-                    },
-                    quote!(black_box(m::aba(black_box(&s.0), &s.1, &s.2, &mut out));),
-                )
-            }
-            Algorithm::Aba => (
-                {
-                    let values = widen(quote!(out));
-                    quote! { m::aba(q, a, b, &mut out); emit(text, #values); }
-                },
-                quote!(m::aba(black_box(&s.0), &s.1, &s.2, &mut out);),
-            ),
-            Algorithm::Rnea => (
-                {
-                    let values = widen(quote!(out));
-                    quote! { m::rnea(q, a, b, &mut out); emit(text, #values); }
-                },
-                quote!(m::rnea(black_box(&s.0), &s.1, &s.2, &mut out);),
-            ),
-            Algorithm::Crba if constrained => (
-                {
-                    let values = widen(quote!(mat_i.as_flattened()));
-                    quote! {
-                        let condition = m::crba_independent(q, &mut mat_i);
-                        emit(text, #values.chain([f64::from(condition)]));
-                    }
-                },
-                quote!(black_box(m::crba_independent(black_box(&s.0), &mut mat_i));),
-            ),
-            Algorithm::Crba => (
-                {
-                    let values = widen(quote!(mat.as_flattened()));
-                    quote! { m::crba(q, &mut mat); emit(text, #values); }
-                },
-                quote!(m::crba(black_box(&s.0), &mut mat);),
-            ),
-            Algorithm::Minv => (
-                {
-                    let values = widen(quote!(mat.as_flattened()));
-                    quote! { m::minv(q, &mut mat); emit(text, #values); }
-                },
-                quote!(m::minv(black_box(&s.0), &mut mat);),
-            ),
-            // Not evaluated through the runner (the CLI completes states with the interpreted solver).
-            Algorithm::Complete
-            | Algorithm::Embedding
-            | Algorithm::CrbaIndependent
-            | Algorithm::Kinematics => continue,
+    for &a in algorithms {
+        let Some((eval, bench)) = runner_calls(a, constrained) else {
+            continue;
         };
         names.push(a.name());
         eval_calls.push(eval);
@@ -771,6 +780,31 @@ mod tests {
             assert_eq!(mode(&dir.join(MANIFEST)), 0o600);
         }
         std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn the_runner_runs_what_the_command_line_reports() {
+        use Algorithm::{Aba, Crba, CrbaIndependent, Rnea};
+        assert_eq!(
+            runner_algorithms(&[Aba, Rnea, Crba], false),
+            [Aba, Rnea, Crba]
+        );
+        assert_eq!(
+            runner_algorithms(&[Aba, Rnea, Crba], true),
+            [Aba, Rnea, Crba, CrbaIndependent]
+        );
+        // `crba` of a model with constraints runs `crba_independent` and prints its measure after M.
+        let src = runner_main("arm_dynamics", &[Crba], true, &["f64"]).unwrap();
+        assert!(
+            src.contains("let condition = m::crba_independent(q, &mut mat_i);"),
+            "{src}"
+        );
+        // Functions the runner has no buffers or name for get no arm.
+        let src = runner_main("arm_dynamics", &Algorithm::ALL, false, &["f64"]).unwrap();
+        for absent in ["kinematics", "complete", "embedding"] {
+            assert!(!src.contains(&format!("m::{absent}")), "{absent}: {src}");
+        }
+        assert!(src.contains("m::minv(q, &mut mat);"), "{src}");
     }
 
     #[test]

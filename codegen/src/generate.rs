@@ -4,95 +4,18 @@
 //! the IR, which unrolls them for this model and folds its constants; the tape becomes straight-line Rust,
 //! once per scalar type.
 
+pub use crate::algorithm::Algorithm;
+use crate::algorithm::{Dims, Shape, WhenGenerated};
 use crate::emit::{function, Arg, Code, Emitted, Output};
 use crate::names::{code_span, shown};
 use crate::size;
 use crate::trace::{input, record, snap, Sym};
 use crate::{build_model, LoadError, Loaded, Location, ModelOptions};
-use embedyn_runtime::constraints::{
-    completion_step, constraint_condition, singularity_threshold, COMPLETION_MAX_STEPS,
-};
-use embedyn_runtime::nalgebra::DMatrix;
-use embedyn_runtime::{
-    aba, crba, embedding_map_in, forward_kinematics, link_poses, mass_matrix_inverse,
-    reduced_mass_matrix_in, rnea, Model, Workspace,
-};
+use embedyn_runtime::constraints::{singularity_threshold, COMPLETION_MAX_STEPS};
+use embedyn_runtime::{Model, Workspace};
 
 use proc_macro2::TokenStream;
 use quote::{format_ident, quote};
-
-/// The algorithms code can be generated for.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum Algorithm {
-    /// Forward dynamics `aba(q, v, tau, qdd)`.
-    Aba,
-    /// Inverse dynamics `rnea(q, v, qdd, tau)`.
-    Rnea,
-    /// Mass matrix `crba(q, m)`.
-    Crba,
-    /// Link frames `kinematics(q, frames)`: the world pose of every link on a moving body (`FRAMES`),
-    /// as `[r00 r01 r02 r10 r11 r12 r20 r21 r22 x y z]` (rotation row-major, then the origin).
-    Kinematics,
-    /// Inverse mass matrix `minv(q, m_inv)` by the operator factorization of Eq. 6 (O(N²) output).
-    Minv,
-    /// Models with loops or couplings: `complete(q, q_out) -> residual`, the dependent coordinates solved
-    /// from the independent ones by Newton's method from the given guess (iterated to 64 ε or at most
-    /// `COMPLETION_MAX_STEPS` steps; `complete_step` is one step).
-    Complete,
-    /// Models with loops or couplings: `embedding(q, x)`, the map `X` (nv × independent nv) with
-    /// `v = X v_independent`; `Xᵀ τ` is the force on the independent coordinates.
-    Embedding,
-    /// Models with loops or couplings: `crba_independent(q, m)`, the mass matrix over the independent
-    /// coordinates, `Xᵀ M X` (what `embedyn eval --algo crba` reports for such a model).
-    CrbaIndependent,
-}
-
-impl Algorithm {
-    /// Every algorithm, in the order generated code lists them.
-    pub const ALL: [Algorithm; 8] = [
-        Algorithm::Kinematics,
-        Algorithm::Aba,
-        Algorithm::Rnea,
-        Algorithm::Crba,
-        Algorithm::Minv,
-        Algorithm::Complete,
-        Algorithm::Embedding,
-        Algorithm::CrbaIndependent,
-    ];
-
-    /// The algorithm with this generated function name (`"aba"`, `"crba_independent"`, …); the error
-    /// lists the names there are.
-    pub fn from_name(name: &str) -> Result<Algorithm, String> {
-        Algorithm::ALL
-            .into_iter()
-            .find(|a| a.name() == name)
-            .ok_or_else(|| {
-                let known: Vec<&str> = Algorithm::ALL.iter().map(|a| a.name()).collect();
-                format!("unknown function `{name}` (expected {})", known.join(", "))
-            })
-    }
-
-    /// Whether the algorithm exists only for models with loops, couplings or mimic joints.
-    pub fn needs_constraints(self) -> bool {
-        matches!(
-            self,
-            Algorithm::Complete | Algorithm::Embedding | Algorithm::CrbaIndependent
-        )
-    }
-
-    pub fn name(self) -> &'static str {
-        match self {
-            Algorithm::Aba => "aba",
-            Algorithm::Rnea => "rnea",
-            Algorithm::Crba => "crba",
-            Algorithm::Kinematics => "kinematics",
-            Algorithm::Minv => "minv",
-            Algorithm::Complete => "complete",
-            Algorithm::Embedding => "embedding",
-            Algorithm::CrbaIndependent => "crba_independent",
-        }
-    }
-}
 
 /// What to generate.
 #[derive(Clone, Debug)]
@@ -121,18 +44,50 @@ impl Default for GenerateOptions {
     fn default() -> Self {
         GenerateOptions {
             model: ModelOptions::default(),
-            algorithms: vec![
-                Algorithm::Kinematics,
-                Algorithm::Aba,
-                Algorithm::Rnea,
-                Algorithm::Crba,
-            ],
+            algorithms: Algorithm::generated(WhenGenerated::ByDefault).collect(),
             f64: true,
             f32: true,
             helpers: quote!(::embedyn::codegen_support),
             exact: false,
             max_compile_memory_mb: Some(crate::size::DEFAULT_COMPILE_MEMORY_MB),
         }
+    }
+}
+
+impl GenerateOptions {
+    /// The functions a user asked for, read the same way by the `robot!` macro and `embedyn generate`:
+    /// exactly `only` (each once, in the order given) when given, else the default ones; and `also`
+    /// (the functions generated on request, `minv`) added when missing.
+    pub fn with_requested(mut self, only: Option<Vec<Algorithm>>, also: &[Algorithm]) -> Self {
+        if let Some(only) = only {
+            self.algorithms = Vec::new();
+            for algo in only {
+                if !self.algorithms.contains(&algo) {
+                    self.algorithms.push(algo);
+                }
+            }
+            self.exact = true;
+        }
+        for &algo in also {
+            if !self.algorithms.contains(&algo) {
+                self.algorithms.push(algo);
+            }
+        }
+        self
+    }
+
+    /// The functions generated for a model with or without constraints: `algorithms`, and for a model
+    /// with constraints (unless `exact`) also those generated with constraints (`complete`, …).
+    pub fn generated_algorithms(&self, constrained: bool) -> Vec<Algorithm> {
+        let mut algorithms = self.algorithms.clone();
+        if constrained && !self.exact {
+            for extra in Algorithm::generated(WhenGenerated::WithConstraints) {
+                if !algorithms.contains(&extra) {
+                    algorithms.push(extra);
+                }
+            }
+        }
+        algorithms
     }
 }
 
@@ -202,19 +157,7 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
         .into_iter()
         .filter_map(|(enabled, scalar)| enabled.then_some(scalar))
         .collect();
-    let mut algorithms = options.algorithms.clone();
-    // A model with constraints also gets its position completion and embedding map.
-    if model.has_constraints() && !options.exact {
-        for extra in [
-            Algorithm::Complete,
-            Algorithm::Embedding,
-            Algorithm::CrbaIndependent,
-        ] {
-            if !algorithms.contains(&extra) {
-                algorithms.push(extra);
-            }
-        }
-    }
+    let algorithms = options.generated_algorithms(model.has_constraints());
     let mut functions = Vec::new();
     if !scalars.is_empty() {
         let mut sizes =
@@ -415,7 +358,7 @@ fn module_body(formatted: &str) -> &str {
 
 /// `complete`: `complete_step` iterated until the relative residual is below 64 ε (or NaN) or the step
 /// budget is spent. The iteration is over Newton steps, not over bodies: the step itself is unrolled.
-fn complete_loop() -> TokenStream {
+pub(crate) fn complete_loop() -> TokenStream {
     let max_steps = COMPLETION_MAX_STEPS;
     quote! {
         /// Position completion: `q_out` is `q` with its dependent coordinates solved from the independent
@@ -441,134 +384,80 @@ fn complete_loop() -> TokenStream {
     }
 }
 
-/// A matrix result as a row-major output.
-fn matrix_output(name: &'static str, m: &DMatrix<Sym>) -> Output {
-    let (rows, cols) = m.shape();
-    Output::Matrix {
-        name,
-        rows,
-        cols,
-        values: (0..rows * cols).map(|k| m[(k / cols, k % cols)]).collect(),
-    }
-}
-
 fn generate_algorithm(
     loaded: &Loaded,
     model: &Model<Sym>,
     algo: Algorithm,
     helpers: &TokenStream,
 ) -> Result<Emitted, LoadError> {
-    let (nq, nv) = (model.nq(), model.nv());
-    let inputs = |arg: u8, n: usize| -> Vec<Sym> { (0..n).map(|i| input(arg, i)).collect() };
+    let spec = algo.spec();
+    let dims = Dims::of(model);
+    let constrained = model.has_constraints();
     let fail = |e: embedyn_runtime::DynamicsError| {
         gen_error(loaded, format!("tracing {}: {e}", algo.name()))
     };
-    let (outputs, tape) = record(|| -> Result<Vec<Output>, LoadError> {
+    let (traced, tape) = record(|| {
         let mut ws = Workspace::new(model);
-        let q = inputs(0, nq);
-        Ok(match algo {
-            Algorithm::Aba => {
-                let (v, tau) = (inputs(1, nv), inputs(2, nv));
-                let mut out = vec![Output::Vector {
-                    name: "qdd",
-                    values: aba(model, &mut ws, &q, &v, &tau).map_err(fail)?.to_vec(),
-                }];
-                if model.has_constraints() {
-                    out.push(Output::Return(constraint_condition(&ws)));
-                }
-                out
-            }
-            Algorithm::Rnea => {
-                let (v, qdd) = (inputs(1, nv), inputs(2, nv));
-                vec![Output::Vector {
-                    name: "tau",
-                    values: rnea(model, &mut ws, &q, &v, &qdd).map_err(fail)?.to_vec(),
-                }]
-            }
-            Algorithm::Crba => {
-                vec![matrix_output("m", crba(model, &mut ws, &q).map_err(fail)?)]
-            }
-            Algorithm::Kinematics => {
-                let zeros = vec![Sym::Const(0.0); nv];
-                forward_kinematics(model, &mut ws, &q, &zeros).map_err(fail)?;
-                let mut values = Vec::new();
-                for (_, x) in link_poses(model, &ws) {
-                    for r in 0..3 {
-                        for c in 0..3 {
-                            values.push(x.rotation[(r, c)]);
-                        }
-                    }
-                    values.extend(x.translation.iter().copied());
-                }
-                vec![Output::Matrix {
-                    name: "frames",
-                    rows: values.len() / 12,
-                    cols: 12,
-                    values,
-                }]
-            }
-            Algorithm::Minv => {
-                vec![matrix_output(
-                    "m_inv",
-                    mass_matrix_inverse(model, &mut ws, &q).map_err(fail)?,
-                )]
-            }
-            Algorithm::Complete => {
-                let mut q_out = q.clone();
-                let residual = completion_step(model, &mut ws, &mut q_out).map_err(fail)?;
-                vec![
-                    Output::Vector {
-                        name: "q_out",
-                        values: q_out,
-                    },
-                    Output::Return(residual),
-                ]
-            }
-            Algorithm::Embedding => {
-                let x = embedding_map_in(model, &mut ws, &q).map_err(fail)?;
-                vec![
-                    matrix_output("x", x),
-                    Output::Return(constraint_condition(&ws)),
-                ]
-            }
-            Algorithm::CrbaIndependent => {
-                let m = reduced_mass_matrix_in(model, &mut ws, &q).map_err(fail)?;
-                vec![
-                    matrix_output("m", m),
-                    Output::Return(constraint_condition(&ws)),
-                ]
-            }
-        })
+        let inputs: Vec<Vec<Sym>> = (0u8..)
+            .zip(spec.inputs)
+            .map(|(arg, i)| (0..i.len.len(&dims)).map(|k| input(arg, k)).collect())
+            .collect();
+        (spec.trace)(model, &mut ws, &inputs)
     });
-    let outputs = outputs?;
-    let (args, doc): (Vec<Arg>, &str) = match algo {
-        Algorithm::Aba => (
-            vec![Arg { name: "q", len: nq }, Arg { name: "v", len: nv }, Arg { name: "tau", len: nv }],
-            if model.has_constraints() {
-                "Forward dynamics with constraint embedding: `qdd` over all spanning coordinates (the O(N) articulated-body algorithm with each aggregate link inline, unrolled); only `Xᵀ τ` acts. Returns the singularity measure, the largest condition number cond₁(Y1) over the loops: where it is not below `SINGULARITY_THRESHOLD` (`!(cond < SINGULARITY_THRESHOLD)`, which also catches NaN) the configuration is at or too near a singular one (a toggle) and `qdd` is meaningless — the interpreted solver refuses there."
-            } else {
-                "Forward dynamics: `qdd = M(q)⁻¹ (τ − C(q, v) − g(q))` (the O(N) articulated-body algorithm, unrolled)."
-            },
-        ),
-        Algorithm::Rnea => (
-            vec![Arg { name: "q", len: nq }, Arg { name: "v", len: nv }, Arg { name: "qdd", len: nv }],
-            "Inverse dynamics: `τ = M(q) qdd + C(q, v) + g(q)` (recursive Newton–Euler, unrolled).",
-        ),
-        Algorithm::Crba => (vec![Arg { name: "q", len: nq }], "The joint-space mass matrix `M(q)` (composite-rigid-body algorithm, unrolled)."),
-        Algorithm::Kinematics => (vec![Arg { name: "q", len: nq }], "Forward kinematics: the world pose of every link on a moving body, in the order of `FRAMES`, as `[r00, r01, r02, r10, r11, r12, r20, r21, r22, x, y, z]` (the rotation row-major: its columns are the link's axes in world coordinates; then the link origin in the world)."),
-        Algorithm::Minv => (vec![Arg { name: "q", len: nq }], "The inverse mass matrix `M(q)⁻¹` by the operator factorization of Eq. 6, unrolled."),
-        Algorithm::Complete => (
-            vec![Arg { name: "q", len: nq }],
-            "One Newton step of the position completion: `q_out` is `q` with its dependent coordinates moved towards the solution of the loop, gear and mimic equations (loop coordinates by at most 0.5 rad or m). Returns the largest residual at `q`, relative to the magnitudes in each equation (`complete` iterates this).",
-        ),
-        Algorithm::Embedding => (vec![Arg { name: "q", len: nq }], "The embedding map `X` (rows: all velocity coordinates, columns: independent ones): `v = X v_independent`. Returns the singularity measure cond₁(Y1) (as `aba` does)."),
-        Algorithm::CrbaIndependent => (vec![Arg { name: "q", len: nq }], "The mass matrix over the independent coordinates, `Xᵀ M(q) X` (the spanning tree's `M` is `crba`). Returns the singularity measure cond₁(Y1) (as `aba` does)."),
+    let traced = traced.map_err(fail)?;
+    // The descriptor and the traced algorithm must agree on what the function returns and writes.
+    let mismatch = |what: String| {
+        gen_error(
+            loaded,
+            format!("tracing {}: {what} (the algorithm's descriptor and its implementation disagree; a bug)", algo.name()),
+        )
     };
-    if algo == Algorithm::Complete {
-        let mut step = function("complete_step", doc, &args, &outputs, &tape, helpers)
-            .map_err(|e| gen_error(loaded, e.0))?;
-        let wrapper = complete_loop();
-        step.code = match step.code {
+    if traced.returned.is_some() != spec.returns_value(constrained)
+        || traced.outputs.len() != spec.outputs.len()
+    {
+        return Err(mismatch("the outputs are not those described".into()));
+    }
+    let mut outputs = Vec::with_capacity(spec.outputs.len() + 1);
+    for (o, values) in spec.outputs.iter().zip(traced.outputs) {
+        let (rows, cols) = match o.shape {
+            Shape::Vector(n) => (n.len(&dims), 1),
+            Shape::Matrix(rows, cols) => (rows.len(&dims), cols.len(&dims)),
+        };
+        if values.len() != rows * cols {
+            return Err(mismatch(format!(
+                "`{}` has {} values, described {rows}×{cols}",
+                o.name,
+                values.len()
+            )));
+        }
+        outputs.push(match o.shape {
+            Shape::Vector(_) => Output::Vector {
+                name: o.name,
+                values,
+            },
+            Shape::Matrix(..) => Output::Matrix {
+                name: o.name,
+                rows,
+                cols,
+                values,
+            },
+        });
+    }
+    outputs.extend(traced.returned.map(Output::Return));
+    let args: Vec<Arg> = spec
+        .inputs
+        .iter()
+        .map(|i| Arg {
+            name: i.name,
+            len: i.len.len(&dims),
+        })
+        .collect();
+    let doc = spec.doc(constrained);
+    let mut emitted = function(spec.traced_name, doc, &args, &outputs, &tape, helpers)
+        .map_err(|e| gen_error(loaded, e.0))?;
+    if let Some(wrapper) = spec.wrapper {
+        let wrapper = wrapper();
+        emitted.code = match emitted.code {
             Code::Tokens(t) => Code::Tokens(quote! { #t #wrapper }),
             Code::Text(text) => {
                 let formatted =
@@ -576,9 +465,8 @@ fn generate_algorithm(
                 Code::Text(text + module_body(&formatted))
             }
         };
-        return Ok(step);
     }
-    function(algo.name(), doc, &args, &outputs, &tape, helpers).map_err(|e| gen_error(loaded, e.0))
+    Ok(emitted)
 }
 
 /// Formats generated items as a source file with `prettyplease`.
@@ -621,4 +509,48 @@ pub fn generate_file(
 /// Builds the f64 model the way generated code sees it (for comparisons in tests).
 pub fn generation_model(loaded: &Loaded, options: &ModelOptions) -> Result<Model<f64>, LoadError> {
     Ok(snapped(&build_model::<f64>(&loaded.robot, options)?))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn requested_functions_are_merged_alike_for_the_macro_and_the_command_line() {
+        // `only(aba, aba, crba)` with `minv`: exactly those, each once, in the order given.
+        let only = GenerateOptions::default().with_requested(
+            Some(vec![Algorithm::Aba, Algorithm::Aba, Algorithm::Crba]),
+            &[Algorithm::Minv],
+        );
+        assert_eq!(
+            only.algorithms,
+            [Algorithm::Aba, Algorithm::Crba, Algorithm::Minv]
+        );
+        assert!(only.exact);
+        assert_eq!(only.generated_algorithms(true), only.algorithms);
+        // Without `only`: the default functions, `minv` once, and for a model with constraints the
+        // functions it also gets.
+        let default =
+            GenerateOptions::default().with_requested(None, &[Algorithm::Minv, Algorithm::Minv]);
+        assert!(!default.exact);
+        let names =
+            |list: Vec<Algorithm>| list.into_iter().map(Algorithm::name).collect::<Vec<_>>();
+        assert_eq!(
+            names(default.generated_algorithms(false)),
+            ["kinematics", "aba", "rnea", "crba", "minv"]
+        );
+        assert_eq!(
+            names(default.generated_algorithms(true)),
+            [
+                "kinematics",
+                "aba",
+                "rnea",
+                "crba",
+                "minv",
+                "complete",
+                "embedding",
+                "crba_independent"
+            ]
+        );
+    }
 }

@@ -12,6 +12,7 @@
 //! println!("{} has {} degrees of freedom", model.name, model.nv());
 //! ```
 
+pub mod algorithm;
 mod assemble;
 pub mod bounded_read;
 mod emit;

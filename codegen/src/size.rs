@@ -21,7 +21,7 @@
 //! Calibrated on measured peak memory (BENCHMARKS.md, "Scale of generation"): within 11 % of 14
 //! measured compiles of generated chains of 50–1000 bodies.
 
-use crate::generate::Algorithm;
+use crate::algorithm::{Algorithm, Growth, SizeCounts};
 use crate::{LoadError, Loaded, Location};
 use embedyn_runtime::Model;
 
@@ -62,19 +62,13 @@ pub fn predicted(model: &Model<f64>, algorithm: Algorithm) -> FunctionSize {
         depth[j] = joint.nv() + joint.parent.map_or(0, |p| depth[p]);
         branch_pairs += joint.nv() * depth[j];
     }
-    let crba = 24.0 * branch_pairs as f64 + 30.0 * nv;
-    let operations = match algorithm {
-        Algorithm::Aba => 440.0 * nv,
-        Algorithm::Rnea => 215.0 * nv,
-        Algorithm::Kinematics => {
-            40.0 * (nv + model.bodies.iter().map(|b| b.links.len()).sum::<usize>() as f64)
-        }
-        Algorithm::Crba => crba,
-        Algorithm::Minv => 38.0 * nv * nv + 170.0 * nv,
-        Algorithm::Complete => 100.0 * nv,
-        Algorithm::Embedding => 50.0 * nv + 2.0 * nv * ni,
-        Algorithm::CrbaIndependent => 1.25 * crba + 2.0 * nv * ni,
+    let counts = SizeCounts {
+        nv,
+        ni,
+        links: model.bodies.iter().map(|b| b.links.len()).sum::<usize>() as f64,
+        crba: 24.0 * branch_pairs as f64 + 30.0 * nv,
     };
+    let operations = (algorithm.spec().predicted_operations)(&counts);
     FunctionSize {
         algorithm,
         operations: operations.ceil() as usize,
@@ -168,12 +162,7 @@ fn refusal(functions: &[FunctionSize], scalars: &[&str], memory: f64, limit: u64
     let quadratic: Vec<&str> = sorted
         .iter()
         .map(|f| f.algorithm)
-        .filter(|a| {
-            matches!(
-                a,
-                Algorithm::Crba | Algorithm::Minv | Algorithm::CrbaIndependent
-            )
-        })
+        .filter(|a| a.spec().growth == Growth::Quadratic)
         .map(Algorithm::name)
         .collect();
     let linear: Vec<&str> = sorted

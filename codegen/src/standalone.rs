@@ -125,47 +125,9 @@ pub fn crate_files(
         file = code_span(&file_name),
         ver = GENERATOR_VERSION
     );
-    let mut listed = options.algorithms.clone();
-    if model.has_constraints() && !options.exact {
-        listed.extend([
-            crate::Algorithm::Complete,
-            crate::Algorithm::Embedding,
-            crate::Algorithm::CrbaIndependent,
-        ]);
-    }
     let constrained = model.has_constraints();
-    for a in &listed {
-        let (sig, note) = match a {
-            crate::Algorithm::Aba if constrained => (
-                "aba(q: &[S; NQ], v: &[S; NV], tau: &[S; NV], qdd: &mut [S; NV]) -> S",
-                " — returns the constraint pivot ratio: near 0 at a singular configuration, where `qdd` \
-                 is meaningless (below about 1e-11 the interpreted solver refuses)",
-            ),
-            crate::Algorithm::Aba => (
-                "aba(q: &[S; NQ], v: &[S; NV], tau: &[S; NV], qdd: &mut [S; NV])",
-                "",
-            ),
-            crate::Algorithm::Rnea => (
-                "rnea(q: &[S; NQ], v: &[S; NV], qdd: &[S; NV], tau: &mut [S; NV])",
-                "",
-            ),
-            crate::Algorithm::Crba => ("crba(q: &[S; NQ], m: &mut [[S; NV]; NV])", ""),
-            crate::Algorithm::Kinematics => (
-                "kinematics(q: &[S; NQ], frames: &mut [[S; 12]; FRAMES.len()])",
-                " — the world pose of each link in `FRAMES`: rotation row-major, then the origin",
-            ),
-            crate::Algorithm::Minv => ("minv(q: &[S; NQ], m_inv: &mut [[S; NV]; NV])", ""),
-            crate::Algorithm::Complete => ("complete(q: &[S; NQ], q_out: &mut [S; NQ])", ""),
-            crate::Algorithm::Embedding => (
-                "embedding(q: &[S; NQ], x: &mut [[S; NI]; NV]) -> S",
-                " — `v = X v_independent`; returns the pivot ratio too",
-            ),
-            crate::Algorithm::CrbaIndependent => (
-                "crba_independent(q: &[S; NQ], m: &mut [[S; NI]; NI])",
-                " — the mass matrix over the independent coordinates, `Xᵀ M X`",
-            ),
-        };
-        readme.push_str(&format!("- `{sig}`{note}\n"));
+    for a in options.generated_algorithms(constrained) {
+        readme.push_str(&a.spec().readme_line(constrained));
     }
     readme.push_str(&format!(
         "\nnq = {}, nv = {}. Coordinates (as embedyn's docs/conventions.md says: revolute angles in rad, prismatic in m; a floating base is\n\

@@ -11,7 +11,8 @@ use syn::{Ident, LitStr, Path, Token};
 struct Args {
     path: LitStr,
     floating: bool,
-    minv: bool,
+    /// Functions generated on request, each asked for by its name as an option (`minv`).
+    requested: Vec<embedyn_codegen::Algorithm>,
     f64: bool,
     f32: bool,
     krate: Option<Path>,
@@ -21,13 +22,18 @@ struct Args {
     max_compile_memory: u64,
 }
 
+/// The functions generated only when asked for, each an option of its own (`minv`).
+fn on_request() -> impl Iterator<Item = embedyn_codegen::Algorithm> {
+    embedyn_codegen::Algorithm::generated(embedyn_codegen::algorithm::WhenGenerated::OnRequest)
+}
+
 impl Parse for Args {
     fn parse(input: ParseStream) -> syn::Result<Self> {
         let path: LitStr = input.parse()?;
         let mut args = Args {
             path,
             floating: false,
-            minv: false,
+            requested: Vec::new(),
             f64: true,
             f32: true,
             krate: None,
@@ -48,7 +54,9 @@ impl Parse for Args {
             let key: Ident = input.parse()?;
             match key.to_string().as_str() {
                 "floating" => args.floating = true,
-                "minv" => args.minv = true,
+                name if on_request().any(|a| a.name() == name) => args
+                    .requested
+                    .extend(on_request().filter(|a| a.name() == name)),
                 "f64_only" => args.f32 = false,
                 "f32_only" => args.f64 = false,
                 "max_compile_memory" => {
@@ -59,21 +67,24 @@ impl Parse for Args {
                     let content;
                     syn::parenthesized!(content in input);
                     let names = content.parse_terminated(Ident::parse, Token![,])?;
-                    let mut list = Vec::new();
-                    for name in names {
-                        let algo = embedyn_codegen::Algorithm::from_name(&name.to_string())
-                            .map_err(|e| syn::Error::new(name.span(), e))?;
-                        if !list.contains(&algo) {
-                            list.push(algo);
-                        }
-                    }
+                    let list = names
+                        .iter()
+                        .map(|name| {
+                            embedyn_codegen::Algorithm::from_name(&name.to_string())
+                                .map_err(|e| syn::Error::new(name.span(), e))
+                        })
+                        .collect::<syn::Result<Vec<_>>>()?;
                     args.only = Some(list);
                 }
                 other => {
+                    let requested: Vec<&str> = on_request().map(|a| a.name()).collect();
                     return Err(syn::Error::new(
                         key.span(),
-                        format!("unknown option `{other}` (expected floating, minv, f64_only, f32_only, only(…), max_compile_memory = MB or crate = path)"),
-                    ))
+                        format!(
+                            "unknown option `{other}` (expected floating, {}, f64_only, f32_only, only(…), max_compile_memory = MB or crate = path)",
+                            requested.join(", ")
+                        ),
+                    ));
                 }
             }
         }
@@ -119,25 +130,18 @@ fn expand(args: &Args) -> Result<proc_macro2::TokenStream, String> {
         .krate
         .clone()
         .map_or_else(|| quote!(::embedyn), |p| quote!(#p));
-    let mut algorithms = args
-        .only
-        .clone()
-        .unwrap_or_else(|| embedyn_codegen::GenerateOptions::default().algorithms);
-    if args.minv && !algorithms.contains(&embedyn_codegen::Algorithm::Minv) {
-        algorithms.push(embedyn_codegen::Algorithm::Minv);
-    }
     let options = embedyn_codegen::GenerateOptions {
         model: embedyn_codegen::ModelOptions {
             floating: args.floating,
             ..Default::default()
         },
-        algorithms,
         f64: args.f64,
         f32: args.f32,
         helpers: quote!(#krate::codegen_support),
-        exact: args.only.is_some(),
         max_compile_memory_mb: Some(args.max_compile_memory),
-    };
+        ..Default::default()
+    }
+    .with_requested(args.only.clone(), &args.requested);
     let items =
         embedyn_codegen::generate_tokens(&loaded, &options).map_err(|e| format!("embedyn: {e}"))?;
     let abs = full

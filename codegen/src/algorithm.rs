@@ -1,0 +1,837 @@
+//! What an algorithm is, in one place: its name, arguments, outputs, documentation, when it is generated,
+//! what it returns, how it is traced and whether the command line offers it. Everything that lists or
+//! describes algorithms — the generator, the `robot!` macro's options, build.rs, the standalone crate's
+//! README, the `embedyn` command line (`--algo`, `--only`, the cached runner, `bench`) and the docs table
+//! (checked in a test) — reads [`ALGORITHMS`]. Adding an algorithm is its runtime implementation and one
+//! entry here.
+
+use crate::trace::Sym;
+use embedyn_runtime::constraints::{completion_step, constraint_condition};
+use embedyn_runtime::{
+    aba, crba, embedding_map_in, forward_kinematics, link_poses, mass_matrix_inverse,
+    reduced_mass_matrix_in, rnea, DynamicsError, Model, Workspace,
+};
+
+/// The algorithms code can be generated for; [`Algorithm::spec`] describes each.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Algorithm {
+    /// `kinematics`: the world pose of every link on a moving body.
+    Kinematics,
+    /// `aba`: forward dynamics.
+    Aba,
+    /// `rnea`: inverse dynamics.
+    Rnea,
+    /// `crba`: the mass matrix.
+    Crba,
+    /// `minv`: the inverse mass matrix.
+    Minv,
+    /// `complete`: position completion (models with constraints).
+    Complete,
+    /// `embedding`: the embedding map `X` (models with constraints).
+    Embedding,
+    /// `crba_independent`: `Xᵀ M X` (models with constraints).
+    CrbaIndependent,
+}
+
+/// A length of an argument or an output, in the model's terms.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Dim {
+    /// `NQ`, the number of position coordinates.
+    Nq,
+    /// `NV`, the number of velocity coordinates.
+    Nv,
+    /// `NI`, the number of independent velocity coordinates.
+    Ni,
+    /// `FRAMES.len()`, the links on moving bodies.
+    Frames,
+    /// A fixed length.
+    Fixed(usize),
+}
+
+/// The sizes of one model that [`Dim`]s resolve to.
+#[derive(Clone, Copy, Debug)]
+pub struct Dims {
+    pub nq: usize,
+    pub nv: usize,
+    pub ni: usize,
+    pub frames: usize,
+}
+
+impl Dims {
+    /// The sizes of `model`.
+    pub fn of<T: embedyn_runtime::Real>(model: &Model<T>) -> Dims {
+        Dims {
+            nq: model.nq(),
+            nv: model.nv(),
+            ni: model.independent_nv(),
+            frames: model.bodies.iter().map(|b| b.links.len()).sum(),
+        }
+    }
+}
+
+impl Dim {
+    /// The length on a model of these sizes.
+    pub fn len(self, dims: &Dims) -> usize {
+        match self {
+            Dim::Nq => dims.nq,
+            Dim::Nv => dims.nv,
+            Dim::Ni => dims.ni,
+            Dim::Frames => dims.frames,
+            Dim::Fixed(n) => n,
+        }
+    }
+
+    /// The length as generated code spells it (`NV`, `FRAMES.len()`, `12`).
+    pub fn code(self) -> String {
+        match self {
+            Dim::Nq => "NQ".into(),
+            Dim::Nv => "NV".into(),
+            Dim::Ni => "NI".into(),
+            Dim::Frames => "FRAMES.len()".into(),
+            Dim::Fixed(n) => n.to_string(),
+        }
+    }
+}
+
+/// One argument of a generated function: `name: &[S; len]`.
+#[derive(Clone, Copy, Debug)]
+pub struct InputSpec {
+    pub name: &'static str,
+    pub len: Dim,
+    /// Physical units of the entries.
+    pub unit: &'static str,
+}
+
+/// The shape of an output.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Shape {
+    /// `&mut [S; n]`.
+    Vector(Dim),
+    /// `&mut [[S; cols]; rows]`, written row-major.
+    Matrix(Dim, Dim),
+}
+
+/// One output argument of a generated function.
+#[derive(Clone, Copy, Debug)]
+pub struct OutputSpec {
+    pub name: &'static str,
+    pub shape: Shape,
+    /// Physical units of the entries.
+    pub unit: &'static str,
+}
+
+/// The scalar a generated function returns (`-> S`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Returns {
+    /// Nothing.
+    Nothing,
+    /// For a model with constraints, the singularity measure cond₁(Y1), to be compared with the scalar
+    /// module's `SINGULARITY_THRESHOLD`; nothing for a tree.
+    SingularityMeasure,
+    /// The largest relative residual of the constraint equations.
+    Residual,
+}
+
+/// When a function is generated without `only(…)`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum WhenGenerated {
+    /// Always.
+    ByDefault,
+    /// For a model with loops, couplings or mimic joints.
+    WithConstraints,
+    /// When asked for by name (its own option of the macro and of `embedyn generate`, `--minv`).
+    OnRequest,
+}
+
+/// How fast a function's code grows with the model (for the size guard's advice).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Growth {
+    Linear,
+    /// With the square of the number of degrees of freedom.
+    Quadratic,
+}
+
+/// The model's numbers the size guard predicts a function's operations from (see `size.rs`).
+#[derive(Clone, Copy, Debug)]
+pub struct SizeCounts {
+    pub nv: f64,
+    pub ni: f64,
+    /// Links on moving bodies.
+    pub links: f64,
+    /// Operations of `crba`: 24 per pair of degrees of freedom on one branch, 30 per degree of freedom.
+    pub crba: f64,
+}
+
+/// What tracing an algorithm gives: each output's values (row-major) in the order of
+/// [`AlgorithmSpec::outputs`], and the returned scalar.
+pub struct Traced {
+    pub outputs: Vec<Vec<Sym>>,
+    pub returned: Option<Sym>,
+}
+
+/// The `embedyn` command line's view of an algorithm.
+#[derive(Clone, Copy, Debug)]
+pub struct CliSpec {
+    /// The help of the `--algo` value.
+    pub help: &'static str,
+    /// The function that computes what the command reports for a model with constraints, when that is
+    /// not this one (`crba` reports `Xᵀ M X`, `crba_independent`).
+    pub with_constraints: Option<Algorithm>,
+}
+
+/// Runs an algorithm on the traced scalar (inputs in the order of [`AlgorithmSpec::inputs`]).
+pub type TraceFn =
+    fn(&Model<Sym>, &mut Workspace<Sym>, &[Vec<Sym>]) -> Result<Traced, DynamicsError>;
+
+/// Runs the interpreted solver's algorithm in f64 (inputs in the order of [`AlgorithmSpec::inputs`]).
+pub type InterpretedFn =
+    fn(&Model<f64>, &mut Workspace<f64>, &[&[f64]]) -> Result<(), DynamicsError>;
+
+/// Everything about one algorithm.
+pub struct AlgorithmSpec {
+    pub algorithm: Algorithm,
+    /// The generated function's name, also the name in `only(…)`, `--only` and `--algo`.
+    pub name: &'static str,
+    /// The name of the traced function when it differs (`complete` iterates `complete_step`).
+    pub traced_name: &'static str,
+    /// The items written after the traced function, which call it (`complete`'s Newton iteration).
+    pub wrapper: Option<fn() -> proc_macro2::TokenStream>,
+    /// One line: what it computes (docs/generated-code.md's table).
+    pub summary: &'static str,
+    /// The generated function's documentation.
+    pub doc: &'static str,
+    /// The documentation for a model with constraints, when it differs.
+    pub doc_with_constraints: Option<&'static str>,
+    pub inputs: &'static [InputSpec],
+    pub outputs: &'static [OutputSpec],
+    pub returns: Returns,
+    /// Exists only for a model with loops, couplings or mimic joints.
+    pub needs_constraints: bool,
+    pub generated: WhenGenerated,
+    /// The standalone crate's README: the note after the signature, for a tree and, when it differs, for
+    /// a model with constraints.
+    pub readme_note: &'static str,
+    pub readme_note_with_constraints: Option<&'static str>,
+    /// The README's signature has never shown the returned scalar of this function; kept so that this
+    /// descriptor changes no generated byte (a later change may show it).
+    pub readme_hides_return: bool,
+    /// Whether `embedyn eval --algo` (and `bench`) offers it.
+    pub cli: Option<CliSpec>,
+    pub growth: Growth,
+    /// The size guard's prediction of the traced operations (an upper bound; see `size.rs`).
+    pub predicted_operations: fn(&SizeCounts) -> f64,
+    /// Runs the algorithm on the traced scalar (inputs in the order of `inputs`).
+    pub trace: TraceFn,
+    /// Runs the interpreted solver's algorithm in f64 (inputs in the order of `inputs`), for timing.
+    pub interpreted: InterpretedFn,
+}
+
+const Q: InputSpec = InputSpec {
+    name: "q",
+    len: Dim::Nq,
+    unit: "rad or m; a floating joint's [x y z qx qy qz qw]",
+};
+const V: InputSpec = InputSpec {
+    name: "v",
+    len: Dim::Nv,
+    unit: "rad/s or m/s",
+};
+const TAU: InputSpec = InputSpec {
+    name: "tau",
+    len: Dim::Nv,
+    unit: "N·m or N",
+};
+const QDD: InputSpec = InputSpec {
+    name: "qdd",
+    len: Dim::Nv,
+    unit: "rad/s² or m/s²",
+};
+const MASS_UNIT: &str = "kg·m², kg·m or kg";
+
+/// Every algorithm, in the order generated code lists them (the order of [`Algorithm`]'s variants).
+pub const ALGORITHMS: &[AlgorithmSpec] = &[
+    AlgorithmSpec {
+        algorithm: Algorithm::Kinematics,
+        name: "kinematics",
+        traced_name: "kinematics",
+        wrapper: None,
+        summary: "world pose of every link in `FRAMES`: `[R row-major, origin]`",
+        doc: "Forward kinematics: the world pose of every link on a moving body, in the order of `FRAMES`, as `[r00, r01, r02, r10, r11, r12, r20, r21, r22, x, y, z]` (the rotation row-major: its columns are the link's axes in world coordinates; then the link origin in the world).",
+        doc_with_constraints: None,
+        inputs: &[Q],
+        outputs: &[OutputSpec {
+            name: "frames",
+            shape: Shape::Matrix(Dim::Frames, Dim::Fixed(12)),
+            unit: "1 (rotation), m (origin)",
+        }],
+        returns: Returns::Nothing,
+        needs_constraints: false,
+        generated: WhenGenerated::ByDefault,
+        readme_note: " — the world pose of each link in `FRAMES`: rotation row-major, then the origin",
+        readme_note_with_constraints: None,
+        readme_hides_return: false,
+        cli: None,
+        growth: Growth::Linear,
+        predicted_operations: |c| 40.0 * (c.nv + c.links),
+        trace: |model, ws, inputs| {
+            let zeros = vec![Sym::Const(0.0); model.nv()];
+            forward_kinematics(model, ws, &inputs[0], &zeros)?;
+            let mut values = Vec::new();
+            for (_, x) in link_poses(model, ws) {
+                for r in 0..3 {
+                    for c in 0..3 {
+                        values.push(x.rotation[(r, c)]);
+                    }
+                }
+                values.extend(x.translation.iter().copied());
+            }
+            Ok(Traced {
+                outputs: vec![values],
+                returned: None,
+            })
+        },
+        interpreted: |model, ws, inputs| {
+            forward_kinematics(model, ws, inputs[0], &vec![0.0; model.nv()])
+        },
+    },
+    AlgorithmSpec {
+        algorithm: Algorithm::Aba,
+        name: "aba",
+        traced_name: "aba",
+        wrapper: None,
+        summary: "forward dynamics (O(N) articulated-body algorithm)",
+        doc: "Forward dynamics: `qdd = M(q)⁻¹ (τ − C(q, v) − g(q))` (the O(N) articulated-body algorithm, unrolled).",
+        doc_with_constraints: Some("Forward dynamics with constraint embedding: `qdd` over all spanning coordinates (the O(N) articulated-body algorithm with each aggregate link inline, unrolled); only `Xᵀ τ` acts. Returns the singularity measure, the largest condition number cond₁(Y1) over the loops: where it is not below `SINGULARITY_THRESHOLD` (`!(cond < SINGULARITY_THRESHOLD)`, which also catches NaN) the configuration is at or too near a singular one (a toggle) and `qdd` is meaningless — the interpreted solver refuses there."),
+        inputs: &[Q, V, TAU],
+        outputs: &[OutputSpec {
+            name: "qdd",
+            shape: Shape::Vector(Dim::Nv),
+            unit: "rad/s² or m/s²",
+        }],
+        returns: Returns::SingularityMeasure,
+        needs_constraints: false,
+        generated: WhenGenerated::ByDefault,
+        readme_note: "",
+        readme_note_with_constraints: Some(" — returns the constraint pivot ratio: near 0 at a singular configuration, where `qdd` is meaningless (below about 1e-11 the interpreted solver refuses)"),
+        readme_hides_return: false,
+        cli: Some(CliSpec {
+            help: "Forward dynamics (articulated-body algorithm)",
+            with_constraints: None,
+        }),
+        growth: Growth::Linear,
+        predicted_operations: |c| 440.0 * c.nv,
+        trace: |model, ws, inputs| {
+            let qdd = aba(model, ws, &inputs[0], &inputs[1], &inputs[2])?.to_vec();
+            Ok(Traced {
+                outputs: vec![qdd],
+                returned: model.has_constraints().then(|| constraint_condition(ws)),
+            })
+        },
+        interpreted: |model, ws, inputs| {
+            aba(model, ws, inputs[0], inputs[1], inputs[2]).map(|_| ())
+        },
+    },
+    AlgorithmSpec {
+        algorithm: Algorithm::Rnea,
+        name: "rnea",
+        traced_name: "rnea",
+        wrapper: None,
+        summary: "inverse dynamics (recursive Newton–Euler)",
+        doc: "Inverse dynamics: `τ = M(q) qdd + C(q, v) + g(q)` (recursive Newton–Euler, unrolled).",
+        doc_with_constraints: None,
+        inputs: &[Q, V, QDD],
+        outputs: &[OutputSpec {
+            name: "tau",
+            shape: Shape::Vector(Dim::Nv),
+            unit: "N·m or N",
+        }],
+        returns: Returns::Nothing,
+        needs_constraints: false,
+        generated: WhenGenerated::ByDefault,
+        readme_note: "",
+        readme_note_with_constraints: None,
+        readme_hides_return: false,
+        cli: Some(CliSpec {
+            help: "Inverse dynamics (recursive Newton–Euler)",
+            with_constraints: None,
+        }),
+        growth: Growth::Linear,
+        predicted_operations: |c| 215.0 * c.nv,
+        trace: |model, ws, inputs| {
+            let tau = rnea(model, ws, &inputs[0], &inputs[1], &inputs[2])?.to_vec();
+            Ok(Traced {
+                outputs: vec![tau],
+                returned: None,
+            })
+        },
+        interpreted: |model, ws, inputs| {
+            rnea(model, ws, inputs[0], inputs[1], inputs[2]).map(|_| ())
+        },
+    },
+    AlgorithmSpec {
+        algorithm: Algorithm::Crba,
+        name: "crba",
+        traced_name: "crba",
+        wrapper: None,
+        summary: "the spanning tree's mass matrix",
+        doc: "The joint-space mass matrix `M(q)` (composite-rigid-body algorithm, unrolled).",
+        doc_with_constraints: None,
+        inputs: &[Q],
+        outputs: &[OutputSpec {
+            name: "m",
+            shape: Shape::Matrix(Dim::Nv, Dim::Nv),
+            unit: MASS_UNIT,
+        }],
+        returns: Returns::Nothing,
+        needs_constraints: false,
+        generated: WhenGenerated::ByDefault,
+        readme_note: "",
+        readme_note_with_constraints: None,
+        readme_hides_return: false,
+        cli: Some(CliSpec {
+            help: "Mass matrix (composite-rigid-body algorithm)",
+            with_constraints: Some(Algorithm::CrbaIndependent),
+        }),
+        growth: Growth::Quadratic,
+        predicted_operations: |c| c.crba,
+        trace: |model, ws, inputs| {
+            let m = crba(model, ws, &inputs[0])?;
+            Ok(Traced {
+                outputs: vec![row_major(m)],
+                returned: None,
+            })
+        },
+        interpreted: |model, ws, inputs| crba(model, ws, inputs[0]).map(|_| ()),
+    },
+    AlgorithmSpec {
+        algorithm: Algorithm::Minv,
+        name: "minv",
+        traced_name: "minv",
+        wrapper: None,
+        summary: "`M⁻¹` by the operator factorization (O(N²) output; only when asked for)",
+        doc: "The inverse mass matrix `M(q)⁻¹` by the operator factorization of Eq. 6, unrolled.",
+        doc_with_constraints: None,
+        inputs: &[Q],
+        outputs: &[OutputSpec {
+            name: "m_inv",
+            shape: Shape::Matrix(Dim::Nv, Dim::Nv),
+            unit: "1/kg, 1/(kg·m) or 1/(kg·m²)",
+        }],
+        returns: Returns::Nothing,
+        needs_constraints: false,
+        generated: WhenGenerated::OnRequest,
+        readme_note: "",
+        readme_note_with_constraints: None,
+        readme_hides_return: false,
+        cli: None,
+        growth: Growth::Quadratic,
+        predicted_operations: |c| 38.0 * c.nv * c.nv + 170.0 * c.nv,
+        trace: |model, ws, inputs| {
+            let m_inv = mass_matrix_inverse(model, ws, &inputs[0])?;
+            Ok(Traced {
+                outputs: vec![row_major(m_inv)],
+                returned: None,
+            })
+        },
+        interpreted: |model, ws, inputs| mass_matrix_inverse(model, ws, inputs[0]).map(|_| ()),
+    },
+    AlgorithmSpec {
+        algorithm: Algorithm::Complete,
+        name: "complete",
+        traced_name: "complete_step",
+        wrapper: Some(crate::generate::complete_loop),
+        summary: "dependent coordinates solved from the independent ones by Newton's method from `q`'s dependent entries, until the relative residual is below 64 ε or for at most `COMPLETION_MAX_STEPS` steps; returns the residual — check it",
+        doc: "One Newton step of the position completion: `q_out` is `q` with its dependent coordinates moved towards the solution of the loop, gear and mimic equations (loop coordinates by at most 0.5 rad or m). Returns the largest residual at `q`, relative to the magnitudes in each equation (`complete` iterates this).",
+        doc_with_constraints: None,
+        inputs: &[Q],
+        outputs: &[OutputSpec {
+            name: "q_out",
+            shape: Shape::Vector(Dim::Nq),
+            unit: "rad or m",
+        }],
+        returns: Returns::Residual,
+        needs_constraints: true,
+        generated: WhenGenerated::WithConstraints,
+        readme_note: "",
+        readme_note_with_constraints: None,
+        readme_hides_return: true,
+        cli: None,
+        growth: Growth::Linear,
+        predicted_operations: |c| 100.0 * c.nv,
+        trace: |model, ws, inputs| {
+            let mut q_out = inputs[0].clone();
+            let residual = completion_step(model, ws, &mut q_out)?;
+            Ok(Traced {
+                outputs: vec![q_out],
+                returned: Some(residual),
+            })
+        },
+        interpreted: |model, ws, inputs| {
+            completion_step(model, ws, &mut inputs[0].to_vec()).map(|_| ())
+        },
+    },
+    AlgorithmSpec {
+        algorithm: Algorithm::Embedding,
+        name: "embedding",
+        traced_name: "embedding",
+        wrapper: None,
+        summary: "the map `X` (`NV × NI`), `v = X v_independent`",
+        doc: "The embedding map `X` (rows: all velocity coordinates, columns: independent ones): `v = X v_independent`. Returns the singularity measure cond₁(Y1) (as `aba` does).",
+        doc_with_constraints: None,
+        inputs: &[Q],
+        outputs: &[OutputSpec {
+            name: "x",
+            shape: Shape::Matrix(Dim::Nv, Dim::Ni),
+            unit: "1 (velocity ratios)",
+        }],
+        returns: Returns::SingularityMeasure,
+        needs_constraints: true,
+        generated: WhenGenerated::WithConstraints,
+        readme_note: " — `v = X v_independent`; returns the pivot ratio too",
+        readme_note_with_constraints: None,
+        readme_hides_return: false,
+        cli: None,
+        growth: Growth::Linear,
+        predicted_operations: |c| 50.0 * c.nv + 2.0 * c.nv * c.ni,
+        trace: |model, ws, inputs| {
+            let x = row_major(embedding_map_in(model, ws, &inputs[0])?);
+            Ok(Traced {
+                outputs: vec![x],
+                returned: Some(constraint_condition(ws)),
+            })
+        },
+        interpreted: |model, ws, inputs| embedding_map_in(model, ws, inputs[0]).map(|_| ()),
+    },
+    AlgorithmSpec {
+        algorithm: Algorithm::CrbaIndependent,
+        name: "crba_independent",
+        traced_name: "crba_independent",
+        wrapper: None,
+        summary: "`Xᵀ M X` over the independent coordinates",
+        doc: "The mass matrix over the independent coordinates, `Xᵀ M(q) X` (the spanning tree's `M` is `crba`). Returns the singularity measure cond₁(Y1) (as `aba` does).",
+        doc_with_constraints: None,
+        inputs: &[Q],
+        outputs: &[OutputSpec {
+            name: "m",
+            shape: Shape::Matrix(Dim::Ni, Dim::Ni),
+            unit: MASS_UNIT,
+        }],
+        returns: Returns::SingularityMeasure,
+        needs_constraints: true,
+        generated: WhenGenerated::WithConstraints,
+        readme_note: " — the mass matrix over the independent coordinates, `Xᵀ M X`",
+        readme_note_with_constraints: None,
+        readme_hides_return: true,
+        cli: None,
+        growth: Growth::Quadratic,
+        predicted_operations: |c| 1.25 * c.crba + 2.0 * c.nv * c.ni,
+        trace: |model, ws, inputs| {
+            let m = row_major(reduced_mass_matrix_in(model, ws, &inputs[0])?);
+            Ok(Traced {
+                outputs: vec![m],
+                returned: Some(constraint_condition(ws)),
+            })
+        },
+        interpreted: |model, ws, inputs| {
+            reduced_mass_matrix_in(model, ws, inputs[0]).map(|_| ())
+        },
+    },
+];
+
+/// A matrix's entries row-major.
+fn row_major(m: &embedyn_runtime::nalgebra::DMatrix<Sym>) -> Vec<Sym> {
+    let (rows, cols) = m.shape();
+    (0..rows * cols).map(|k| m[(k / cols, k % cols)]).collect()
+}
+
+// The table lists every algorithm once, in the order of the enum's variants (`spec` indexes it).
+const _: () = {
+    let mut i = 0;
+    while i < ALGORITHMS.len() {
+        assert!(ALGORITHMS[i].algorithm as usize == i);
+        i += 1;
+    }
+    assert!(Algorithm::CrbaIndependent as usize + 1 == ALGORITHMS.len());
+};
+
+impl Algorithm {
+    /// Every algorithm, in the order generated code lists them.
+    pub const ALL: [Algorithm; ALGORITHMS.len()] = {
+        let mut all = [Algorithm::Kinematics; ALGORITHMS.len()];
+        let mut i = 0;
+        while i < ALGORITHMS.len() {
+            all[i] = ALGORITHMS[i].algorithm;
+            i += 1;
+        }
+        all
+    };
+
+    /// Its descriptor.
+    pub fn spec(self) -> &'static AlgorithmSpec {
+        &ALGORITHMS[self as usize]
+    }
+
+    /// The generated function's name (`"aba"`, `"crba_independent"`, …).
+    pub fn name(self) -> &'static str {
+        self.spec().name
+    }
+
+    /// Whether the algorithm exists only for models with loops, couplings or mimic joints.
+    pub fn needs_constraints(self) -> bool {
+        self.spec().needs_constraints
+    }
+
+    /// The algorithm with this generated function name (`"aba"`, `"crba_independent"`, …); the error
+    /// lists the names there are.
+    pub fn from_name(name: &str) -> Result<Algorithm, String> {
+        Algorithm::ALL
+            .into_iter()
+            .find(|a| a.name() == name)
+            .ok_or_else(|| {
+                let known: Vec<&str> = Algorithm::ALL.iter().map(|a| a.name()).collect();
+                format!("unknown function `{name}` (expected {})", known.join(", "))
+            })
+    }
+
+    /// The algorithms generated when `generated` says so, in table order.
+    pub fn generated(generated: WhenGenerated) -> impl Iterator<Item = Algorithm> {
+        ALGORITHMS
+            .iter()
+            .filter(move |s| s.generated == generated)
+            .map(|s| s.algorithm)
+    }
+
+    /// The algorithms `embedyn eval --algo` and `bench` offer, in table order.
+    pub fn offered_by_cli() -> impl Iterator<Item = Algorithm> {
+        ALGORITHMS
+            .iter()
+            .filter(|s| s.cli.is_some())
+            .map(|s| s.algorithm)
+    }
+
+    /// The function that computes what the command line reports for this algorithm on a model with
+    /// or without constraints (`crba` on a model with constraints: `crba_independent`).
+    pub fn reported_by(self, constrained: bool) -> Algorithm {
+        match self.spec().cli {
+            Some(CliSpec {
+                with_constraints: Some(other),
+                ..
+            }) if constrained => other,
+            _ => self,
+        }
+    }
+}
+
+impl AlgorithmSpec {
+    /// Whether the generated function returns a scalar on a model with or without constraints.
+    pub fn returns_value(&self, constrained: bool) -> bool {
+        match self.returns {
+            Returns::Nothing => false,
+            Returns::SingularityMeasure => constrained,
+            Returns::Residual => true,
+        }
+    }
+
+    /// The documentation of the generated function.
+    pub fn doc(&self, constrained: bool) -> &'static str {
+        match self.doc_with_constraints {
+            Some(doc) if constrained => doc,
+            _ => self.doc,
+        }
+    }
+
+    /// The signature as the standalone crate's README shows it, with its note:
+    /// `aba(q: &[S; NQ], v: &[S; NV], tau: &[S; NV], qdd: &mut [S; NV])`.
+    pub fn readme_line(&self, constrained: bool) -> String {
+        let inputs = self
+            .inputs
+            .iter()
+            .map(|i| format!("{}: &[S; {}]", i.name, i.len.code()));
+        let outputs = self.outputs.iter().map(|o| match o.shape {
+            Shape::Vector(n) => format!("{}: &mut [S; {}]", o.name, n.code()),
+            Shape::Matrix(rows, cols) => {
+                format!("{}: &mut [[S; {}]; {}]", o.name, cols.code(), rows.code())
+            }
+        });
+        let arguments: Vec<String> = inputs.chain(outputs).collect();
+        let returned = if self.returns_value(constrained) && !self.readme_hides_return {
+            " -> S"
+        } else {
+            ""
+        };
+        let note = match self.readme_note_with_constraints {
+            Some(note) if constrained => note,
+            _ => self.readme_note,
+        };
+        format!(
+            "- `{}({}){returned}`{note}\n",
+            self.name,
+            arguments.join(", ")
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A row of the function tables of docs/generated-code.md.
+    #[derive(Debug, PartialEq)]
+    struct Row {
+        signature: String,
+        what: String,
+        /// In the table of functions a model with constraints also has.
+        constrained: bool,
+    }
+
+    /// The rows of the markdown tables of docs/generated-code.md's "What a module holds".
+    fn documented_functions() -> Vec<Row> {
+        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../docs/generated-code.md");
+        let text =
+            std::fs::read_to_string(path).expect("docs/generated-code.md is in the repository");
+        let section = text
+            .split("## What a module holds")
+            .nth(1)
+            .and_then(|s| s.split("\n## ").next())
+            .expect("the section \"What a module holds\"");
+        let mut constrained = false;
+        let mut rows = Vec::new();
+        for line in section.lines() {
+            if line.contains("loops, couplings or mimic joints also has") {
+                constrained = true;
+            }
+            let Some(cell) = line.strip_prefix("| `") else {
+                continue;
+            };
+            if let Some((signature, what)) = cell.split_once("` | ") {
+                rows.push(Row {
+                    signature: signature.to_string(),
+                    what: what.trim_end_matches(" |").to_string(),
+                    constrained,
+                });
+            }
+        }
+        rows
+    }
+
+    /// `name(q, v, tau, qdd)` (and ` -> S` when it always returns a scalar), as the docs' table writes it.
+    fn documented_signature(name: &str, spec: &AlgorithmSpec) -> String {
+        let arguments: Vec<&str> = spec
+            .inputs
+            .iter()
+            .map(|i| i.name)
+            .chain(spec.outputs.iter().map(|o| o.name))
+            .collect();
+        // The docs show ` -> S` where the function always returns a scalar (`aba`'s measure for a model
+        // with constraints is in the prose).
+        let returned = spec.returns_value(spec.needs_constraints);
+        format!(
+            "{name}({}){}",
+            arguments.join(", "),
+            if returned { " -> S" } else { "" }
+        )
+    }
+
+    #[test]
+    fn the_docs_table_lists_every_algorithm_as_described() {
+        let rows = documented_functions();
+        let mut described = Vec::new();
+        for spec in ALGORITHMS {
+            let signature = documented_signature(spec.name, spec);
+            let row = rows.iter().find(|r| r.signature == signature);
+            assert_eq!(
+                row,
+                Some(&Row {
+                    signature,
+                    what: spec.summary.to_string(),
+                    constrained: spec.needs_constraints
+                }),
+                "docs/generated-code.md's row of `{}` differs from its descriptor",
+                spec.name
+            );
+            described.push(row);
+            if spec.traced_name != spec.name {
+                // The traced step of an iterated algorithm is a function of its own.
+                let step = documented_signature(spec.traced_name, spec);
+                let row = rows.iter().find(|r| r.signature == step);
+                assert!(
+                    row.is_some_and(|r| r.constrained == spec.needs_constraints),
+                    "docs/generated-code.md does not list `{step}` with `{}`",
+                    spec.name
+                );
+                described.push(row);
+            }
+        }
+        for row in &rows {
+            assert!(
+                described.contains(&Some(row)),
+                "docs/generated-code.md lists {row:?}, which no descriptor describes"
+            );
+        }
+    }
+
+    #[test]
+    fn the_descriptors_agree_with_each_other() {
+        for spec in ALGORITHMS {
+            // Generated with constraints only for a model that has them; an iterated algorithm names its
+            // step.
+            if spec.generated == WhenGenerated::WithConstraints {
+                assert!(spec.needs_constraints, "{}", spec.name);
+            }
+            assert_eq!(
+                spec.wrapper.is_some(),
+                spec.traced_name != spec.name,
+                "{}",
+                spec.name
+            );
+            // What the command line reports with constraints is computed by a function that exists then.
+            if let Some(CliSpec {
+                with_constraints: Some(other),
+                ..
+            }) = spec.cli
+            {
+                assert!(
+                    other.needs_constraints() && other.spec().cli.is_none(),
+                    "{}",
+                    spec.name
+                );
+            }
+            // A singularity measure is what a function for a model with constraints returns; a tree's
+            // functions return nothing but a residual.
+            if spec.needs_constraints {
+                assert!(spec.returns_value(true), "{}", spec.name);
+            }
+            assert_eq!(
+                spec.inputs.first().map(|i| i.len),
+                Some(Dim::Nq),
+                "{}",
+                spec.name
+            );
+        }
+    }
+
+    #[test]
+    fn every_algorithm_is_found_by_its_name() {
+        for a in Algorithm::ALL {
+            assert_eq!(Algorithm::from_name(a.name()), Ok(a));
+            assert_eq!(a.spec().algorithm, a);
+        }
+        let e = Algorithm::from_name("abba").unwrap_err();
+        assert_eq!(
+            e,
+            "unknown function `abba` (expected kinematics, aba, rnea, crba, minv, complete, embedding, crba_independent)"
+        );
+    }
+
+    #[test]
+    fn the_command_line_reports_crba_independent_for_crba_with_constraints() {
+        let offered: Vec<&str> = Algorithm::offered_by_cli().map(Algorithm::name).collect();
+        assert_eq!(offered, ["aba", "rnea", "crba"]);
+        assert_eq!(
+            Algorithm::Crba.reported_by(true),
+            Algorithm::CrbaIndependent
+        );
+        assert_eq!(Algorithm::Crba.reported_by(false), Algorithm::Crba);
+        assert_eq!(Algorithm::Aba.reported_by(true), Algorithm::Aba);
+    }
+}
