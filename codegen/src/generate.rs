@@ -8,6 +8,7 @@ use crate::emit::{function, Arg, Code, Emitted, Output};
 use crate::names::{code_span, shown};
 use crate::size;
 use crate::trace::{input, record, snap, Sym};
+use crate::value_names::Owners;
 use crate::{build_model, LoadError, Loaded, Location, ModelOptions};
 use embedyn_runtime::constraints::{
     completion_step, constraint_condition, singularity_threshold, COMPLETION_MAX_STEPS,
@@ -15,7 +16,7 @@ use embedyn_runtime::constraints::{
 use embedyn_runtime::nalgebra::DMatrix;
 use embedyn_runtime::{
     aba, crba, embedding_map_in, forward_kinematics, link_poses, mass_matrix_inverse,
-    reduced_mass_matrix_in, rnea, Model, Workspace,
+    reduced_mass_matrix_in, rnea, Model, Real, Workspace,
 };
 
 use proc_macro2::TokenStream;
@@ -137,7 +138,7 @@ impl Default for GenerateOptions {
 }
 
 /// Version of the generator, part of every cache key: generated code from another version is never reused.
-pub const GENERATOR_VERSION: &str = concat!(env!("CARGO_PKG_VERSION"), "-g3");
+pub const GENERATOR_VERSION: &str = concat!(env!("CARGO_PKG_VERSION"), "-g4");
 
 /// The model the generator traces: rotations and axes within 1e-14 of 0 or ±1 made exact, so that the
 /// zero structure of axis-aligned joints and right-angle frames folds away.
@@ -266,6 +267,8 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
         code_span(&loaded.robot.source.file_name().map_or_else(String::new, |f| f.to_string_lossy().into_owned())),
         shown.join(", ")
     );
+    let doc = format!(" {doc}");
+    let [nq, nv, ni, nj, nf] = [nq, nv, ni, nj, nf].map(proc_macro2::Literal::usize_unsuffixed);
     let header = quote! {
         #[doc = #doc]
         #[allow(dead_code)]
@@ -317,7 +320,7 @@ fn check_size_before_tracing(
 /// it also holds the scalar's singularity threshold.
 fn scalar_module(scalar: &str, constrained: bool, functions: &[TokenStream]) -> TokenStream {
     let module = format_ident!("{}", scalar);
-    let doc = format!("The generated dynamics in `{scalar}`.");
+    let doc = format!(" The generated dynamics in `{scalar}`.");
     let threshold = if constrained {
         let value = proc_macro2::Literal::f64_unsuffixed(match scalar {
             "f32" => singularity_threshold::<f32>(),
@@ -416,13 +419,15 @@ fn module_body(formatted: &str) -> &str {
 /// `complete`: `complete_step` iterated until the relative residual is below 64 ε (or NaN) or the step
 /// budget is spent. The iteration is over Newton steps, not over bodies: the step itself is unrolled.
 fn complete_loop() -> TokenStream {
-    let max_steps = COMPLETION_MAX_STEPS;
+    let max_steps = proc_macro2::Literal::usize_unsuffixed(COMPLETION_MAX_STEPS);
+    let must_use = crate::emit::MUST_USE;
     quote! {
         /// Position completion: `q_out` is `q` with its dependent coordinates solved from the independent
         /// ones by Newton's method from `q`'s dependent entries as the guess (it converges to the assembly
         /// branch nearest the guess), iterated until the largest residual, relative to the magnitudes in
         /// each equation, is below 64 ε or for at most `COMPLETION_MAX_STEPS` steps. Returns that residual:
         /// check it — a guess outside the mechanism's range does not converge (or gives NaN).
+        #[must_use = #must_use]
         pub fn complete(q: &[S; super::NQ], q_out: &mut [S; super::NQ]) -> S {
             let tolerance: S = 64.0 * S::EPSILON;
             *q_out = *q;
@@ -438,6 +443,17 @@ fn complete_loop() -> TokenStream {
         }
         /// Newton steps `complete` takes at most.
         pub const COMPLETION_MAX_STEPS: usize = #max_steps;
+    }
+}
+
+/// Components of a joint's coordinates in the names of generated code (a floating joint has 7).
+const COORDINATE: [&str; 7] = ["0", "1", "2", "3", "4", "5", "6"];
+
+/// The name of an algorithm's third argument (`aba(q, v, tau)`, `rnea(q, v, qdd)`).
+fn third_input(algo: Algorithm) -> &'static str {
+    match algo {
+        Algorithm::Rnea => "qdd",
+        _ => "tau",
     }
 }
 
@@ -459,7 +475,34 @@ fn generate_algorithm(
     helpers: &TokenStream,
 ) -> Result<Emitted, LoadError> {
     let (nq, nv) = (model.nq(), model.nv());
-    let inputs = |arg: u8, n: usize| -> Vec<Sym> { (0..n).map(|i| input(arg, i)).collect() };
+    // Inputs are named after their joints: `knee_q`, `knee_v`, `base_q_3` (a joint with several
+    // coordinates), so that generated code reads `let knee_q = q[2];`.
+    let inputs = |arg: u8, n: usize| -> Vec<Sym> {
+        let quantity = ["q", "v", third_input(algo)][arg as usize];
+        (0..n)
+            .map(|i| {
+                let value = input(arg, i);
+                let owner = model.joints.iter().find(|j| {
+                    let (start, len) = if arg == 0 {
+                        (j.q_index, j.nq())
+                    } else {
+                        (j.v_index, j.nv())
+                    };
+                    (start..start + len).contains(&i)
+                });
+                match owner {
+                    Some(j) if (if arg == 0 { j.nq() } else { j.nv() }) == 1 => {
+                        value.named(&j.name, quantity, "")
+                    }
+                    Some(j) => {
+                        let start = if arg == 0 { j.q_index } else { j.v_index };
+                        value.named(&j.name, quantity, COORDINATE[(i - start).min(6)])
+                    }
+                    None => value,
+                }
+            })
+            .collect()
+    };
     let fail = |e: embedyn_runtime::DynamicsError| {
         gen_error(loaded, format!("tracing {}: {e}", algo.name()))
     };
@@ -541,6 +584,10 @@ fn generate_algorithm(
         })
     });
     let outputs = outputs?;
+    let owners = Owners::new(
+        model.joints.iter().map(|j| j.name.as_str()),
+        model.bodies.iter().map(|b| b.name.as_str()),
+    );
     let (args, doc): (Vec<Arg>, &str) = match algo {
         Algorithm::Aba => (
             vec![Arg { name: "q", len: nq }, Arg { name: "v", len: nv }, Arg { name: "tau", len: nv }],
@@ -565,8 +612,16 @@ fn generate_algorithm(
         Algorithm::CrbaIndependent => (vec![Arg { name: "q", len: nq }], "The mass matrix over the independent coordinates, `Xᵀ M(q) X` (the spanning tree's `M` is `crba`). Returns the singularity measure cond₁(Y1) (as `aba` does)."),
     };
     if algo == Algorithm::Complete {
-        let mut step = function("complete_step", doc, &args, &outputs, &tape, helpers)
-            .map_err(|e| gen_error(loaded, e.0))?;
+        let mut step = function(
+            "complete_step",
+            doc,
+            &args,
+            &outputs,
+            &tape,
+            helpers,
+            &owners,
+        )
+        .map_err(|e| gen_error(loaded, e.0))?;
         let wrapper = complete_loop();
         step.code = match step.code {
             Code::Tokens(t) => Code::Tokens(quote! { #t #wrapper }),
@@ -578,7 +633,8 @@ fn generate_algorithm(
         };
         return Ok(step);
     }
-    function(algo.name(), doc, &args, &outputs, &tape, helpers).map_err(|e| gen_error(loaded, e.0))
+    function(algo.name(), doc, &args, &outputs, &tape, helpers, &owners)
+        .map_err(|e| gen_error(loaded, e.0))
 }
 
 /// Formats generated items as a source file with `prettyplease`.

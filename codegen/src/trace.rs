@@ -60,10 +60,23 @@ fn sym_key(s: Sym) -> (u8, u64) {
     }
 }
 
+/// The name an algorithm gave a value ([`Real::named`]): component `component` (empty for a scalar)
+/// of `quantity` of the body or joint `owner`. Names live beside the tape, never in it: they change
+/// neither the operations nor their order.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Label {
+    pub owner: String,
+    pub quantity: String,
+    pub component: String,
+}
+
 #[derive(Default)]
 pub struct Tape {
     pub nodes: Vec<Op>,
     map: HashMap<Key, u32>,
+    /// The first name given to each node (a node reached again under another name, by folding or
+    /// common-subexpression elimination, keeps the name of where it was first computed).
+    pub labels: HashMap<u32, Label>,
 }
 
 thread_local! {
@@ -372,6 +385,18 @@ impl Real for Sym {
     }
     fn epsilon() -> Self {
         Sym::Const(f64::EPSILON)
+    }
+    fn named(self, owner: &str, quantity: &str, component: &str) -> Self {
+        if let Sym::Node(n) = self {
+            TAPE.with(|t| {
+                t.borrow_mut().labels.entry(n).or_insert_with(|| Label {
+                    owner: owner.to_string(),
+                    quantity: quantity.to_string(),
+                    component: component.to_string(),
+                });
+            });
+        }
+        self
     }
     /// A check, answerable for constants only (see [`PartialOrd`] for `Sym`).
     #[track_caller]
