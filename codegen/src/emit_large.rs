@@ -63,6 +63,7 @@ fn constructs(text: &str) -> (usize, usize, usize) {
             lets += 1;
         }
         if statement.starts_with("#[")
+            || statement.starts_with("///")
             || statement.starts_with("fn ")
             || statement.starts_with("pub fn ")
             || statement.starts_with("type ")
@@ -307,9 +308,7 @@ pub(crate) fn function_text(
             helpers,
             names,
         };
-        for line in doc_lines(&part_doc(name, c, parts.len(), &part_bodies[c])) {
-            writeln!(text, "    #[doc = {line:?}]").unwrap();
-        }
+        write_doc(&mut text, &part_doc(name, c, parts.len(), &part_bodies[c]));
         writeln!(text, "    #[inline(never)]").unwrap();
         writeln!(text, "    #[allow(unused_variables, clippy::all)]").unwrap();
         let part_function = &part_functions[c];
@@ -320,9 +319,7 @@ pub(crate) fn function_text(
     // The public function: the parts in order, then the outputs no part computes (constants and
     // inputs passed through), then the returned value.
     let doc = function_doc(doc, &names.bodies(order.iter()), &part_functions);
-    for line in doc_lines(&doc) {
-        writeln!(text, "    #[doc = {line:?}]").unwrap();
-    }
+    write_doc(&mut text, &doc);
     let returns = outputs.iter().any(|o| matches!(o, Output::Return(_)));
     if returns {
         writeln!(text, "    #[must_use = {MUST_USE:?}]").unwrap();
@@ -387,6 +384,14 @@ pub(crate) fn function_text(
     }
     writeln!(text, "    }}").unwrap();
     text
+}
+
+/// Writes `doc` as `///` comment lines. Safe as comment text: the docs are the generator's own, and
+/// model names reach them only as escaped code spans, which hold no line break or control character.
+fn write_doc(text: &mut String, doc: &str) {
+    for line in doc_lines(doc) {
+        writeln!(text, "    ///{line}").unwrap();
+    }
 }
 
 /// The positions of each part, from the first positions `parts`.
