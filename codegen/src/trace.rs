@@ -454,4 +454,28 @@ mod tests {
         });
         assert!(tape.nodes.iter().any(|op| matches!(op, Op::Select { .. })));
     }
+
+    /// A name is kept beside the tape: it adds no node, returns the value unchanged, and the first
+    /// name of a node stays (a value reached again under another name keeps where it was computed).
+    #[test]
+    fn names_are_kept_beside_the_tape() {
+        let ((), tape) = record(|| {
+            let x = input(0, 0);
+            let y = x * x;
+            assert_eq!(y.named("thigh", "v", "ang_x"), y);
+            assert_eq!((x * x).named("shin", "a", ""), y);
+            assert_eq!(Sym::Const(2.0).named("thigh", "m", ""), Sym::Const(2.0));
+        });
+        assert_eq!(tape.nodes.len(), 2);
+        assert_eq!(tape.labels.len(), 1);
+        let label = &tape.labels[&1];
+        assert_eq!(
+            (
+                label.owner.as_str(),
+                label.quantity.as_str(),
+                label.component.as_str()
+            ),
+            ("thigh", "v", "ang_x")
+        );
+    }
 }
