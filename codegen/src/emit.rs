@@ -3,6 +3,7 @@
 //! [`crate::emit_large`].
 
 use crate::trace::{Op, Sym, Tape};
+use crate::value_names::{body_list, part_names, Owners, ValueNames};
 use proc_macro2::{Ident, Literal, TokenStream};
 use quote::{format_ident, quote};
 use std::cmp::Reverse;
@@ -31,6 +32,43 @@ pub enum Output {
     Return(Sym),
 }
 
+impl Output {
+    /// The parameter name of an output (none for the return value).
+    fn name(&self) -> Option<&'static str> {
+        match self {
+            Output::Vector { name, .. } | Output::Matrix { name, .. } => Some(name),
+            Output::Return(_) => None,
+        }
+    }
+}
+
+/// The doc of a generated function with its header: the bodies whose values it computes (in the
+/// model's order) and its parts (each documented with the bodies it covers).
+pub(crate) fn function_doc(doc: &str, bodies: &[&str], parts: &[String]) -> String {
+    let mut text = doc.to_string();
+    if !bodies.is_empty() {
+        text += &format!(
+            "\n\nBodies it computes, in the model's order: {}.",
+            body_list(bodies)
+        );
+    }
+    if parts.len() > 1 {
+        let parts: Vec<String> = parts.iter().map(|p| format!("`{p}`")).collect();
+        text += &format!("\n\nComputed in parts, in order: {}.", parts.join(", "));
+    }
+    text
+}
+
+/// The doc of part `index` (of `count`) of function `function`, which covers `bodies` (in the model's
+/// order).
+pub(crate) fn part_doc(function: &str, index: usize, count: usize, bodies: &[&str]) -> String {
+    let mut text = format!("Part {} of {count} of `{function}`", index + 1);
+    if !bodies.is_empty() {
+        text += &format!(": values of the bodies {}", body_list(bodies));
+    }
+    text + "."
+}
+
 /// Statements per chunk function. At ~2000 statements rustc -O compiles each in about a second, and the
 /// call boundaries cost a few loads and stores of live values.
 pub const CHUNK: usize = 2000;
@@ -45,8 +83,34 @@ fn lit(x: f64) -> TokenStream {
     }
 }
 
-fn node_ident(n: u32) -> Ident {
-    format_ident!("t{}", n)
+/// The reason of `#[must_use]` on a generated function that returns a value: the singularity measure
+/// (`aba` of a model with constraints, `embedding`, `crba_independent`) or the residual (`complete`)
+/// is what says whether the outputs can be used.
+pub(crate) const MUST_USE: &str =
+    "the returned measure says whether the outputs can be used (see the function's documentation)";
+
+/// Doc-comment lines as `#[doc]` attributes carry them: each with the space that `/// ` puts after
+/// the slashes (without it, the formatted code reads `///Dynamics`).
+pub(crate) fn doc_lines(doc: &str) -> Vec<String> {
+    doc.lines()
+        .map(|line| {
+            if line.is_empty() {
+                String::new()
+            } else {
+                format!(" {line}")
+            }
+        })
+        .collect()
+}
+
+/// The identifier of value `n` ([`ValueNames`]).
+fn node_ident(names: &ValueNames, n: u32) -> Ident {
+    format_ident!("{}", names.name(n))
+}
+
+/// A length or an index as generated code writes it: `4`, not `4usize`.
+fn num(i: usize) -> Literal {
+    Literal::usize_unsuffixed(i)
 }
 
 /// A generated function (its parts and the public function), ready for a scalar module whose `S` is
@@ -89,6 +153,7 @@ pub fn function(
     outputs: &[Output],
     tape: &Tape,
     helpers: &TokenStream,
+    owners: &Owners,
 ) -> Result<Emitted, EmitError> {
     let nodes = &tape.nodes;
     // Liveness from the outputs.
@@ -150,6 +215,13 @@ pub fn function(
     let order: Vec<u32> = (0..nodes.len() as u32)
         .filter(|&i| live[i as usize] && !matches!(nodes[i as usize], Op::Input { .. }))
         .collect();
+    let live_nodes: Vec<u32> = (0..nodes.len() as u32)
+        .filter(|&i| live[i as usize])
+        .collect();
+    let mut reserved: Vec<&str> = vec!["s", "sin_batch", "cos_batch"];
+    reserved.extend(args.iter().map(|a| a.name));
+    reserved.extend(outputs.iter().filter_map(Output::name));
+    let names = ValueNames::new(tape, &live_nodes, &reserved, owners);
     if order.len() > SCHEDULE_LIMIT {
         let (order, batch) = batch_angles(nodes, order, &sin_of, &cos_of);
         let angles = batch_args(nodes, &batch);
@@ -157,6 +229,7 @@ pub fn function(
         let operations = order.len();
         let text = crate::emit_large::function_text(
             name, doc, args, outputs, nodes, order, &batch, &angles, &sin_of, &cos_of, &helpers,
+            &names,
         );
         return Ok(Emitted {
             operations,
@@ -208,22 +281,24 @@ pub fn function(
         .iter()
         .map(|a| {
             let id = format_ident!("{}", a.name);
-            let len = a.len;
+            let len = num(a.len);
             quote!(#id: &[S; #len])
         })
         .collect();
     let arg_names: Vec<Ident> = args.iter().map(|a| format_ident!("{}", a.name)).collect();
-    let nslots = slot.len().max(1);
+    let nslots = num(slot.len().max(1));
 
     let operand = |s: &Sym| -> TokenStream {
         match s {
             Sym::Const(c) => lit(*c),
             Sym::Node(n) => {
-                let id = node_ident(*n);
+                let id = node_ident(&names, *n);
                 quote!(#id)
             }
         }
     };
+    let chunk_bodies: Vec<Vec<&str>> = chunks.iter().map(|ns| names.bodies(ns.iter())).collect();
+    let chunk_names = part_names(name, &chunk_bodies);
     let mut chunk_fns = Vec::new();
     let mut bodies = Vec::new();
     for (c, ns) in chunks.iter().enumerate() {
@@ -243,15 +318,15 @@ pub fn function(
         needed.sort_unstable();
         needed.dedup();
         for m in needed {
-            let id = node_ident(m);
+            let id = node_ident(&names, m);
             match nodes[m as usize] {
                 Op::Input { arg, index } => {
                     let a = &arg_names[arg as usize];
-                    let i = index as usize;
+                    let i = num(index as usize);
                     stmts.push(quote!(let #id: S = #a[#i];));
                 }
                 _ => {
-                    let k = slot[&m];
+                    let k = num(slot[&m]);
                     stmts.push(quote!(let #id: S = s[#k];));
                 }
             }
@@ -261,7 +336,7 @@ pub fn function(
             if defined.contains(&n) {
                 continue;
             }
-            let id = node_ident(n);
+            let id = node_ident(&names, n);
             let expr = match &nodes[n as usize] {
                 Op::Input { .. } => unreachable!("inputs are read, not computed"),
                 Op::Add(a, b) => {
@@ -313,13 +388,14 @@ pub fn function(
                         let (sin_batch, cos_batch) = #helpers::sincos_batch([#(#args),*]);
                     ));
                     for (k, a) in angles.iter().enumerate() {
+                        let k = num(k);
                         if let Some(&si) = sin_of.get(a) {
-                            let id = node_ident(si);
+                            let id = node_ident(&names, si);
                             stmts.push(quote!(let #id: S = sin_batch[#k];));
                             defined.insert(si);
                         }
                         if let Some(&ci) = cos_of.get(a) {
-                            let id = node_ident(ci);
+                            let id = node_ident(&names, ci);
                             stmts.push(quote!(let #id: S = cos_batch[#k];));
                             defined.insert(ci);
                         }
@@ -329,8 +405,8 @@ pub fn function(
                 Op::Sin(a) | Op::Cos(a) => {
                     let (s_id, c_id) = (sin_of.get(a).copied(), cos_of.get(a).copied());
                     let x = operand(a);
-                    let s_tok = s_id.map_or_else(|| format_ident!("_"), node_ident);
-                    let c_tok = c_id.map_or_else(|| format_ident!("_"), node_ident);
+                    let s_tok = s_id.map_or_else(|| format_ident!("_"), |x| node_ident(&names, x));
+                    let c_tok = c_id.map_or_else(|| format_ident!("_"), |x| node_ident(&names, x));
                     stmts.push(quote!(let (#s_tok, #c_tok): (S, S) = #helpers::sincos(#x);));
                     if let Some(si) = s_id {
                         defined.insert(si);
@@ -346,13 +422,16 @@ pub fn function(
         }
         if split {
             for &n in ns.iter() {
-                if let Some(k) = slot.get(&n) {
-                    let id = node_ident(n);
+                if let Some(&k) = slot.get(&n) {
+                    let k = num(k);
+                    let id = node_ident(&names, n);
                     stmts.push(quote!(s[#k] = #id;));
                 }
             }
-            let fname = format_ident!("{}_part{}", name, c);
+            let fname = format_ident!("{}", chunk_names[c]);
+            let part_lines = doc_lines(&part_doc(name, c, chunks.len(), &chunk_bodies[c]));
             chunk_fns.push(quote! {
+                #(#[doc = #part_lines])*
                 #[inline(never)]
                 #[allow(unused_variables, clippy::all)]
                 fn #fname(#(#scalar_args,)* s: &mut [S; #nslots]) {
@@ -380,9 +459,10 @@ pub fn function(
                 values,
             } => {
                 let id = format_ident!("{}", oname);
-                let n = values.len();
+                let n = num(values.len());
                 out_params.push(quote!(#id: &mut [S; #n]));
                 for (i, v) in values.iter().enumerate() {
+                    let i = num(i);
                     let val = value_tokens(v, split, &slot, &operand, nodes, &arg_names);
                     out_stmts.push(quote!(#id[#i] = #val;));
                 }
@@ -394,7 +474,8 @@ pub fn function(
                 values,
             } => {
                 let id = format_ident!("{}", oname);
-                out_params.push(quote!(#id: &mut [[S; #cols]; #rows]));
+                let (cols_lit, rows_lit) = (num(*cols), num(*rows));
+                out_params.push(quote!(#id: &mut [[S; #cols_lit]; #rows_lit]));
                 for r in 0..*rows {
                     for c in 0..*cols {
                         let val = value_tokens(
@@ -405,6 +486,7 @@ pub fn function(
                             nodes,
                             &arg_names,
                         );
+                        let (r, c) = (num(r), num(c));
                         out_stmts.push(quote!(#id[#r][#c] = #val;));
                     }
                 }
@@ -413,9 +495,10 @@ pub fn function(
     }
     let fname = format_ident!("{}", name);
     let body = if split {
-        let calls: Vec<TokenStream> = (0..chunks.len())
+        let calls: Vec<TokenStream> = chunk_names
+            .iter()
             .map(|c| {
-                let f = format_ident!("{}_part{}", name, c);
+                let f = format_ident!("{}", c);
                 quote!(#f(#(#arg_names,)* &mut s);)
             })
             .collect();
@@ -434,13 +517,24 @@ pub fn function(
         }
     };
     let operations = order.len();
+    let doc_lines = doc_lines(&function_doc(
+        doc,
+        &names.bodies(order.iter()),
+        &chunk_names,
+    ));
+    let must_use = if ret_value.is_empty() {
+        quote!()
+    } else {
+        quote!(#[must_use = #MUST_USE])
+    };
     Ok(Emitted {
         operations,
         largest_constant,
         compile_bytes: TOKEN_BYTES_PER_OPERATION * operations as f64,
         code: Code::Tokens(quote! {
             #(#chunk_fns)*
-            #[doc = #doc]
+            #(#[doc = #doc_lines])*
+            #must_use
             #[allow(unused_variables, clippy::all)]
             pub fn #fname(#(#scalar_args,)* #(#out_params),*) #ret_type {
                 #body
@@ -464,11 +558,11 @@ fn value_tokens(
                 unreachable!()
             };
             let a = &args[arg as usize];
-            let i = index as usize;
+            let i = num(index as usize);
             quote!(#a[#i])
         }
         Sym::Node(n) if split => {
-            let k = slot[n];
+            let k = num(slot[n]);
             quote!(s[#k])
         }
         _ => operand(v),

@@ -21,8 +21,9 @@
 //! The text is formatted as it is written (one statement per line, four spaces per level): the
 //! standalone crate needs no pretty-printing pass over millions of tokens.
 
-use crate::emit::{operands, Arg, Output, CHUNK};
+use crate::emit::{doc_lines, function_doc, operands, part_doc, Arg, Output, CHUNK, MUST_USE};
 use crate::trace::{Op, Sym};
+use crate::value_names::{part_names, ValueNames};
 use std::collections::HashMap;
 use std::fmt::Write;
 
@@ -62,6 +63,7 @@ fn constructs(text: &str) -> (usize, usize, usize) {
             lets += 1;
         }
         if statement.starts_with("#[")
+            || statement.starts_with("///")
             || statement.starts_with("fn ")
             || statement.starts_with("pub fn ")
             || statement.starts_with("type ")
@@ -162,6 +164,7 @@ pub(crate) fn function_text(
     sin_of: &HashMap<Sym, u32>,
     cos_of: &HashMap<Sym, u32>,
     helpers: &str,
+    names: &ValueNames,
 ) -> String {
     let order = pair_sines_with_cosines(nodes, order, sin_of, cos_of, batch);
     let position: HashMap<u32, usize> = order.iter().enumerate().map(|(i, &n)| (n, i)).collect();
@@ -284,6 +287,10 @@ pub(crate) fn function_text(
         .unwrap();
     }
     let batched: std::collections::HashSet<u32> = batch.iter().copied().collect();
+    let part_bodies: Vec<Vec<&str>> = part_ranges(&parts, order.len())
+        .map(|range| names.bodies(order[range].iter()))
+        .collect();
+    let part_functions = part_names(name, &part_bodies);
     for (c, range) in part_ranges(&parts, order.len()).enumerate() {
         let part = Part {
             nodes,
@@ -299,24 +306,26 @@ pub(crate) fn function_text(
             sin_of,
             cos_of,
             helpers,
+            names,
         };
+        write_doc(&mut text, &part_doc(name, c, parts.len(), &part_bodies[c]));
         writeln!(text, "    #[inline(never)]").unwrap();
         writeln!(text, "    #[allow(unused_variables, clippy::all)]").unwrap();
-        writeln!(text, "    fn {name}_part{c}({part_params}) {{").unwrap();
+        let part_function = &part_functions[c];
+        writeln!(text, "    fn {part_function}({part_params}) {{").unwrap();
         part.write_body(&mut text);
         writeln!(text, "    }}").unwrap();
     }
     // The public function: the parts in order, then the outputs no part computes (constants and
     // inputs passed through), then the returned value.
-    for line in doc.lines() {
-        writeln!(text, "    #[doc = {:?}]", format!(" {line}")).unwrap();
+    let doc = function_doc(doc, &names.bodies(order.iter()), &part_functions);
+    write_doc(&mut text, &doc);
+    let returns = outputs.iter().any(|o| matches!(o, Output::Return(_)));
+    if returns {
+        writeln!(text, "    #[must_use = {MUST_USE:?}]").unwrap();
     }
     writeln!(text, "    #[allow(unused_variables, clippy::all)]").unwrap();
-    let ret = if outputs.iter().any(|o| matches!(o, Output::Return(_))) {
-        " -> S"
-    } else {
-        ""
-    };
+    let ret = if returns { " -> S" } else { "" };
     writeln!(text, "    pub fn {name}({public_params}){ret} {{").unwrap();
     if nslots > 0 {
         writeln!(
@@ -327,8 +336,8 @@ pub(crate) fn function_text(
         )
         .unwrap();
     }
-    for c in 0..parts.len() {
-        writeln!(text, "        {name}_part{c}({part_call_args});").unwrap();
+    for part_function in &part_functions {
+        writeln!(text, "        {part_function}({part_call_args});").unwrap();
     }
     let outside = |v: &Sym| -> Option<String> {
         match v {
@@ -375,6 +384,14 @@ pub(crate) fn function_text(
     }
     writeln!(text, "    }}").unwrap();
     text
+}
+
+/// Writes `doc` as `///` comment lines. Safe as comment text: the docs are the generator's own, and
+/// model names reach them only as escaped code spans, which hold no line break or control character.
+fn write_doc(text: &mut String, doc: &str) {
+    for line in doc_lines(doc) {
+        writeln!(text, "    ///{line}").unwrap();
+    }
 }
 
 /// The positions of each part, from the first positions `parts`.
@@ -474,6 +491,7 @@ struct Part<'a> {
     sin_of: &'a HashMap<Sym, u32>,
     cos_of: &'a HashMap<Sym, u32>,
     helpers: &'a str,
+    names: &'a ValueNames,
 }
 
 impl Part<'_> {
@@ -536,7 +554,13 @@ impl Part<'_> {
             .collect();
         preloads.sort_unstable();
         for m in preloads {
-            writeln!(text, "        let t{m} = {};", self.access(m)).unwrap();
+            writeln!(
+                text,
+                "        let {} = {};",
+                self.names.name(m),
+                self.access(m)
+            )
+            .unwrap();
         }
         let mut batch_written = false;
         let mut sines_written: std::collections::HashSet<u32> = std::collections::HashSet::new();
@@ -560,7 +584,7 @@ impl Part<'_> {
                 let (s, c) = (self.sin_of.get(a).copied(), self.cos_of.get(a).copied());
                 sines_written.extend([s, c].into_iter().flatten());
                 let name_of = |x: Option<u32>| match x {
-                    Some(x) if readers.contains_key(&x) || leaves_part(x) => format!("t{x}"),
+                    Some(x) if readers.contains_key(&x) || leaves_part(x) => self.names.name(x),
                     _ => "_".to_string(),
                 };
                 let (angle, _) = self.operand(a, &reference);
@@ -573,7 +597,7 @@ impl Part<'_> {
                 )
                 .unwrap();
                 for x in [s, c].into_iter().flatten() {
-                    self.write_destinations(text, x, &format!("t{x}"));
+                    self.write_destinations(text, x, &self.names.name(x));
                 }
                 continue;
             }
@@ -582,8 +606,9 @@ impl Part<'_> {
             if !readers.contains_key(&n) && dests.len() == 1 {
                 writeln!(text, "        {} = {value};", dests[0]).unwrap();
             } else {
-                writeln!(text, "        let t{n} = {value};").unwrap();
-                self.write_destinations(text, n, &format!("t{n}"));
+                let id = self.names.name(n);
+                writeln!(text, "        let {id} = {value};").unwrap();
+                self.write_destinations(text, n, &id);
             }
         }
     }
@@ -612,8 +637,9 @@ impl Part<'_> {
                 let Some(&x) = x else { continue };
                 let named = reference.get(&x) == Some(&Reference::Name);
                 if named || (!reference.contains_key(&x) && self.destinations_of(x).len() > 1) {
-                    writeln!(text, "        let t{x} = {array}[{k}];").unwrap();
-                    self.write_destinations(text, x, &format!("t{x}"));
+                    let id = self.names.name(x);
+                    writeln!(text, "        let {id} = {array}[{k}];").unwrap();
+                    self.write_destinations(text, x, &id);
                 } else {
                     self.write_destinations(text, x, &format!("{array}[{k}]"));
                 }
@@ -675,7 +701,7 @@ impl Part<'_> {
         match reference.get(&m) {
             Some(Reference::Inline) => self.operation(m, reference),
             Some(Reference::Access) => (self.access(m), ATOM),
-            _ => (format!("t{m}"), ATOM),
+            _ => (self.names.name(m), ATOM),
         }
     }
 

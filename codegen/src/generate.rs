@@ -10,9 +10,10 @@ use crate::emit::{function, Arg, Code, Emitted, Output};
 use crate::names::{code_span, shown};
 use crate::size;
 use crate::trace::{input, record, snap, Sym};
+use crate::value_names::Owners;
 use crate::{build_model, LoadError, Loaded, Location, ModelOptions};
 use embedyn_runtime::constraints::{singularity_threshold, COMPLETION_MAX_STEPS};
-use embedyn_runtime::{Model, Workspace};
+use embedyn_runtime::{Model, Real, Workspace};
 
 use proc_macro2::TokenStream;
 use quote::{format_ident, quote};
@@ -92,7 +93,7 @@ impl GenerateOptions {
 }
 
 /// Version of the generator, part of every cache key: generated code from another version is never reused.
-pub const GENERATOR_VERSION: &str = concat!(env!("CARGO_PKG_VERSION"), "-g3");
+pub const GENERATOR_VERSION: &str = concat!(env!("CARGO_PKG_VERSION"), "-g4");
 
 /// The model the generator traces: rotations and axes within 1e-14 of 0 or ±1 made exact, so that the
 /// zero structure of axis-aligned joints and right-angle frames folds away.
@@ -209,6 +210,8 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
         code_span(&loaded.robot.source.file_name().map_or_else(String::new, |f| f.to_string_lossy().into_owned())),
         shown.join(", ")
     );
+    let doc = format!(" {doc}");
+    let [nq, nv, ni, nj, nf] = [nq, nv, ni, nj, nf].map(proc_macro2::Literal::usize_unsuffixed);
     let header = quote! {
         #[doc = #doc]
         #[allow(dead_code)]
@@ -260,7 +263,7 @@ fn check_size_before_tracing(
 /// it also holds the scalar's singularity threshold.
 fn scalar_module(scalar: &str, constrained: bool, functions: &[TokenStream]) -> TokenStream {
     let module = format_ident!("{}", scalar);
-    let doc = format!("The generated dynamics in `{scalar}`.");
+    let doc = format!(" The generated dynamics in `{scalar}`.");
     let threshold = if constrained {
         let value = proc_macro2::Literal::f64_unsuffixed(match scalar {
             "f32" => singularity_threshold::<f32>(),
@@ -359,13 +362,15 @@ fn module_body(formatted: &str) -> &str {
 /// `complete`: `complete_step` iterated until the relative residual is below 64 ε (or NaN) or the step
 /// budget is spent. The iteration is over Newton steps, not over bodies: the step itself is unrolled.
 pub(crate) fn complete_loop() -> TokenStream {
-    let max_steps = COMPLETION_MAX_STEPS;
+    let max_steps = proc_macro2::Literal::usize_unsuffixed(COMPLETION_MAX_STEPS);
+    let must_use = crate::emit::MUST_USE;
     quote! {
         /// Position completion: `q_out` is `q` with its dependent coordinates solved from the independent
         /// ones by Newton's method from `q`'s dependent entries as the guess (it converges to the assembly
         /// branch nearest the guess), iterated until the largest residual, relative to the magnitudes in
         /// each equation, is below 64 ε or for at most `COMPLETION_MAX_STEPS` steps. Returns that residual:
         /// check it — a guess outside the mechanism's range does not converge (or gives NaN).
+        #[must_use = #must_use]
         pub fn complete(q: &[S; super::NQ], q_out: &mut [S; super::NQ]) -> S {
             let tolerance: S = 64.0 * S::EPSILON;
             *q_out = *q;
@@ -384,6 +389,9 @@ pub(crate) fn complete_loop() -> TokenStream {
     }
 }
 
+/// Components of a joint's coordinates in the names of generated code (a floating joint has 7).
+const COORDINATE: [&str; 7] = ["0", "1", "2", "3", "4", "5", "6"];
+
 fn generate_algorithm(
     loaded: &Loaded,
     model: &Model<Sym>,
@@ -393,6 +401,32 @@ fn generate_algorithm(
     let spec = algo.spec();
     let dims = Dims::of(model);
     let constrained = model.has_constraints();
+    // Inputs are named after their joints: `knee_q`, `knee_v`, `base_q_3` (a joint with several
+    // coordinates), so that generated code reads `let knee_q = q[2];`.
+    let named_input = |arg: u8, spec_input: &crate::algorithm::InputSpec, i: usize| -> Sym {
+        let value = input(arg, i);
+        let positions = spec_input.len == crate::algorithm::Dim::Nq;
+        let range = |j: &embedyn_runtime::Joint<Sym>| {
+            if positions {
+                (j.q_index, j.nq())
+            } else {
+                (j.v_index, j.nv())
+            }
+        };
+        let owner = model.joints.iter().find(|j| {
+            let (start, len) = range(j);
+            (start..start + len).contains(&i)
+        });
+        match owner {
+            Some(j) if range(j).1 == 1 => value.named(&j.name, spec_input.name, ""),
+            Some(j) => value.named(
+                &j.name,
+                spec_input.name,
+                COORDINATE[(i - range(j).0).min(6)],
+            ),
+            None => value,
+        }
+    };
     let fail = |e: embedyn_runtime::DynamicsError| {
         gen_error(loaded, format!("tracing {}: {e}", algo.name()))
     };
@@ -400,11 +434,19 @@ fn generate_algorithm(
         let mut ws = Workspace::new(model);
         let inputs: Vec<Vec<Sym>> = (0u8..)
             .zip(spec.inputs)
-            .map(|(arg, i)| (0..i.len.len(&dims)).map(|k| input(arg, k)).collect())
+            .map(|(arg, i)| {
+                (0..i.len.len(&dims))
+                    .map(|k| named_input(arg, i, k))
+                    .collect()
+            })
             .collect();
         (spec.trace)(model, &mut ws, &inputs)
     });
     let traced = traced.map_err(fail)?;
+    let owners = Owners::new(
+        model.joints.iter().map(|j| j.name.as_str()),
+        model.bodies.iter().map(|b| b.name.as_str()),
+    );
     // The descriptor and the traced algorithm must agree on what the function returns and writes.
     let mismatch = |what: String| {
         gen_error(
@@ -453,8 +495,16 @@ fn generate_algorithm(
         })
         .collect();
     let doc = spec.doc(constrained);
-    let mut emitted = function(spec.traced_name, doc, &args, &outputs, &tape, helpers)
-        .map_err(|e| gen_error(loaded, e.0))?;
+    let mut emitted = function(
+        spec.traced_name,
+        doc,
+        &args,
+        &outputs,
+        &tape,
+        helpers,
+        &owners,
+    )
+    .map_err(|e| gen_error(loaded, e.0))?;
     if let Some(wrapper) = spec.wrapper {
         let wrapper = wrapper();
         emitted.code = match emitted.code {

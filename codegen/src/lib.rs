@@ -25,6 +25,7 @@ mod size;
 pub mod standalone;
 pub mod trace;
 mod urdf;
+mod value_names;
 mod xml_text;
 
 pub use assemble::{build_model, inertial_about_link, ModelOptions, ROOT_JOINT};

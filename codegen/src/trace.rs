@@ -60,10 +60,23 @@ fn sym_key(s: Sym) -> (u8, u64) {
     }
 }
 
+/// The name an algorithm gave a value ([`Real::named`]): component `component` (empty for a scalar)
+/// of `quantity` of the body or joint `owner`. Names live beside the tape, never in it: they change
+/// neither the operations nor their order.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Label {
+    pub owner: String,
+    pub quantity: String,
+    pub component: String,
+}
+
 #[derive(Default)]
 pub struct Tape {
     pub nodes: Vec<Op>,
     map: HashMap<Key, u32>,
+    /// The first name given to each node (a node reached again under another name, by folding or
+    /// common-subexpression elimination, keeps the name of where it was first computed).
+    pub labels: HashMap<u32, Label>,
 }
 
 thread_local! {
@@ -373,6 +386,18 @@ impl Real for Sym {
     fn epsilon() -> Self {
         Sym::Const(f64::EPSILON)
     }
+    fn named(self, owner: &str, quantity: &str, component: &str) -> Self {
+        if let Sym::Node(n) = self {
+            TAPE.with(|t| {
+                t.borrow_mut().labels.entry(n).or_insert_with(|| Label {
+                    owner: owner.to_string(),
+                    quantity: quantity.to_string(),
+                    component: component.to_string(),
+                });
+            });
+        }
+        self
+    }
     /// A check, answerable for constants only (see [`PartialOrd`] for `Sym`).
     #[track_caller]
     fn is_finite(self) -> bool {
@@ -428,5 +453,29 @@ mod tests {
             assert!(matches!(x.max(two), Sym::Node(_)));
         });
         assert!(tape.nodes.iter().any(|op| matches!(op, Op::Select { .. })));
+    }
+
+    /// A name is kept beside the tape: it adds no node, returns the value unchanged, and the first
+    /// name of a node stays (a value reached again under another name keeps where it was computed).
+    #[test]
+    fn names_are_kept_beside_the_tape() {
+        let ((), tape) = record(|| {
+            let x = input(0, 0);
+            let y = x * x;
+            assert_eq!(y.named("thigh", "v", "ang_x"), y);
+            assert_eq!((x * x).named("shin", "a", ""), y);
+            assert_eq!(Sym::Const(2.0).named("thigh", "m", ""), Sym::Const(2.0));
+        });
+        assert_eq!(tape.nodes.len(), 2);
+        assert_eq!(tape.labels.len(), 1);
+        let label = &tape.labels[&1];
+        assert_eq!(
+            (
+                label.owner.as_str(),
+                label.quantity.as_str(),
+                label.component.as_str()
+            ),
+            ("thigh", "v", "ang_x")
+        );
     }
 }

@@ -68,6 +68,15 @@ pub trait Real:
         self > Self::zero() && self.is_finite()
     }
 
+    /// Names this value for generated code: component `component` (`""` for a scalar) of `quantity`
+    /// (`"v"`, `"qdd"`, …) of the body or joint `owner`. The code generator's traced scalar attaches the
+    /// name to the operation that computed the value, and generated code calls it by that name
+    /// (`thigh_v_ang_x`, `knee_qdd`); for numbers it is nothing at all. Names never change a value.
+    #[inline(always)]
+    fn named(self, _owner: &str, _quantity: &str, _component: &str) -> Self {
+        self
+    }
+
     /// `if self > other { then } else { otherwise }`: a data-dependent choice that generated code keeps
     /// (the tracing scalar records it as a select instead of answering the comparison at generation
     /// time). Every choice on a computed value in the algorithms is written with this, never with `if`:

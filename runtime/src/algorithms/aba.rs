@@ -10,7 +10,8 @@
 //! free bodies is as correct as one robot.
 
 use super::{
-    check_configuration, check_input, gravity_in, velocity_sweep, DynamicsError, Workspace,
+    check_configuration, check_input, gravity_in, per_coordinate, velocity_sweep, DynamicsError,
+    Workspace,
 };
 #[allow(unused_imports)]
 use crate::alloc_prelude::*;
@@ -101,11 +102,14 @@ pub(crate) fn forward_step<T: Real>(
         *x = ws.epsilon[v0 + k] - a_prime.dot(&ws.u[v0 + k]);
     }
     cholesky_solve_in_place(&d_block(&mut ws.d_factor, &ws.d_offset, i, n), qdd);
+    for (k, x) in qdd.iter_mut().enumerate() {
+        *x = x.named(&joint.name, per_coordinate(&QDD, n, k), "");
+    }
     let mut a = a_prime;
     for (k, &x) in qdd.iter().enumerate() {
         a += joint.subspace_column(k) * x;
     }
-    ws.acceleration[i] = a;
+    ws.acceleration[i] = a.named(&model.bodies[i].name, "a");
     Ok(())
 }
 
@@ -138,10 +142,13 @@ pub(crate) fn init_articulated<T: Real>(model: &Model<T>, ws: &mut Workspace<T>)
 /// `p` (shared by the forward dynamics and the operator inverse of Eq. 6).
 pub(crate) fn factor_joint<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, i: usize) {
     let joint = &model.joints[i];
+    ws.inertia[i] = ws.inertia[i].named(&model.bodies[i].name, "p");
     let p = &ws.inertia[i];
     let (v0, n) = (joint.v_index, joint.nv());
     for k in 0..n {
-        ws.u[v0 + k] = p.mul_motion(&joint.subspace_column(k));
+        ws.u[v0 + k] = p
+            .mul_motion(&joint.subspace_column(k))
+            .named(&joint.name, per_coordinate(&U, n, k));
     }
     let mut d = d_block(&mut ws.d_factor, &ws.d_offset, i, n);
     // The lower triangle is what the factorization reads.
@@ -151,8 +158,17 @@ pub(crate) fn factor_joint<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, i: 
             d[(r, c)] = h.dot(&ws.u[v0 + c]);
         }
     }
-    ws.d_pivot[i] = cholesky_in_place(&mut d);
+    ws.d_pivot[i] = cholesky_in_place(&mut d).named(&joint.name, "d", "");
+    if n == 1 {
+        // The factor of a 1 × 1 `D` is its inverse.
+        d[(0, 0)] = d[(0, 0)].named(&joint.name, "d_inv", "");
+    }
 }
+
+/// Names of the per-coordinate quantities of a joint in generated code (see [`per_coordinate`]).
+const QDD: [&str; 7] = ["qdd", "qdd0", "qdd1", "qdd2", "qdd3", "qdd4", "qdd5"];
+const U: [&str; 7] = ["u", "u0", "u1", "u2", "u3", "u4", "u5"];
+const EPSILON: [&str; 7] = ["eps", "eps0", "eps1", "eps2", "eps3", "eps4", "eps5"];
 
 /// `P⁺ = τ̄ P = P − U D⁻¹ Uᵀ` for joint `i` (after [`factor_joint`]), and `G ε = U D⁻¹ ε` for the `ε` given
 /// (zeros where only `P⁺` is wanted).
@@ -198,8 +214,13 @@ pub(crate) fn backward_step<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, i:
     factor_joint(model, ws, i);
     let joint = &model.joints[i];
     let (v0, n) = (joint.v_index, joint.nv());
+    ws.force[i] = ws.force[i].named(&model.bodies[i].name, "z");
     for k in 0..n {
-        ws.epsilon[v0 + k] = tau[v0 + k] - joint.subspace_column(k).dot(&ws.force[i]);
+        ws.epsilon[v0 + k] = (tau[v0 + k] - joint.subspace_column(k).dot(&ws.force[i])).named(
+            &joint.name,
+            per_coordinate(&EPSILON, n, k),
+            "",
+        );
     }
     let Some(parent) = joint.parent else {
         return;

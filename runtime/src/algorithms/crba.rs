@@ -35,10 +35,11 @@ pub fn crba<'w, T: Real>(
     let m = &mut ws.mass_matrix;
     // Entries of joints on different branches are zero and never written below.
     m.as_mut_slice().fill(T::zero());
-    for (i, joint) in model.joints.iter().enumerate() {
+    for (i, (joint, body)) in model.joints.iter().zip(&model.bodies).enumerate() {
+        let composite = ws.composite[i].named(&body.name, "ic");
         for k in 0..joint.nv() {
             let col = joint.v_index + k;
-            let mut f = ws.composite[i].mul_motion(&joint.subspace_column(k));
+            let mut f = composite.mul_motion(&joint.subspace_column(k));
             // The joint's own block, mirrored so that M is exactly symmetric.
             for r in k..joint.nv() {
                 let val = joint.subspace_column(r).dot(&f);

@@ -15,11 +15,12 @@ pub fn forward_kinematics<T: Real>(
     check_configuration(model, q)?;
     check_input("v", v, model.nv())?;
     velocity_sweep(model, ws, q, v);
-    for (i, joint) in model.joints.iter().enumerate() {
+    for (i, (joint, body)) in model.joints.iter().zip(&model.bodies).enumerate() {
         ws.world_placement[i] = match joint.parent {
             Some(p) => ws.world_placement[p].compose(&ws.parent_placement[i]),
             None => ws.parent_placement[i],
-        };
+        }
+        .named(&body.name, "pose");
     }
     Ok(())
 }

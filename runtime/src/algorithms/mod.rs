@@ -127,8 +127,11 @@ pub(crate) fn check_configuration<T: Real>(model: &Model<T>, q: &[T]) -> Result<
 /// The first forward sweep shared by RNEA and ABA: `ᵖX_i(q)`, `V(k)`, and `a(k) = V(k) ×ₘ H*θ̇(k)`.
 #[inline(always)]
 pub(crate) fn velocity_sweep<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, q: &[T], v: &[T]) {
-    for (i, joint) in model.joints.iter().enumerate() {
-        let x = joint.placement.compose(&joint.joint_transform(q));
+    for (i, (joint, body)) in model.joints.iter().zip(&model.bodies).enumerate() {
+        let x = joint
+            .placement
+            .compose(&joint.joint_transform(q))
+            .named(&joint.name, "x");
         let vj = joint.joint_motion(v);
         let vel = match joint.parent {
             Some(p) => x.inv_act_motion(&ws.velocity[p]) + vj,
@@ -136,7 +139,19 @@ pub(crate) fn velocity_sweep<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, q
         };
         ws.coriolis[i] = vel.cross_motion(&vj);
         ws.parent_placement[i] = x;
-        ws.velocity[i] = vel;
+        ws.velocity[i] = vel.named(&body.name, "v");
+    }
+}
+
+/// The name of a joint quantity with one entry per velocity coordinate, for generated code
+/// ([`Real::named`]): `names[0]` for a joint with one coordinate, `names[k + 1]` for coordinate `k` of
+/// a joint with `n` of them.
+#[inline(always)]
+pub(crate) fn per_coordinate(names: &[&'static str; 7], n: usize, k: usize) -> &'static str {
+    if n == 1 {
+        names[0]
+    } else {
+        names[(k + 1).min(6)]
     }
 }
 

@@ -1,7 +1,8 @@
 //! Inverse dynamics by the recursive Newton–Euler algorithm (the paper's Eqs. 1–3).
 
 use super::{
-    check_configuration, check_input, gravity_in, velocity_sweep, DynamicsError, Workspace,
+    check_configuration, check_input, gravity_in, per_coordinate, velocity_sweep, DynamicsError,
+    Workspace,
 };
 #[allow(unused_imports)]
 use crate::alloc_prelude::*;
@@ -33,15 +34,15 @@ pub fn rnea_with_gravity<'w, T: Real>(
     check_input("qdd", qdd, model.nv())?;
     velocity_sweep(model, ws, q, v);
     // Outward: α(k) = φ*(k+1,k) α(k+1) + H*(k) θ̈(k) + a(k), with the base accelerating at −g.
-    for (i, joint) in model.joints.iter().enumerate() {
+    for (i, (joint, body)) in model.joints.iter().zip(&model.bodies).enumerate() {
         let x = &ws.parent_placement[i];
         let a_parent = match joint.parent {
             Some(p) => x.inv_act_motion(&ws.acceleration[p]),
             None if gravity => gravity_in(&model.gravity, x),
             None => crate::spatial::Motion::zero(),
         };
-        let a = a_parent + joint.joint_motion(qdd) + ws.coriolis[i];
-        let inertia = &model.bodies[i].inertia;
+        let a = (a_parent + joint.joint_motion(qdd) + ws.coriolis[i]).named(&body.name, "a");
+        let inertia = &body.inertia;
         let vel = &ws.velocity[i];
         // f(k) = M(k) α(k) + b(k), b(k) = V ×* M V; children are added in the inward sweep.
         ws.force[i] = inertia.mul_motion(&a) + vel.cross_force(&inertia.mul_motion(vel));
@@ -50,9 +51,14 @@ pub fn rnea_with_gravity<'w, T: Real>(
     // Inward: f(k) += φ(k,k−1) f(k−1);  𝒯(k) = H(k) f(k).
     for i in (0..model.nbodies()).rev() {
         let joint = &model.joints[i];
-        let f = ws.force[i];
-        for k in 0..joint.nv() {
-            ws.tau[joint.v_index + k] = joint.subspace_column(k).dot(&f);
+        let f = ws.force[i].named(&model.bodies[i].name, "f");
+        let n = joint.nv();
+        for k in 0..n {
+            ws.tau[joint.v_index + k] =
+                joint
+                    .subspace_column(k)
+                    .dot(&f)
+                    .named(&joint.name, per_coordinate(&TAU, n, k), "");
         }
         if let Some(p) = joint.parent {
             let fp = ws.parent_placement[i].act_force(&f);
@@ -61,3 +67,6 @@ pub fn rnea_with_gravity<'w, T: Real>(
     }
     Ok(&ws.tau)
 }
+
+/// Names of the joint forces in generated code (see [`per_coordinate`]).
+const TAU: [&str; 7] = ["tau", "tau0", "tau1", "tau2", "tau3", "tau4", "tau5"];

@@ -56,6 +56,7 @@ mod articulated;
 mod force;
 mod inertia;
 mod motion;
+mod names;
 mod transform;
 
 pub use articulated::ArticulatedInertia;
