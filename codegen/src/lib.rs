@@ -22,6 +22,7 @@ mod generate;
 pub mod ir;
 pub mod names;
 mod size;
+#[cfg(feature = "standalone")]
 pub mod standalone;
 pub mod trace;
 mod urdf;
