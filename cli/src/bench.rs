@@ -10,30 +10,44 @@ use embedyn_runtime::{Model, Workspace};
 use serde_json::{json, Value};
 use std::hint::black_box;
 
-/// Median over 101 batches, each sized to last ~0.2 ms.
-fn time(f: &mut dyn FnMut()) -> f64 {
-    let mut calls = 1usize;
-    loop {
-        let t = std::time::Instant::now();
-        for _ in 0..calls {
-            f();
-        }
-        if t.elapsed().as_micros() >= 200 {
-            break;
-        }
-        calls *= 2;
-    }
-    let mut runs: Vec<f64> = (0..101)
-        .map(|_| {
+/// Defines the items given and keeps their source text: the timing loop is compiled here, for the
+/// interpreted solver, and written into the cached runner's `main.rs`, for the generated code, so that both
+/// engines are timed by the same loop.
+macro_rules! with_source {
+    ($source:ident, $($item:tt)*) => {
+        $($item)*
+        /// The source text of the items above.
+        pub(crate) const $source: &str = stringify!($($item)*);
+    };
+}
+
+with_source! {
+    TIME_SOURCE,
+    /// Median ns per call over 101 batches, each sized to last about 0.2 ms.
+    fn time(f: &mut dyn FnMut()) -> f64 {
+        let mut calls = 1usize;
+        loop {
             let t = std::time::Instant::now();
             for _ in 0..calls {
                 f();
             }
-            t.elapsed().as_nanos() as f64 / calls as f64
-        })
-        .collect();
-    runs.sort_by(f64::total_cmp);
-    runs[50]
+            if t.elapsed().as_micros() >= 200 {
+                break;
+            }
+            calls *= 2;
+        }
+        let mut runs: Vec<f64> = (0..101)
+            .map(|_| {
+                let t = std::time::Instant::now();
+                for _ in 0..calls {
+                    f();
+                }
+                t.elapsed().as_nanos() as f64 / calls as f64
+            })
+            .collect();
+        runs.sort_by(f64::total_cmp);
+        runs[50]
+    }
 }
 
 /// States timed per algorithm.

@@ -611,6 +611,10 @@ fn runner_main(
             }
         }
     });
+    // The timing loop `bench` uses for the interpreted solver, the same text.
+    let time: TokenStream = super::bench::TIME_SOURCE
+        .parse()
+        .map_err(|e| format!("internal error: the timing loop does not parse: {e}"))?;
     let file = quote! {
         //! Evaluates or times the generated functions for `embedyn eval --engine generated` and
         //! `embedyn bench` (protocol: see embedyn's `cli/runner.rs`).
@@ -625,31 +629,7 @@ fn runner_main(
             text.push('\n');
         }
 
-        /// Median ns per call over 101 batches, each sized to last about 0.2 ms.
-        fn time(f: &mut dyn FnMut()) -> f64 {
-            let mut calls = 1usize;
-            loop {
-                let t = std::time::Instant::now();
-                for _ in 0..calls {
-                    f();
-                }
-                if t.elapsed().as_micros() >= 200 {
-                    break;
-                }
-                calls *= 2;
-            }
-            let mut runs: Vec<f64> = (0..101)
-                .map(|_| {
-                    let t = std::time::Instant::now();
-                    for _ in 0..calls {
-                        f();
-                    }
-                    t.elapsed().as_nanos() as f64 / calls as f64
-                })
-                .collect();
-            runs.sort_by(f64::total_cmp);
-            runs[50]
-        }
+        #time
 
         #(#per_scalar)*
 
