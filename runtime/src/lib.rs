@@ -43,6 +43,7 @@ pub mod linalg;
 mod model;
 #[cfg(feature = "alloc")]
 mod model_constants;
+pub mod random;
 mod scalar;
 pub mod spatial;
 
