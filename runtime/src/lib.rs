@@ -46,6 +46,8 @@ mod model_constants;
 pub mod random;
 mod scalar;
 pub mod spatial;
+#[cfg(feature = "alloc")]
+pub mod tree;
 
 #[cfg(feature = "alloc")]
 pub use algorithms::{
