@@ -10,6 +10,7 @@
 //! Conventions (docs/conventions.md): spatial vectors are `[angular; linear]`, SI units, gravity
 //! (0, 0, −9.81) m/s² by default; a floating base uses Pinocchio's free-flyer layout.
 
+#![warn(missing_docs)]
 #![no_std]
 
 #[cfg(feature = "alloc")]
