@@ -34,6 +34,8 @@ mod alloc_prelude {
 #[cfg(feature = "alloc")]
 mod algorithms;
 #[cfg(feature = "alloc")]
+mod check;
+#[cfg(feature = "alloc")]
 pub mod constraints;
 // Fused multiply-add and exact rounding come from the platform's libm.
 #[cfg(feature = "std")]
@@ -42,8 +44,6 @@ mod double_double;
 pub mod linalg;
 #[cfg(feature = "alloc")]
 mod model;
-#[cfg(feature = "alloc")]
-mod model_constants;
 pub mod random;
 mod scalar;
 pub mod spatial;

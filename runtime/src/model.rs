@@ -466,9 +466,9 @@ impl<T: Real> Model<T> {
     /// check of [`ModelBuilder::build`], in `U`'s precision). Build in f64 and convert, so that every scalar
     /// type gets the structure decided once, in f64.
     pub fn try_cast<U: Real>(&self) -> Result<Model<U>, ModelError> {
-        crate::model_constants::check_constants_fit::<T, U>(self)?;
+        crate::check::check_constants_fit::<T, U>(self)?;
         let model = self.cast::<U>();
-        crate::algorithms::check_articulated_inertia(&model)?;
+        crate::check::check_converted(&model)?;
         Ok(model)
     }
 
@@ -700,7 +700,7 @@ impl<T: Real> ModelBuilder<T> {
             groups: Vec::new(),
             group_of: vec![None; n],
         };
-        crate::algorithms::check_articulated_inertia(&model)?;
+        crate::check::check_built(&model)?;
         if !model.constraints.is_empty() {
             model.groups = crate::constraints::build_groups(&model, &declared)?;
             for (g, group) in model.groups.iter().enumerate() {

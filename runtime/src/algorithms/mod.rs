@@ -3,10 +3,9 @@
 
 #[allow(unused_imports)]
 use crate::alloc_prelude::*;
-mod aba;
+pub(crate) mod aba;
 mod crba;
 mod embedded;
-mod inertia_check;
 mod kinematics;
 mod minv;
 mod rnea;
@@ -23,8 +22,6 @@ pub use kinematics::{forward_kinematics, kinetic_energy, link_poses, potential_e
 pub use minv::mass_matrix_inverse;
 pub use rnea::{rnea, rnea_with_gravity};
 pub use workspace::Workspace;
-
-pub(crate) use inertia_check::check_articulated_inertia;
 
 use crate::model::{JointType, Model};
 use crate::spatial::{Motion, Transform};
