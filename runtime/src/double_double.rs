@@ -205,7 +205,7 @@ impl DoubleDouble {
     /// Square root; NaN for negative arguments, `±0` for `±0`.
     ///
     /// One Newton step from the `f64` root: with `s = √hi`, the exact residual `self − s²` (the square
-    /// is formed exactly with [`two_prod`]) divided by `2s` is the correction. Newton doubles the number
+    /// is formed exactly with `two_prod`) divided by `2s` is the correction. Newton doubles the number
     /// of correct bits, so 53 become ~106; the neglected second-order term is `(correction)²/(2s)`,
     /// about 2⁻¹⁰⁷ relative.
     pub fn sqrt(self) -> Self {

@@ -183,7 +183,7 @@ pub fn jacobian<T: Real>(model: &Model<T>, ws: &Workspace<T>, out: &mut DMatrix<
 }
 
 /// `J̇ v` for every constraint (raw rows), from the kinematics and the velocity-product accelerations in
-/// `ws` (see [`crate::algorithms::bias_accelerations`]).
+/// `ws` (see [`crate::constraint_kinematics`]).
 pub fn bias<T: Real>(model: &Model<T>, ws: &Workspace<T>, out: &mut [T]) {
     let mut row = 0;
     for c in &model.constraints {
