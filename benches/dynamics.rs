@@ -33,7 +33,7 @@ struct States<T> {
 
 /// 64 deterministic pseudo-random states (angles in ±3 rad, quaternions normalized).
 fn states<T: Real>(model: &Model<T>) -> States<T> {
-    let mut rng = Rng(42);
+    let mut rng = Rng::new(42);
     let mut out = States {
         q: vec![],
         v: vec![],
@@ -150,7 +150,7 @@ pub const LOOP_MODELS: [(&str, &str); 9] = [
 fn loop_states(model: &Model<f64>) -> States<f64> {
     use embedyn::constraints::{complete_configuration, complete_velocity};
     let mut ws = Workspace::new(model);
-    let mut rng = Rng(7);
+    let mut rng = Rng::new(7);
     let mut out = States {
         q: vec![],
         v: vec![],

@@ -85,7 +85,7 @@ fn embedding_matches_the_lagrange_multiplier_solution() {
         let model = load_model::<f64>(path, floating);
         assert!(model.has_constraints(), "{path}");
         let mut ws = Workspace::new(&model);
-        let mut rng = Rng(31);
+        let mut rng = Rng::new(31);
         let mut worst = 0.0f64;
         for _ in 0..5 {
             let (q, v) = consistent_state(&model, &mut ws, &mut rng);
@@ -125,7 +125,7 @@ fn accelerations_satisfy_the_constraints_and_rnea_inverts_them() {
     for (path, floating) in LOOP_MODELS {
         let model = load_model::<f64>(path, floating);
         let mut ws = Workspace::new(&model);
-        let mut rng = Rng(5);
+        let mut rng = Rng::new(5);
         let (q, v) = consistent_state(&model, &mut ws, &mut rng);
         let tau = rng.vec(model.nv(), -5.0, 5.0);
         let qdd = aba(&model, &mut ws, &q, &v, &tau).unwrap().to_vec();
@@ -169,7 +169,7 @@ fn jacobian_and_bias_match_finite_differences_of_the_position_constraint() {
     for (path, floating) in LOOP_MODELS {
         let model = load_model::<f64>(path, floating);
         let mut ws = Workspace::new(&model);
-        let mut rng = Rng(77);
+        let mut rng = Rng::new(77);
         let (q, v) = consistent_state(&model, &mut ws, &mut rng);
         let (jac, bias, _) = constraint_rows(&model, &mut ws, &q, &v);
         // A direction in the 1-DoF joints only (a floating base would need the quaternion map).
@@ -248,7 +248,7 @@ fn jacobian_and_bias_match_finite_differences_of_the_position_constraint() {
 fn position_completion_reaches_machine_precision_and_keeps_the_branch() {
     let model = load_model::<f64>("models/loops/four_bar_internal.urdf", false);
     let mut ws = Workspace::new(&model);
-    let mut rng = Rng(9);
+    let mut rng = Rng::new(9);
     let (q, _) = consistent_state(&model, &mut ws, &mut rng);
     // Perturb the dependent coordinates a little: Newton must come back to the same assembly.
     let mut guess = q.clone();
@@ -275,7 +275,7 @@ fn completion_from_many_starts_assembles_or_says_so() {
     for (path, floating) in LOOP_MODELS {
         let model = load_model::<f64>(path, floating);
         let mut ws = Workspace::new(&model);
-        let mut rng = Rng(7);
+        let mut rng = Rng::new(7);
         let mut assembled = 0;
         for _ in 0..100 {
             let mut q = model.neutral_configuration();
@@ -333,7 +333,7 @@ fn four_bar_cut_at_terminal_and_internal_joints_agree() {
         out
     };
     let (mut ws_t, mut ws_i) = (Workspace::new(&term), Workspace::new(&int));
-    let mut rng = Rng(12);
+    let mut rng = Rng::new(12);
     let mut worst = 0.0f64;
     for _ in 0..5 {
         let (q_t, v_t) = consistent_state(&term, &mut ws_t, &mut rng);

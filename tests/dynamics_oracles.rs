@@ -22,7 +22,7 @@ const MODELS: [(&str, bool); 5] = [
 ];
 
 fn check_model(model: &Model<f64>, seed: u64, samples: usize) {
-    let mut rng = Rng(seed);
+    let mut rng = Rng::new(seed);
     let mut ws = Workspace::new(model);
     let nv = model.nv();
     let mut worst = [0.0f64; 4];
@@ -109,7 +109,7 @@ fn gravity_torque_matches_a_static_balance() {
     for (path, floating) in MODELS {
         let model = load_model::<f64>(path, floating);
         let mut ws = Workspace::new(&model);
-        let mut rng = Rng(11);
+        let mut rng = Rng::new(11);
         let q = rng.configuration(&model);
         let zero = vec![0.0; model.nv()];
         let g = rnea(&model, &mut ws, &q, &zero, &zero).unwrap().to_vec();
@@ -174,7 +174,7 @@ fn each_floating_root_of_a_scene_is_independent() {
     let box_joint = &model.joints[model.joint_index("box_free").unwrap()];
     let (bq, bv) = (box_joint.q_index, box_joint.v_index);
     let mut ws = Workspace::new(&model);
-    let mut rng = Rng(5);
+    let mut rng = Rng::new(5);
     let q = rng.configuration(&model);
     let mut v = rng.vec(model.nv(), -1.0, 1.0);
     v[bv..bv + 6].fill(0.0);

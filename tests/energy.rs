@@ -62,7 +62,7 @@ fn drift(model: &Model<f64>, q0: &[f64], v0: &[f64], h: f64, duration: f64) -> f
 
 fn check_drift_order(path: &str, floating: bool, h: f64) {
     let model = load_model::<f64>(path, floating);
-    let mut rng = Rng(3);
+    let mut rng = Rng::new(3);
     let q = rng.configuration(&model);
     let v = rng.vec(model.nv(), -1.0, 1.0);
     let d1 = drift(&model, &q, &v, h, 0.5);
@@ -98,7 +98,7 @@ fn power_balance_at_an_instant() {
     ] {
         let model = load_model::<f64>(path, floating);
         let mut ws = Workspace::new(&model);
-        let mut rng = Rng(17);
+        let mut rng = Rng::new(17);
         let q = rng.configuration(&model);
         let v = rng.vec(model.nv(), -1.0, 1.0);
         let tau = rng.vec(model.nv(), -5.0, 5.0);

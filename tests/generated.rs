@@ -79,7 +79,7 @@ macro_rules! check {
         let names: Vec<&str> = model.joints.iter().map(|j| j.name.as_str()).collect();
         assert_eq!(names, $m::JOINTS.to_vec());
         let mut ws = Workspace::new(&model);
-        let mut rng = Rng(99);
+        let mut rng = Rng::new(99);
         let mut worst = [0.0f64; 9];
         for _ in 0..20 {
             let q: [f64; NQ] = rng.configuration(&model).try_into().unwrap();
@@ -235,7 +235,7 @@ fn generated_completion_and_embedding_match_interpreted() {
             let model: Model<f64> = load_model($path, false);
             assert_eq!(model.independent_nv(), NI);
             let mut ws = Workspace::new(&model);
-            let mut rng = Rng(5);
+            let mut rng = Rng::new(5);
             let (mut worst_q, mut worst_x) = (0.0f64, 0.0f64);
             for _ in 0..10 {
                 let mut q = model.neutral_configuration();
@@ -527,7 +527,7 @@ fn only_generates_the_functions_named_and_the_same_code() {
     const NQ: usize = four_bar::NQ;
     let model: Model<f64> = load_model("models/loops/four_bar_internal.urdf", false);
     let mut ws = Workspace::new(&model);
-    let mut rng = Rng(3);
+    let mut rng = Rng::new(3);
     for _ in 0..5 {
         let mut q = model.neutral_configuration();
         for (j, joint) in model.joints.iter().enumerate() {

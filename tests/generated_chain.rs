@@ -39,7 +39,7 @@ fn split_chain_generated_matches_interpreted() {
     let model: Model<f64> = load_model("tests/data/scale/chain24.urdf", false);
     assert_eq!((model.nq(), model.nv()), (NQ, NV));
     let mut ws = Workspace::new(&model);
-    let mut rng = Rng(7);
+    let mut rng = Rng::new(7);
     // worst relative error: f64 aba, rnea, crba, minv, kinematics; then f32 aba, rnea, crba, minv.
     let mut worst = [0.0f64; 9];
     for _ in 0..10 {

@@ -53,7 +53,7 @@ fn hostile_names_through_the_macro_mean_what_the_model_says() {
     let names: Vec<&str> = model.joints.iter().map(|j| j.name.as_str()).collect();
     assert_eq!(names, JOINTS);
     let mut ws = Workspace::new(&model);
-    let mut rng = Rng(8);
+    let mut rng = Rng::new(8);
     for _ in 0..5 {
         let q: [f64; 12] = rng.configuration(&model).try_into().unwrap();
         let v: [f64; 12] = rng.vec(12, -2.0, 2.0).try_into().unwrap();

@@ -60,7 +60,7 @@ fn ten_thousand_steps_stay_on_the_constraints_and_conserve_energy() {
     let model = load_model::<f64>("models/loops/four_bar_internal.urdf", false);
     let mut ws = Workspace::new(&model);
     let mut q = model.neutral_configuration();
-    let mut rng = Rng(4);
+    let mut rng = Rng::new(4);
     for j in 0..model.joints.len() {
         if model.is_independent(j) {
             q[model.joints[j].q_index] = rng.uniform(-0.2, 0.2);

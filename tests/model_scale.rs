@@ -15,7 +15,7 @@ use embedyn::{aba, crba, load, relative_error, rnea, Model, ModelOptions, Real, 
 /// whatever the model's units.
 fn aba_against_crba_solve<T: Real>(model: &Model<T>, samples: usize) -> f64 {
     let mut ws = Workspace::new(model);
-    let mut rng = Rng(5);
+    let mut rng = Rng::new(5);
     let mut worst = 0.0f64;
     for _ in 0..samples {
         let q: Vec<T> = cast(&rng.configuration(model));

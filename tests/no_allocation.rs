@@ -46,7 +46,7 @@ fn algorithm_calls_do_not_allocate() {
         let model = load_model::<f64>(path, floating);
         let mut ws = Workspace::new(&model);
         ws.reserve_all(&model);
-        let mut rng = Rng(1);
+        let mut rng = Rng::new(1);
         let q = rng.configuration(&model);
         let v = rng.vec(model.nv(), -1.0, 1.0);
         let tau = rng.vec(model.nv(), -1.0, 1.0);

@@ -33,7 +33,7 @@ fn compare<T: Real, R: Real>(path: &str, floating: bool, samples: usize) -> Erro
     let model_r = load_model::<R>(path, floating);
     let mut ws_t = Workspace::new(&model_t);
     let mut ws_r = Workspace::new(&model_r);
-    let mut rng = Rng(23);
+    let mut rng = Rng::new(23);
     let mut e = Errors {
         aba: 0.0,
         rnea: 0.0,
@@ -105,7 +105,7 @@ fn double_double_model_is_more_precise_than_f64() {
     let path = "tests/data/pinocchio/ur5.urdf";
     let m_dd = load_model::<DoubleDouble>(path, false);
     let mut ws = Workspace::new(&m_dd);
-    let mut rng = Rng(2);
+    let mut rng = Rng::new(2);
     let q = rng.configuration(&load_model::<f64>(path, false));
     let (q, v, tau) = (
         cast::<DoubleDouble>(&q),

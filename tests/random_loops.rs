@@ -251,7 +251,7 @@ fn random_model(rng: &mut Rng) -> Result<Model<f64>, embedyn::ModelError> {
 
 /// Outcomes of one model's states: (regular states checked, refusals).
 fn check(seed: u64) -> Result<(usize, usize), TestCaseError> {
-    let mut rng = Rng(seed);
+    let mut rng = Rng::new(seed);
     let model = match random_model(&mut rng) {
         Ok(m) => m,
         // Refused at load (a dependent choice that is singular where the builder assembled it): a clear

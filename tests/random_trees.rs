@@ -16,7 +16,7 @@ fn tolerance(nv: usize, cond: f64) -> f64 {
 }
 
 fn check(seed: u64, n: usize, floating: bool) -> Result<(), TestCaseError> {
-    let mut rng = Rng(seed);
+    let mut rng = Rng::new(seed);
     let model = random_tree(&mut rng, n, floating);
     let nv = model.nv();
     let mut ws = Workspace::new(&model);
@@ -74,7 +74,7 @@ proptest! {
 #[test]
 fn long_chain_of_200_bodies() {
     // Deep recursion depth, no branching: the O(N) sweeps must stay accurate down a long chain.
-    let mut rng = Rng(5);
+    let mut rng = Rng::new(5);
     let model = chain(200);
     check_chain(&model, &mut rng);
 }

@@ -4,8 +4,9 @@
 
 use super::runner::{build_runner, run, RowShape};
 use super::CliError;
-use crate::sampling::{consistent_states, Rng};
+use crate::sampling::consistent_states;
 use embedyn_codegen::{Algorithm, GenerateOptions, Loaded, ModelOptions};
+use embedyn_runtime::random::SplitMix64;
 use embedyn_runtime::{Model, Workspace};
 use serde_json::{json, Value};
 use std::hint::black_box;
@@ -59,7 +60,7 @@ type TimedState = (Vec<f64>, Vec<f64>, Vec<f64>);
 /// The states each timed call cycles through: random consistent states (see [`crate::sampling`]), each
 /// with a random third vector (`tau` for `aba`, `qdd` for `rnea`).
 fn states(model: &Model<f64>) -> Result<Vec<TimedState>, CliError> {
-    let mut rng = Rng::new(0x5eed);
+    let mut rng = SplitMix64::new(0x5eed);
     let found =
         consistent_states(model, STATES, 0x5eed).map_err(|e| CliError(format!("bench: {e}")))?;
     Ok(found

@@ -5,6 +5,8 @@
 //! the binary, the tests and the fuzzer; it is not an API to build on (use `embedyn` and
 //! `embedyn-codegen`).
 
+#![warn(missing_docs)]
+
 mod bench;
 mod complete;
 mod eval;
@@ -49,17 +51,21 @@ pub fn main() -> ExitCode {
     }
 }
 
+/// The parsed command line.
 #[derive(Parser, Debug)]
 #[command(
     name = "embedyn",
     version,
-    about = "Exact, fast rigid-body dynamics from URDF and URDF+"
+    about = "Exact, fast rigid-body dynamics from URDF and URDF+",
+    long_about = None
 )]
 pub struct Cli {
+    /// The command to run.
     #[command(subcommand)]
     pub command: Command,
 }
 
+/// The commands of `embedyn`.
 #[derive(Subcommand, Debug)]
 pub enum Command {
     /// Print the model's structure: joints in coordinate order, bodies, loops and couplings.
@@ -73,7 +79,9 @@ pub enum Command {
     /// Make states consistent with the loops and couplings: solve the dependent coordinates of `q` from the
     /// independent ones (the given dependent entries are the starting guess) and project `v`.
     Complete {
+        /// The model file (URDF or URDF+).
         model: PathBuf,
+        /// Make the URDF root free with a floating joint named `root_joint`.
         #[arg(long)]
         floating: bool,
         /// JSON input: `{"samples": [{"q": [...], "v": [...]}]}`; stdin when absent.
@@ -82,15 +90,18 @@ pub enum Command {
     },
     /// Write a standalone, formatted, `no_std` Rust crate with the model's generated dynamics.
     Generate {
+        /// The model file (URDF or URDF+).
         model: PathBuf,
         /// Output folder (created if needed).
         #[arg(long)]
         out: PathBuf,
+        /// Make the URDF root free with a floating joint named `root_joint`.
         #[arg(long)]
         floating: bool,
         /// Also generate `minv` (the O(N²) inverse mass matrix of Eq. 6).
         #[arg(long)]
         minv: bool,
+        /// Generate exactly these functions (the help text, from the descriptors, lists them).
         #[arg(long, value_delimiter = ',', help = only_help())]
         only: Option<Vec<String>>,
         /// Generate only this scalar type's module (default: both `f64` and `f32`).
@@ -103,7 +114,9 @@ pub enum Command {
     /// Time every algorithm for each engine and scalar (median ns per call, in-process, pre-generated
     /// random states).
     Bench {
+        /// The model file (URDF or URDF+).
         model: PathBuf,
+        /// Make the URDF root free with a floating joint named `root_joint`.
         #[arg(long)]
         floating: bool,
         /// Print JSON instead of a table.
@@ -115,13 +128,18 @@ pub enum Command {
     },
     /// Evaluate an algorithm on the samples of a JSON file (or stdin).
     Eval {
+        /// The model file (URDF or URDF+).
         model: PathBuf,
+        /// The algorithm to evaluate.
         #[arg(long, value_parser = algo_parser())]
         algo: Algo,
+        /// Which engine evaluates it.
         #[arg(long, value_enum, default_value = "interpreted")]
         engine: Engine,
+        /// The scalar type it computes in.
         #[arg(long, value_enum, default_value = "f64")]
         scalar: Scalar,
+        /// Make the URDF root free with a floating joint named `root_joint`.
         #[arg(long)]
         floating: bool,
         /// JSON input: `{"samples": [...]}`; stdin when absent.
@@ -166,6 +184,7 @@ fn only_help() -> String {
     )
 }
 
+/// Which engine `embedyn eval` and `bench` use.
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Engine {
     /// The interpreted solver (the oracle).
@@ -174,9 +193,12 @@ pub enum Engine {
     Generated,
 }
 
+/// The scalar type of a computation.
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Scalar {
+    /// Double precision (64-bit).
     F64,
+    /// Single precision (32-bit), as on a microcontroller FPU.
     F32,
 }
 

@@ -11,6 +11,7 @@
 use embedyn_runtime::constraints::{
     complete_configuration, complete_velocity, constraint_violation,
 };
+use embedyn_runtime::random::SplitMix64;
 use embedyn_runtime::{JointType, Model, Workspace};
 use std::f64::consts::PI;
 
@@ -34,40 +35,13 @@ pub struct State {
     pub v: Vec<f64>,
 }
 
-/// A small deterministic generator (SplitMix64): the same seed gives the same states on every machine.
-#[derive(Clone, Debug)]
-pub struct Rng(u64);
-
-impl Rng {
-    pub fn new(seed: u64) -> Rng {
-        Rng(seed)
-    }
-
-    fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
-    }
-
-    /// Uniform in `[lo, hi)`.
-    pub fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * ((self.next_u64() >> 11) as f64 / (1u64 << 53) as f64)
-    }
-
-    fn below(&mut self, n: usize) -> usize {
-        (self.next_u64() % n as u64) as usize
-    }
-}
-
 /// Draws `count` consistent states of `model` (deterministic for a given `seed`).
 pub fn consistent_states(
     model: &Model<f64>,
     count: usize,
     seed: u64,
 ) -> Result<Vec<State>, String> {
-    let mut rng = Rng::new(seed);
+    let mut rng = SplitMix64::new(seed);
     let mut ws = Workspace::new(model);
     let mut found: Vec<State> = Vec::with_capacity(count);
     if !model.has_constraints() {
@@ -110,7 +84,7 @@ pub fn consistent_states(
 
 /// Any configuration: angles in ±π, displacements in ±1 m, a free body anywhere in the unit cube with
 /// a uniformly random orientation.
-fn draw_configuration(model: &Model<f64>, rng: &mut Rng) -> Vec<f64> {
+fn draw_configuration(model: &Model<f64>, rng: &mut SplitMix64) -> Vec<f64> {
     let mut q = model.neutral_configuration();
     for j in &model.joints {
         let i = j.q_index;
@@ -135,7 +109,7 @@ fn draw_configuration(model: &Model<f64>, rng: &mut Rng) -> Vec<f64> {
 
 /// Uniform on the unit sphere of quaternions (a draw in the unit ball, accepted away from the centre,
 /// normalized).
-fn random_unit_quaternion(rng: &mut Rng) -> [f64; 4] {
+fn random_unit_quaternion(rng: &mut SplitMix64) -> [f64; 4] {
     loop {
         let x: [f64; 4] = core::array::from_fn(|_| rng.uniform(-1.0, 1.0));
         let n = x.iter().map(|c| c * c).sum::<f64>().sqrt();
@@ -148,7 +122,7 @@ fn random_unit_quaternion(rng: &mut Rng) -> [f64; 4] {
 
 /// `base` with each independent coordinate moved by up to [`STEP`] (the dependent ones stay, as the
 /// starting guess of the completion: the same assembly branch).
-fn perturb(model: &Model<f64>, base: &[f64], rng: &mut Rng) -> Vec<f64> {
+fn perturb(model: &Model<f64>, base: &[f64], rng: &mut SplitMix64) -> Vec<f64> {
     let mut q = base.to_vec();
     for (b, j) in model.joints.iter().enumerate() {
         if !model.is_independent(b) || j.joint_type == JointType::Floating {
@@ -167,7 +141,7 @@ fn complete(
     model: &Model<f64>,
     ws: &mut Workspace<f64>,
     q: &mut [f64],
-    rng: &mut Rng,
+    rng: &mut SplitMix64,
 ) -> Option<State> {
     complete_configuration(model, ws, q).ok()?;
     let mut v: Vec<f64> = (0..model.nv()).map(|_| rng.uniform(-1.0, 1.0)).collect();

@@ -51,9 +51,13 @@ pub enum Dim {
 /// The sizes of one model that [`Dim`]s resolve to.
 #[derive(Clone, Copy, Debug)]
 pub struct Dims {
+    /// Length of `q`.
     pub nq: usize,
+    /// Length of `v`.
     pub nv: usize,
+    /// Number of independent velocities.
     pub ni: usize,
+    /// Number of links on moving bodies.
     pub frames: usize,
 }
 
@@ -96,7 +100,9 @@ impl Dim {
 /// One argument of a generated function: `name: &[S; len]`.
 #[derive(Clone, Copy, Debug)]
 pub struct InputSpec {
+    /// The argument's name.
     pub name: &'static str,
+    /// Its length.
     pub len: Dim,
     /// Physical units of the entries.
     pub unit: &'static str,
@@ -114,7 +120,9 @@ pub enum Shape {
 /// One output argument of a generated function.
 #[derive(Clone, Copy, Debug)]
 pub struct OutputSpec {
+    /// The argument's name.
     pub name: &'static str,
+    /// Its shape.
     pub shape: Shape,
     /// Physical units of the entries.
     pub unit: &'static str,
@@ -146,6 +154,7 @@ pub enum WhenGenerated {
 /// How fast a function's code grows with the model (for the size guard's advice).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Growth {
+    /// With the number of degrees of freedom.
     Linear,
     /// With the square of the number of degrees of freedom.
     Quadratic,
@@ -154,7 +163,9 @@ pub enum Growth {
 /// The model's numbers the size guard predicts a function's operations from (see `size.rs`).
 #[derive(Clone, Copy, Debug)]
 pub struct SizeCounts {
+    /// Degrees of freedom.
     pub nv: f64,
+    /// Independent degrees of freedom.
     pub ni: f64,
     /// Links on moving bodies.
     pub links: f64,
@@ -165,7 +176,9 @@ pub struct SizeCounts {
 /// What tracing an algorithm gives: each output's values (row-major) in the order of
 /// [`AlgorithmSpec::outputs`], and the returned scalar.
 pub struct Traced {
+    /// Each output's values, row-major.
     pub outputs: Vec<Vec<Sym>>,
+    /// The returned scalar, if the function returns one.
     pub returned: Option<Sym>,
 }
 
@@ -189,6 +202,7 @@ pub type InterpretedFn =
 
 /// Everything about one algorithm.
 pub struct AlgorithmSpec {
+    /// Which algorithm this describes.
     pub algorithm: Algorithm,
     /// The generated function's name, also the name in `only(…)`, `--only` and `--algo`.
     pub name: &'static str,
@@ -202,18 +216,24 @@ pub struct AlgorithmSpec {
     pub doc: &'static str,
     /// The documentation for a model with constraints, when it differs.
     pub doc_with_constraints: Option<&'static str>,
+    /// The inputs, in argument order.
     pub inputs: &'static [InputSpec],
+    /// The outputs, in argument order after the inputs.
     pub outputs: &'static [OutputSpec],
+    /// The scalar the generated function returns.
     pub returns: Returns,
     /// Exists only for a model with loops, couplings or mimic joints.
     pub needs_constraints: bool,
+    /// When it is generated without `only(…)`.
     pub generated: WhenGenerated,
     /// The standalone crate's README: the note after the signature, for a tree and, when it differs, for
     /// a model with constraints.
     pub readme_note: &'static str,
+    /// The README note for a model with constraints, when it differs from `readme_note`.
     pub readme_note_with_constraints: Option<&'static str>,
     /// Whether `embedyn eval --algo` (and `bench`) offers it.
     pub cli: Option<CliSpec>,
+    /// How its code grows with the model.
     pub growth: Growth,
     /// The size guard's prediction of the traced operations (an upper bound; see `size.rs`).
     pub predicted_operations: fn(&SizeCounts) -> f64,

@@ -336,39 +336,6 @@ fn constraint_location(robot: &Robot, names: &str) -> Location {
     Location::new(&robot.source, None, format!("constraints {names}"))
 }
 
-/// The bodies from `b` up to, not including, `top`.
-fn path(body_parent: &[Option<usize>], b: Option<usize>, top: Option<usize>) -> Vec<usize> {
-    let mut out = Vec::new();
-    let mut cur = b;
-    while cur != top {
-        let Some(c) = cur else { break };
-        out.push(c);
-        cur = body_parent[c];
-    }
-    out
-}
-
-fn common_ancestor(
-    body_parent: &[Option<usize>],
-    a: Option<usize>,
-    b: Option<usize>,
-) -> Option<usize> {
-    let mut ancestors = Vec::new();
-    let mut cur = a;
-    while let Some(c) = cur {
-        ancestors.push(c);
-        cur = body_parent[c];
-    }
-    let mut cur = b;
-    while let Some(c) = cur {
-        if ancestors.contains(&c) {
-            return Some(c);
-        }
-        cur = body_parent[c];
-    }
-    None
-}
-
 /// URDF+ loops and couplings and URDF mimic joints, as runtime constraints (docs/model-format.md).
 fn add_constraints(
     robot: &Robot,
@@ -378,6 +345,7 @@ fn add_constraints(
     builder: &mut embedyn_runtime::ModelBuilder<f64>,
 ) -> Result<(), LoadError> {
     use embedyn_runtime::constraints::{Constraint, ConstraintKind, LoopClosure, LoopType};
+    use embedyn_runtime::tree;
     let path_of = &robot.source;
     for l in &robot.loops {
         let (pb, ppose) = link_frames[l.predecessor.link];
@@ -411,12 +379,17 @@ fn add_constraints(
     for c in &robot.couplings {
         let pb = link_frames[c.predecessor].0;
         let sb = link_frames[c.successor].0;
-        let top = common_ancestor(body_parent, pb, sb);
+        let parent = |body: usize| body_parent[body];
+        let top = tree::common_ancestor(parent, pb, sb);
+        let mut predecessor_path = Vec::new();
+        tree::path_to_ancestor(parent, pb, top, &mut predecessor_path);
+        let mut successor_path = Vec::new();
+        tree::path_to_ancestor(parent, sb, top, &mut successor_path);
         let mut terms: Vec<(usize, f64)> = Vec::new();
-        for b in path(body_parent, pb, top) {
+        for b in predecessor_path {
             terms.push((b, c.ratio));
         }
-        for b in path(body_parent, sb, top) {
+        for b in successor_path {
             terms.push((b, -1.0));
         }
         if terms.is_empty() {

@@ -6,6 +6,7 @@ use std::path::{Path, PathBuf};
 /// Where in a model file something is: the file, the element (`joint "knee"`) and its line.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Location {
+    /// The model file.
     pub file: PathBuf,
     /// 1-based line, when known.
     pub line: Option<u32>,
@@ -14,6 +15,7 @@ pub struct Location {
 }
 
 impl Location {
+    /// A location in `file` at `line` (1-based, when known) naming `element`.
     pub fn new(file: &Path, line: Option<u32>, element: impl Into<String>) -> Self {
         Location {
             file: file.to_path_buf(),
@@ -57,11 +59,14 @@ impl fmt::Display for Location {
 /// A model that cannot be loaded. The message names the file, the element and, where possible, the line.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct LoadError {
+    /// Where in the model file.
     pub location: Location,
+    /// What is wrong.
     pub message: String,
 }
 
 impl LoadError {
+    /// An error at `location` saying `message`.
     pub fn new(location: Location, message: impl Into<String>) -> Self {
         LoadError {
             location,
@@ -82,7 +87,9 @@ impl std::error::Error for LoadError {}
 /// inequality): the model loads and the warning is reported.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Warning {
+    /// Where in the model file.
     pub location: Location,
+    /// What is unusual.
     pub message: String,
 }
 

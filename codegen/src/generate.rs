@@ -21,6 +21,7 @@ use quote::{format_ident, quote};
 /// What to generate.
 #[derive(Clone, Debug)]
 pub struct GenerateOptions {
+    /// How the model is assembled from the file (floating root, …).
     pub model: ModelOptions,
     /// Default: `kinematics`, `aba`, `rnea`, `crba` (the O(N²) inverse only when asked for).
     pub algorithms: Vec<Algorithm>,

@@ -12,6 +12,8 @@
 //! println!("{} has {} degrees of freedom", model.name, model.nv());
 //! ```
 
+#![warn(missing_docs)]
+
 pub mod algorithm;
 mod assemble;
 pub mod bounded_read;

@@ -27,7 +27,7 @@ const KEYWORDS: &[&str] = &[
 /// name does not start with a letter.
 ///
 /// The result is lowercase ASCII letters, digits and single underscores, never a keyword, never empty,
-/// never starting with a digit or an underscore, at most about [`MAX_IDENTIFIER`] characters. A name that
+/// never starting with a digit or an underscore, at most about 48 characters (`MAX_IDENTIFIER`). A name that
 /// is already such an identifier (up to ASCII case) is kept as it is; any other name is transliterated
 /// (every other character becomes `_`) and gets `_` and 8 hex digits of the SHA-256 of the original name,
 /// so that names which sanitize alike (`a-b`, `a.b`, `a b`) still give distinct identifiers. Results of

@@ -19,28 +19,40 @@ pub use crate::names::crate_name;
 /// crate's, and, with `bins`, the `embedyn eval --engine generated` runner's.
 #[derive(Serialize)]
 pub struct Manifest {
+    /// `[package]`.
     pub package: Package,
+    /// `[[bin]]` targets (only the runner has them).
     #[serde(rename = "bin", skip_serializing_if = "Vec::is_empty")]
     pub bins: Vec<Binary>,
+    /// `[dependencies]`: name and version requirement.
     pub dependencies: BTreeMap<String, String>,
     /// Empty: the crate is not part of any enclosing workspace.
     pub workspace: BTreeMap<String, String>,
 }
 
+/// The `[package]` table.
 #[derive(Serialize)]
 pub struct Package {
+    /// The crate's name.
     pub name: String,
+    /// Its version.
     pub version: String,
+    /// Its Rust edition.
     pub edition: String,
+    /// One line saying what it is.
     pub description: String,
+    /// Its licence (SPDX expression).
     pub license: String,
+    /// Whether `cargo publish` may publish it (always `false`).
     pub publish: bool,
 }
 
 /// A `[[bin]]` target.
 #[derive(Serialize)]
 pub struct Binary {
+    /// The binary's name.
     pub name: String,
+    /// Its main source file, relative to the manifest.
     pub path: String,
 }
 
@@ -65,6 +77,7 @@ impl Manifest {
         }
     }
 
+    /// The manifest's text (the serializer's error as a message).
     pub fn to_toml(&self) -> Result<String, String> {
         toml::to_string(self).map_err(|e| format!("cannot write Cargo.toml: {e}"))
     }

@@ -14,7 +14,9 @@ use std::ops::{Add, AddAssign, Div, DivAssign, Mul, MulAssign, Neg, Sub, SubAssi
 /// A traced scalar: a constant known at generation time, or a node of the tape.
 #[derive(Clone, Copy, Debug)]
 pub enum Sym {
+    /// A value known at generation time (folded, never recorded).
     Const(f64),
+    /// The value of tape node `n`.
     Node(u32),
 }
 
@@ -23,23 +25,38 @@ pub enum Sym {
 pub enum Op {
     /// Input `index` of argument `arg` (0: q, 1: v, 2: tau/qdd).
     Input {
+        /// Which argument: 0 `q`, 1 `v`, 2 `tau`/`qdd`.
         arg: u8,
+        /// The entry of that argument.
         index: u32,
     },
+    /// `a + b`.
     Add(Sym, Sym),
+    /// `a - b`.
     Sub(Sym, Sym),
+    /// `a * b`.
     Mul(Sym, Sym),
+    /// `a / b`.
     Div(Sym, Sym),
+    /// `-a`.
     Neg(Sym),
+    /// `a.sqrt()`.
     Sqrt(Sym),
+    /// `a.sin()`.
     Sin(Sym),
+    /// `a.cos()`.
     Cos(Sym),
+    /// `a.abs()`.
     Abs(Sym),
     /// `if lhs > rhs { then } else { otherwise }`.
     Select {
+        /// Left side of the comparison.
         lhs: Sym,
+        /// Right side of the comparison.
         rhs: Sym,
+        /// The value when `lhs > rhs`.
         then: Sym,
+        /// The value otherwise.
         otherwise: Sym,
     },
 }
@@ -65,13 +82,18 @@ fn sym_key(s: Sym) -> (u8, u64) {
 /// neither the operations nor their order.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Label {
+    /// The body or joint the value belongs to.
     pub owner: String,
+    /// What the value is (`v`, `d_inv`, …).
     pub quantity: String,
+    /// Which component (empty for a scalar).
     pub component: String,
 }
 
+/// The recording of one traced function: its operations in order, deduplicated as they are added.
 #[derive(Default)]
 pub struct Tape {
+    /// The operations; node `n` is `nodes[n]`.
     pub nodes: Vec<Op>,
     map: HashMap<Key, u32>,
     /// The first name given to each node (a node reached again under another name, by folding or
@@ -150,6 +172,7 @@ pub fn snap(x: f64) -> f64 {
 }
 
 impl Sym {
+    /// The value, when it is a generation-time constant.
     pub fn constant(&self) -> Option<f64> {
         match self {
             Sym::Const(c) => Some(*c),

@@ -17,7 +17,9 @@ use std::path::Path;
 /// A parsed model and the warnings its data raised.
 #[derive(Clone, Debug)]
 pub struct Loaded {
+    /// The model as the file describes it.
     pub robot: Robot,
+    /// Unusual but valid data, each at its element.
     pub warnings: Vec<Warning>,
 }
 

@@ -1,6 +1,8 @@
 //! The `robot!` proc-macro: a thin shell over `embedyn-codegen`, which does all the work (the same
 //! function serves `build.rs` and `embedyn generate`).
 
+#![warn(missing_docs)]
+
 use proc_macro::TokenStream;
 use quote::quote;
 use syn::parse::{Parse, ParseStream};

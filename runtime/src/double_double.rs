@@ -205,7 +205,7 @@ impl DoubleDouble {
     /// Square root; NaN for negative arguments, `±0` for `±0`.
     ///
     /// One Newton step from the `f64` root: with `s = √hi`, the exact residual `self − s²` (the square
-    /// is formed exactly with [`two_prod`]) divided by `2s` is the correction. Newton doubles the number
+    /// is formed exactly with `two_prod`) divided by `2s` is the correction. Newton doubles the number
     /// of correct bits, so 53 become ~106; the neglected second-order term is `(correction)²/(2s)`,
     /// about 2⁻¹⁰⁷ relative.
     pub fn sqrt(self) -> Self {
@@ -686,22 +686,18 @@ mod tests {
 
     type Dd = DoubleDouble;
 
-    /// Deterministic xorshift64* generator, so failures reproduce and no extra dependency is needed.
-    struct Rng(u64);
+    /// The crate's deterministic generator, so failures reproduce, with this module's draws on top.
+    struct Rng(crate::random::SplitMix64);
 
     impl Rng {
-        fn next_u64(&mut self) -> u64 {
-            self.0 ^= self.0 >> 12;
-            self.0 ^= self.0 << 25;
-            self.0 ^= self.0 >> 27;
-            self.0.wrapping_mul(0x2545_f491_4f6c_dd1d)
+        fn new(seed: u64) -> Rng {
+            Rng(crate::random::SplitMix64::new(seed))
         }
-        /// Uniform in [0, 1).
-        fn unit(&mut self) -> f64 {
-            (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
+        fn next_u64(&mut self) -> u64 {
+            self.0.next_u64()
         }
         fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
-            lo + (hi - lo) * self.unit()
+            self.0.uniform(lo, hi)
         }
         /// A double-double with a random (full) trailing part, magnitude in [lo, hi).
         fn dd(&mut self, lo: f64, hi: f64) -> Dd {
@@ -775,7 +771,7 @@ mod tests {
 
     #[test]
     fn error_free_transformations_are_exact() {
-        let mut rng = Rng(0x1234_5678_9abc_def1);
+        let mut rng = Rng::new(0x1234_5678_9abc_def1);
         for _ in 0..10_000 {
             // Products of integers below 2^53: exact in i128, must equal p + e exactly.
             let a = rng.int(53);
@@ -825,7 +821,7 @@ mod tests {
 
     #[test]
     fn add_and_sub_match_integer_arithmetic() {
-        let mut rng = Rng(0x0dd0_0dd0_0dd0_0dd1);
+        let mut rng = Rng::new(0x0dd0_0dd0_0dd0_0dd1);
         for _ in 0..10_000 {
             let a = rng.int(100);
             let bits = rng.next_u64() as u32 % 100 + 1;
@@ -846,7 +842,7 @@ mod tests {
         let x = Dd::new(1.0, 1e-20);
         let y = Dd::new(-1.0, 1e-25);
         assert_eq!(x + y, Dd::new(1e-20, 1e-25));
-        let mut rng = Rng(0x5107_5107);
+        let mut rng = Rng::new(0x5107_5107);
         for _ in 0..10_000 {
             let a = rng.dd(-1e6, 1e6);
             let c = a.hi() * f64::EPSILON * rng.uniform(-0.5, 0.5);
@@ -859,7 +855,7 @@ mod tests {
 
     #[test]
     fn mul_matches_integer_arithmetic() {
-        let mut rng = Rng(0xfeed_beef_cafe_f00d);
+        let mut rng = Rng::new(0xfeed_beef_cafe_f00d);
         let mut worst = 0.0_f64;
         for _ in 0..10_000 {
             // Exact: two 53-bit factors give a 106-bit product.
@@ -881,7 +877,7 @@ mod tests {
 
     #[test]
     fn div_matches_integer_arithmetic() {
-        let mut rng = Rng(0xabad_1dea_5eed_0001);
+        let mut rng = Rng::new(0xabad_1dea_5eed_0001);
         let mut worst = 0.0_f64;
         for _ in 0..10_000 {
             // Exact quotients must come back exactly.
@@ -921,7 +917,7 @@ mod tests {
 
     #[test]
     fn random_round_trips_are_accurate() {
-        let mut rng = Rng(42);
+        let mut rng = Rng::new(42);
         let (mut worst_div, mut worst_add) = (0.0_f64, 0.0_f64);
         for _ in 0..10_000 {
             let a = rng.dd(-1e3, 1e3);
@@ -949,7 +945,7 @@ mod tests {
         let reference = parse("1.41421356237309504880168872420969807856967188");
         assert!(rel_err(root, reference) <= 1e-31);
 
-        let mut rng = Rng(7);
+        let mut rng = Rng::new(7);
         let mut worst = 0.0_f64;
         for _ in 0..10_000 {
             let x = rng.dd(1e-10, 1e10);
@@ -976,7 +972,7 @@ mod tests {
             let err = abs_err(s.square() + c.square(), Dd::ONE);
             assert!(err <= 1e-30, "sin²+cos²−1 = {err:e} at {x}");
         }
-        let mut rng = Rng(99);
+        let mut rng = Rng::new(99);
         for _ in 0..2_000 {
             let x = rng.dd(-20.0, 20.0);
             let (s, c) = x.sin_cos();
@@ -989,7 +985,7 @@ mod tests {
 
     #[test]
     fn sin_cos_agree_with_f64() {
-        let mut rng = Rng(2024);
+        let mut rng = Rng::new(2024);
         for _ in 0..20_000 {
             let x = rng.uniform(-1e3, 1e3);
             let (s, c) = Dd::from(x).sin_cos();
@@ -1027,7 +1023,7 @@ mod tests {
 
     #[test]
     fn sin_cos_symmetries() {
-        let mut rng = Rng(5);
+        let mut rng = Rng::new(5);
         for _ in 0..1_000 {
             let x = rng.dd(0.0, 50.0);
             assert_eq!((-x).sin(), -x.sin());
@@ -1043,7 +1039,7 @@ mod tests {
             .iter()
             .map(|&x| Dd::from(x))
             .collect();
-        let mut rng = Rng(11);
+        let mut rng = Rng::new(11);
         points.extend((0..500).map(|_| rng.dd(-10.0, 10.0)));
         let mut worst = 0.0_f64;
         for x in points {

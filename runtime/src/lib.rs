@@ -10,6 +10,7 @@
 //! Conventions (docs/conventions.md): spatial vectors are `[angular; linear]`, SI units, gravity
 //! (0, 0, −9.81) m/s² by default; a floating base uses Pinocchio's free-flyer layout.
 
+#![warn(missing_docs)]
 #![no_std]
 
 #[cfg(feature = "alloc")]
@@ -33,6 +34,8 @@ mod alloc_prelude {
 #[cfg(feature = "alloc")]
 mod algorithms;
 #[cfg(feature = "alloc")]
+mod check;
+#[cfg(feature = "alloc")]
 pub mod constraints;
 // Fused multiply-add and exact rounding come from the platform's libm.
 #[cfg(feature = "std")]
@@ -41,10 +44,11 @@ mod double_double;
 pub mod linalg;
 #[cfg(feature = "alloc")]
 mod model;
-#[cfg(feature = "alloc")]
-mod model_constants;
+pub mod random;
 mod scalar;
 pub mod spatial;
+#[cfg(feature = "alloc")]
+pub mod tree;
 
 #[cfg(feature = "alloc")]
 pub use algorithms::{

@@ -758,19 +758,16 @@ mod tests {
 
     type Dd = DoubleDouble;
 
-    /// Deterministic xorshift64* generator, so failures reproduce.
-    struct Rng(u64);
+    /// The crate's deterministic generator, so failures reproduce, with this module's draws on top.
+    struct Rng(crate::random::SplitMix64);
 
     impl Rng {
-        fn next_u64(&mut self) -> u64 {
-            self.0 ^= self.0 >> 12;
-            self.0 ^= self.0 << 25;
-            self.0 ^= self.0 >> 27;
-            self.0.wrapping_mul(0x2545_f491_4f6c_dd1d)
+        fn new(seed: u64) -> Rng {
+            Rng(crate::random::SplitMix64::new(seed))
         }
         /// Uniform in [-1, 1).
         fn signed_unit(&mut self) -> f64 {
-            2.0 * ((self.next_u64() >> 11) as f64 / (1u64 << 53) as f64) - 1.0
+            self.0.uniform(-1.0, 1.0)
         }
         fn matrix<T: Real>(&mut self, m: usize, n: usize) -> DMatrix<T> {
             DMatrix::from_fn(m, n, |_, _| T::from_f64(self.signed_unit()))
@@ -873,7 +870,7 @@ mod tests {
     /// Solves random systems with known solutions; returns the largest normwise relative residual
     /// `‖A x − b‖∞ / (‖A‖∞ ‖x‖∞)` and the largest forward error divided by `cond₁(A)`.
     fn check_lu_random<T: Real>(residual_tol: f64) -> (f64, f64) {
-        let mut rng = Rng(0x1234_5678_9abc_def1);
+        let mut rng = Rng::new(0x1234_5678_9abc_def1);
         let (mut worst_residual, mut worst_forward) = (0.0f64, 0.0f64);
         for a in lu_test_matrices::<T>(&mut rng) {
             let n = a.nrows();
@@ -923,7 +920,7 @@ mod tests {
     /// `P A = L U` with the factor of `lu_in_place`, `A A⁻¹ = A⁻¹ A = I`, and the multi-column solve
     /// agreeing with column-by-column solves.
     fn check_lu_factor_and_inverse<T: Real>(tol: f64) -> f64 {
-        let mut rng = Rng(99);
+        let mut rng = Rng::new(99);
         let mut worst = 0.0f64;
         for a in lu_test_matrices::<T>(&mut rng) {
             let n = a.nrows();
@@ -1136,7 +1133,7 @@ mod tests {
 
     #[test]
     fn condition_number_f64_agrees_with_double_double() {
-        let mut rng = Rng(7);
+        let mut rng = Rng::new(7);
         for n in [2, 5, 10, 30] {
             let a = rng.matrix::<f64>(n, n);
             let c64 = condition_number_1_of(&a);
@@ -1183,7 +1180,7 @@ mod tests {
             assert!((d[0].abs() - largest).abs() <= T::from_f64(tol) * scale);
         }
         // Qᵀ then Q is the identity on vectors; Qᵀ a_{P(0)} = R e_0.
-        let mut rng = Rng(5);
+        let mut rng = Rng::new(5);
         let v = rng.vector::<T>(m);
         let mut w = v.clone();
         qr.apply_qt_in_place(&mut w);
@@ -1199,7 +1196,7 @@ mod tests {
     }
 
     fn check_qr<T: Real>(tol: f64) -> f64 {
-        let mut rng = Rng(31);
+        let mut rng = Rng::new(31);
         let mut worst = 0.0f64;
         for (m, n) in [
             (1, 1),
@@ -1323,7 +1320,7 @@ mod tests {
         assert!(independent_rows(&DMatrix::<T>::zeros(4, 2), 1e-12).is_empty());
 
         // A random rank-3 8×5 matrix (dependent rows are combinations of others).
-        let mut rng = Rng(77);
+        let mut rng = Rng::new(77);
         let b = matmul(&rng.matrix::<T>(8, 3), &rng.matrix::<T>(3, 5));
         let rows = independent_rows(&b, 1e-12);
         assert_eq!(rows.len(), 3);
@@ -1347,7 +1344,7 @@ mod tests {
         let a = from_rows::<T>(&[&[1.0, 1.0, 0.0], &[0.0, 1e-3, 1.0], &[0.0, 0.0, 0.0]]);
         assert_eq!(independent_columns(&a, 1e-12), vec![1, 2]);
         // Columns c₀, 3c₀, 0, c₁.
-        let mut rng = Rng(3);
+        let mut rng = Rng::new(3);
         let c0 = rng.vector::<T>(5);
         let c1 = rng.vector::<T>(5);
         let b = DMatrix::from_fn(5, 4, |i, j| match j {
@@ -1391,7 +1388,7 @@ mod tests {
 
     /// Returns the largest relative error over the least-squares cases.
     fn check_least_squares<T: Real>(tol: f64) -> f64 {
-        let mut rng = Rng(2024);
+        let mut rng = Rng::new(2024);
         let mut worst = 0.0f64;
         let mut record = |err: f64, what: &str| {
             assert!(
@@ -1546,7 +1543,7 @@ mod tests {
 
     #[test]
     fn select_pivoted_solve_matches_lu_and_bounds_the_condition_number() {
-        let mut rng = Rng(17);
+        let mut rng = Rng::new(17);
         for n in 1..=6 {
             for trial in 0..40 {
                 let mut a: DMatrix<f64> = rng.matrix(n, n);

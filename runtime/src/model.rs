@@ -30,12 +30,14 @@ pub enum JointType {
 }
 
 impl JointType {
+    /// Length of this joint's part of `q` (7 for floating: position and unit quaternion, else 1).
     pub fn nq(self) -> usize {
         match self {
             JointType::Floating => 7,
             _ => 1,
         }
     }
+    /// Length of this joint's part of `v` (6 for floating, else 1).
     pub fn nv(self) -> usize {
         match self {
             JointType::Floating => 6,
@@ -56,7 +58,9 @@ impl JointType {
 /// A moving joint: connects body `parent` (or the world) to the body of the same index.
 #[derive(Clone, Debug)]
 pub struct Joint<T: Real> {
+    /// The joint's name, as in the model file.
     pub name: String,
+    /// What the joint lets move.
     pub joint_type: JointType,
     /// Unit axis in the joint frame (unused by floating joints).
     pub axis: Vector3<T>,
@@ -65,14 +69,18 @@ pub struct Joint<T: Real> {
     /// Pose of the joint frame in the parent body frame; at zero displacement the child body frame is
     /// the joint frame.
     pub placement: Transform<T>,
+    /// Index of this joint's first coordinate in `q`.
     pub q_index: usize,
+    /// Index of this joint's first entry in `v`, `tau` and `qdd`.
     pub v_index: usize,
 }
 
 impl<T: Real> Joint<T> {
+    /// Length of this joint's part of `q`.
     pub fn nq(&self) -> usize {
         self.joint_type.nq()
     }
+    /// Length of this joint's part of `v`.
     pub fn nv(&self) -> usize {
         self.joint_type.nv()
     }
@@ -157,8 +165,11 @@ pub struct Body<T: Real> {
 /// A kinematic tree ready for the algorithms. Build it with [`Model::builder`].
 #[derive(Clone, Debug)]
 pub struct Model<T: Real> {
+    /// The robot's name (URDF `<robot name>`).
     pub name: String,
+    /// The joints, one per body: `joints[i]` moves `bodies[i]`; parents come before children.
     pub joints: Vec<Joint<T>>,
+    /// The bodies, in depth-first order (each subtree is a contiguous range).
     pub bodies: Vec<Body<T>>,
     /// Gravity in the world frame, (0, 0, −9.81) m/s² by default.
     pub gravity: Vector3<T>,
@@ -177,42 +188,94 @@ pub struct Model<T: Real> {
 /// Errors in the structure of a model given to [`ModelBuilder`].
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum ModelError {
+    /// A joint names a parent body that was not added before it.
     #[error("joint `{joint}`: parent body {parent} must be added before its children")]
-    ParentNotYetAdded { joint: String, parent: usize },
+    ParentNotYetAdded {
+        /// The joint.
+        joint: String,
+        /// The parent body's index.
+        parent: usize,
+    },
+    /// A joint's axis is zero or not finite.
     #[error("joint `{joint}`: the axis must be a non-zero finite vector")]
-    BadAxis { joint: String },
+    BadAxis {
+        /// The joint.
+        joint: String,
+    },
+    /// A floating joint has a parent body.
     #[error("joint `{joint}`: a floating joint must connect a body to the world")]
-    FloatingNotRoot { joint: String },
+    FloatingNotRoot {
+        /// The joint.
+        joint: String,
+    },
+    /// A joint's subtree has no inertia about its axis, so the mass matrix is singular.
     #[error("joint `{joint}`: the bodies of the subtree it moves have no inertia about its axis (D = {d:e}), so its acceleration is undetermined")]
-    NoInertiaAboutAxis { joint: String, d: f64 },
+    NoInertiaAboutAxis {
+        /// The joint.
+        joint: String,
+        /// The articulated inertia about its axis.
+        d: f64,
+    },
+    /// A loop's frames cannot be brought together by any configuration.
     #[error("{group}: the loop's two frames never meet: no configuration closes it (smallest residual found {gap:.3e}; check the <origin> of its predecessor and successor)")]
-    LoopNeverCloses { group: String, gap: f64 },
+    LoopNeverCloses {
+        /// The group, by the names of its constraints.
+        group: String,
+        /// The smallest residual found.
+        gap: f64,
+    },
+    /// A constraint involves no moving joint.
     #[error("constraint `{constraint}` involves no moving joint")]
-    EmptyConstraint { constraint: String },
+    EmptyConstraint {
+        /// The constraint's name.
+        constraint: String,
+    },
+    /// A floating joint is part of a loop or coupling.
     #[error("joint `{joint}`: a floating joint cannot be part of a loop or coupling")]
-    FloatingInGroup { joint: String },
+    FloatingInGroup {
+        /// The joint.
+        joint: String,
+    },
+    /// A group declares a different number of dependent joints than its constraints remove.
     #[error("{group}: {declared} joint(s) are declared dependent (independent=\"false\" or <mimic>), but the constraints remove {needed} degree(s) of freedom")]
     DependentMismatch {
+        /// The group, by the names of its constraints.
         group: String,
+        /// How many joints the file declares dependent.
         declared: usize,
+        /// How many degrees of freedom the constraints remove.
         needed: usize,
     },
+    /// The declared dependent joints cannot be solved from the independent ones.
     #[error("{group}: the dependent joints cannot be solved from the independent ones (cond(Y1) = {condition:e} at a generic assembled configuration); declare other joints independent=\"false\"")]
-    SingularDependentChoice { group: String, condition: f64 },
+    SingularDependentChoice {
+        /// The group, by the names of its constraints.
+        group: String,
+        /// The condition number of the dependent part of the constraint Jacobian.
+        condition: f64,
+    },
+    /// A model constant does not fit the scalar type.
     #[error("{element}: its {what} {value:e} {}", fit_problem(.too_large, .value, .scalar))]
     ConstantDoesNotFit {
+        /// What the constant belongs to.
         element: ModelElement,
+        /// Which constant it is (`"mass"`, …).
         what: &'static str,
+        /// Its value (f64).
         value: f64,
         /// The scalar type's name (`"f32"`).
         scalar: &'static str,
         /// Whether it is too large (else: too small to keep its precision).
         too_large: bool,
     },
+    /// Combining the inertias of a joint's subtree overflows the scalar type.
     #[error("joint `{joint}`: the inertias of the bodies it moves overflow when the dynamics combines them (the largest is body `{body}`'s, {magnitude:e}); the model's numbers are too large for this scalar type")]
     InertiaOverflow {
+        /// The joint whose subtree overflows.
         joint: String,
+        /// The body with the largest inertia.
         body: String,
+        /// The magnitude of that inertia.
         magnitude: f64,
     },
 }
@@ -232,9 +295,11 @@ fn fit_problem(too_large: &bool, value: &f64, scalar: &str) -> String {
 pub enum ModelElement {
     /// A body, or one of the links merged into it, by link name.
     Body(String),
+    /// A joint, by name.
     Joint(String),
     /// A loop, coupling or mimic relation, by name.
     Constraint(String),
+    /// The gravity vector.
     Gravity,
 }
 
@@ -263,6 +328,7 @@ pub struct ModelBuilder<T: Real> {
 }
 
 impl<T: Real> Model<T> {
+    /// Starts a model named `name` with gravity (0, 0, −9.81) m/s²; add bodies, then [`ModelBuilder::build`].
     pub fn builder(name: impl Into<String>) -> ModelBuilder<T> {
         ModelBuilder {
             name: name.into(),
@@ -284,6 +350,7 @@ impl<T: Real> Model<T> {
     pub fn nv(&self) -> usize {
         self.nv
     }
+    /// Number of bodies (= number of joints).
     pub fn nbodies(&self) -> usize {
         self.bodies.len()
     }
@@ -301,6 +368,7 @@ impl<T: Real> Model<T> {
         start..end
     }
 
+    /// Index of the joint (and of its body) named `name`.
     pub fn joint_index(&self, name: &str) -> Option<usize> {
         self.joints.iter().position(|j| j.name == name)
     }
@@ -398,9 +466,9 @@ impl<T: Real> Model<T> {
     /// check of [`ModelBuilder::build`], in `U`'s precision). Build in f64 and convert, so that every scalar
     /// type gets the structure decided once, in f64.
     pub fn try_cast<U: Real>(&self) -> Result<Model<U>, ModelError> {
-        crate::model_constants::check_constants_fit::<T, U>(self)?;
+        crate::check::check_constants_fit::<T, U>(self)?;
         let model = self.cast::<U>();
-        crate::algorithms::check_articulated_inertia(&model)?;
+        crate::check::check_converted(&model)?;
         Ok(model)
     }
 
@@ -455,6 +523,7 @@ impl<T: Real> Model<T> {
 }
 
 impl<T: Real> ModelBuilder<T> {
+    /// Sets gravity in the world frame (m/s²).
     pub fn gravity(mut self, g: Vector3<T>) -> Self {
         self.gravity = g;
         self
@@ -631,7 +700,7 @@ impl<T: Real> ModelBuilder<T> {
             groups: Vec::new(),
             group_of: vec![None; n],
         };
-        crate::algorithms::check_articulated_inertia(&model)?;
+        crate::check::check_built(&model)?;
         if !model.constraints.is_empty() {
             model.groups = crate::constraints::build_groups(&model, &declared)?;
             for (g, group) in model.groups.iter().enumerate() {

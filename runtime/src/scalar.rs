@@ -39,15 +39,21 @@ pub trait Real:
     fn from_f64(x: f64) -> Self;
     /// Converts to `f64`, rounding to nearest where the type is wider.
     fn to_f64(self) -> f64;
+    /// Square root.
     fn sqrt(self) -> Self;
+    /// Sine (rad).
     fn sin(self) -> Self;
+    /// Cosine (rad).
     fn cos(self) -> Self;
+    /// Sine and cosine together.
     fn sin_cos(self) -> (Self, Self) {
         (self.sin(), self.cos())
     }
+    /// Absolute value.
     fn abs(self) -> Self;
     /// The unit roundoff of the type (2⁻⁵² for f64).
     fn epsilon() -> Self;
+    /// Whether the value is neither infinite nor NaN.
     fn is_finite(self) -> bool;
 
     /// The value, where one is known: always for numbers; for the code generator's traced scalar only for

@@ -1,6 +1,7 @@
 //! Helpers shared by the integration tests: paths to the repo's models, deterministic random states.
 #![allow(dead_code)]
 
+use embedyn::random::SplitMix64;
 use embedyn::{load, Model, ModelOptions, Real};
 use std::path::PathBuf;
 
@@ -18,20 +19,20 @@ pub fn load_model<T: Real>(rel: &str, floating: bool) -> Model<T> {
         .unwrap_or_else(|e| panic!("{e}"))
 }
 
-/// SplitMix64: a tiny deterministic generator, so failures reproduce from the seed alone.
-pub struct Rng(pub u64);
+/// The crate's generator with the tests' own draws (vectors, configurations) on top; the numbers come from
+/// `embedyn::random::SplitMix64`, so failures reproduce from the seed alone.
+pub struct Rng(SplitMix64);
 
 impl Rng {
+    pub fn new(seed: u64) -> Rng {
+        Rng(SplitMix64::new(seed))
+    }
     pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
+        self.0.next_u64()
     }
     /// Uniform in [lo, hi).
     pub fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * ((self.next_u64() >> 11) as f64 / (1u64 << 53) as f64)
+        self.0.uniform(lo, hi)
     }
     pub fn vec(&mut self, n: usize, lo: f64, hi: f64) -> Vec<f64> {
         (0..n).map(|_| self.uniform(lo, hi)).collect()

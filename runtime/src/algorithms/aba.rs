@@ -24,8 +24,9 @@ use nalgebra::DMatrixViewMut;
 /// Forward dynamics `qdd = M(q)⁻¹ (τ − C(q, v) − g(q))`. The result is also left in `ws.qdd`.
 ///
 /// ```
-/// use embedyn_runtime::{aba, Model, JointType, SpatialInertia, Transform, Workspace};
-/// use nalgebra::{Matrix3, Vector3};
+/// # use embedyn_runtime as embedyn; // the facade `embedyn` re-exports this crate
+/// use embedyn::nalgebra::{Matrix3, Vector3};
+/// use embedyn::{aba, JointType, Model, SpatialInertia, Transform, Workspace};
 /// // A 1 kg point-like pendulum, 0.5 m below a horizontal pivot.
 /// let mut b = Model::<f64>::builder("pendulum");
 /// let inertia = SpatialInertia::from_com(1.0, Vector3::new(0.0, 0.0, -0.5), Matrix3::identity() * 1e-3);

@@ -13,6 +13,22 @@ use crate::Real;
 use nalgebra::DMatrix;
 
 /// The joint-space mass matrix `M(q)` (symmetric, both triangles filled). Left in `ws.mass_matrix`.
+///
+/// ```
+/// # use embedyn_runtime as embedyn; // the facade `embedyn` re-exports this crate
+/// use embedyn::nalgebra::{Matrix3, Vector3};
+/// use embedyn::{crba, JointType, Model, SpatialInertia, Transform, Workspace};
+/// // A 1 kg point-like pendulum, 0.5 m below a horizontal pivot.
+/// let mut b = Model::<f64>::builder("pendulum");
+/// let inertia = SpatialInertia::from_com(1.0, Vector3::new(0.0, 0.0, -0.5), Matrix3::identity() * 1e-3);
+/// b.add_body(None, "pivot", JointType::Revolute, Vector3::x(), Transform::identity(), "bob", inertia)
+///     .unwrap();
+/// let model = b.build().unwrap();
+/// let mut ws = Workspace::new(&model);
+/// // m l² + I about the pivot.
+/// let m = crba(&model, &mut ws, &[0.3]).unwrap();
+/// assert!((m[(0, 0)] - (0.25 + 1e-3)).abs() < 1e-12);
+/// ```
 pub fn crba<'w, T: Real>(
     model: &Model<T>,
     ws: &'w mut Workspace<T>,

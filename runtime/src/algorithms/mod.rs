@@ -3,10 +3,9 @@
 
 #[allow(unused_imports)]
 use crate::alloc_prelude::*;
-mod aba;
+pub(crate) mod aba;
 mod crba;
 mod embedded;
-mod inertia_check;
 mod kinematics;
 mod minv;
 mod rnea;
@@ -24,8 +23,6 @@ pub use minv::mass_matrix_inverse;
 pub use rnea::{rnea, rnea_with_gravity};
 pub use workspace::Workspace;
 
-pub(crate) use inertia_check::check_articulated_inertia;
-
 use crate::model::{JointType, Model};
 use crate::spatial::{Motion, Transform};
 use crate::Real;
@@ -33,35 +30,62 @@ use crate::Real;
 /// Errors of an algorithm call.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum DynamicsError {
+    /// An input slice has the wrong length.
     #[error("`{name}` has length {got}, the model needs {expected}")]
     WrongLength {
+        /// The argument (`"q"`, `"v"`, …).
         name: &'static str,
+        /// Its length.
         got: usize,
+        /// The length the model needs.
         expected: usize,
     },
+    /// An input entry is NaN or infinite.
     #[error("`{name}`[{index}] is not a finite number ({value})")]
     NonFiniteInput {
+        /// The argument.
         name: &'static str,
+        /// The entry's index.
         index: usize,
+        /// Its value.
         value: f64,
     },
+    /// A floating joint's quaternion is zero or not finite.
     #[error("joint `{joint}`: its quaternion `q`[{start}..{end}] has norm {norm:e}; it must be a non-zero, finite [qx qy qz qw] (it is normalized before use)")]
     InvalidQuaternion {
+        /// The floating joint.
         joint: String,
+        /// Index of the quaternion's first entry in `q`.
         start: usize,
+        /// One past its last entry.
         end: usize,
+        /// Its norm.
         norm: f64,
     },
+    /// A joint's articulated inertia about its axis is not positive at this configuration.
     #[error("joint `{joint}`: the articulated inertia about its axis is not positive (D = {d:e})")]
-    SingularJoint { joint: String, d: f64 },
+    SingularJoint {
+        /// The joint.
+        joint: String,
+        /// The articulated inertia about its axis.
+        d: f64,
+    },
+    /// A loop is at or too near a singular configuration.
     #[error("{group}: the loop is at or too near a singular configuration: cond(Y1) = {condition:.3e} ≥ {threshold:.1e}, the limit in this scalar type (the dependent joints are not determined by the independent ones here)")]
     SingularConstraint {
+        /// The group, by the names of its constraints.
         group: String,
+        /// cond₁(Y1) at this configuration.
         condition: f64,
+        /// The limit in this scalar type.
         threshold: f64,
     },
+    /// An aggregate link's reduced inertia is not positive definite.
     #[error("{group}: the reduced inertia of the aggregate link is not positive definite")]
-    SingularGroup { group: String },
+    SingularGroup {
+        /// The group, by the names of its constraints.
+        group: String,
+    },
 }
 
 pub(crate) fn check_len(

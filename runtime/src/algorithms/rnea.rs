@@ -10,6 +10,22 @@ use crate::model::Model;
 use crate::Real;
 
 /// Inverse dynamics `τ = M(q) qdd + C(q, v) + g(q)` with the model's gravity. Left in `ws.tau` too.
+///
+/// ```
+/// # use embedyn_runtime as embedyn; // the facade `embedyn` re-exports this crate
+/// use embedyn::nalgebra::{Matrix3, Vector3};
+/// use embedyn::{rnea, JointType, Model, SpatialInertia, Transform, Workspace};
+/// // A 1 kg point-like pendulum, 0.5 m below a horizontal pivot.
+/// let mut b = Model::<f64>::builder("pendulum");
+/// let inertia = SpatialInertia::from_com(1.0, Vector3::new(0.0, 0.0, -0.5), Matrix3::identity() * 1e-3);
+/// b.add_body(None, "pivot", JointType::Revolute, Vector3::x(), Transform::identity(), "bob", inertia)
+///     .unwrap();
+/// let model = b.build().unwrap();
+/// let mut ws = Workspace::new(&model);
+/// // Held still at θ = 0.3 the pivot carries the weight's moment: τ = m g l sin θ.
+/// let tau = rnea(&model, &mut ws, &[0.3], &[0.0], &[0.0]).unwrap();
+/// assert!((tau[0] - 9.81 * 0.5 * 0.3f64.sin()).abs() < 1e-12);
+/// ```
 pub fn rnea<'w, T: Real>(
     model: &Model<T>,
     ws: &'w mut Workspace<T>,

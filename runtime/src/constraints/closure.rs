@@ -28,6 +28,7 @@ pub enum LoopType {
 }
 
 impl LoopType {
+    /// Number of scalar equations the loop imposes (before redundant ones are removed).
     pub fn rows(self) -> usize {
         match self {
             LoopType::Revolute | LoopType::Prismatic => 5,
@@ -35,6 +36,7 @@ impl LoopType {
             LoopType::Fixed => 6,
         }
     }
+    /// The URDF+ `type` name (`"revolute"`, …).
     pub fn as_str(self) -> &'static str {
         match self {
             LoopType::Revolute => "revolute",
@@ -48,16 +50,21 @@ impl LoopType {
 /// A loop closure between frame P on body `predecessor` and frame S on body `successor` (`None`: the world).
 #[derive(Clone, Debug)]
 pub struct LoopClosure<T: Real> {
+    /// What the cut joint keeps.
     pub kind: LoopType,
+    /// The body of frame P, `None` for the world.
     pub predecessor: Option<usize>,
     /// Pose of P in the predecessor body's frame.
     pub predecessor_frame: Transform<T>,
+    /// The body of frame S, `None` for the world.
     pub successor: Option<usize>,
+    /// Pose of S in the successor body's frame.
     pub successor_frame: Transform<T>,
     /// Unit axis in P.
     pub axis: Vector3<T>,
     /// `e1`, `e2 = axis × e1`: a right-handed basis of the plane normal to the axis.
     pub e1: Vector3<T>,
+    /// The second vector of that basis.
     pub e2: Vector3<T>,
 }
 
@@ -72,6 +79,8 @@ struct FrameState<T: Real> {
 }
 
 impl<T: Real> LoopClosure<T> {
+    /// A loop closure of `kind` between the two frames; `axis` (any length, zero for spherical and fixed
+    /// loops) is normalized and the basis `e1`, `e2` derived from it.
     pub fn new(
         kind: LoopType,
         predecessor: Option<usize>,
@@ -105,6 +114,7 @@ impl<T: Real> LoopClosure<T> {
         }
     }
 
+    /// The same closure in scalar `U` (through f64).
     pub fn cast<U: Real>(&self) -> LoopClosure<U> {
         let c = |v: &Vector3<T>| v.map(|x| U::from_f64(x.to_f64()));
         LoopClosure {

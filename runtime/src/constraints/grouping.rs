@@ -37,27 +37,12 @@ pub struct Group {
 const RANK_TOLERANCE: f64 = 1e-9;
 
 fn lca<T: Real>(model: &Model<T>, a: Option<usize>, b: Option<usize>) -> Option<usize> {
-    let (mut a, mut b) = (a?, b?);
-    loop {
-        if a == b {
-            return Some(a);
-        }
-        if a > b {
-            a = model.joints[a].parent?;
-        } else {
-            b = model.joints[b].parent?;
-        }
-    }
+    crate::tree::common_ancestor(|body| model.joints[body].parent, a, b)
 }
 
 /// Bodies from `b` up to (excluding) `top`.
 fn path_to<T: Real>(model: &Model<T>, b: Option<usize>, top: Option<usize>, out: &mut Vec<usize>) {
-    let mut cur = b;
-    while cur != top {
-        let Some(c) = cur else { break };
-        out.push(c);
-        cur = model.joints[c].parent;
-    }
+    crate::tree::path_to_ancestor(|body| model.joints[body].parent, b, top, out);
 }
 
 /// The bodies whose joints a loop's equations involve: the paths from its two frames' bodies up to their

@@ -31,13 +31,21 @@ use crate::Real;
 pub struct Constraint<T: Real> {
     /// The URDF+ element's name (`<loop name>`, `<coupling name>`, or the mimic joint's name).
     pub name: String,
+    /// What the constraint says.
     pub kind: ConstraintKind<T>,
 }
 
+/// The two forms a constraint takes.
 #[derive(Clone, Debug)]
 pub enum ConstraintKind<T: Real> {
     /// `Σ coefficient · q[joint] + offset = 0` over 1-DoF joints (index into `model.joints`).
-    Linear { terms: Vec<(usize, T)>, offset: T },
+    /// A linear relation of joint coordinates (couplings and mimic joints).
+    Linear {
+        /// `(joint index, coefficient)` pairs.
+        terms: Vec<(usize, T)>,
+        /// The constant term.
+        offset: T,
+    },
     /// A cut joint between two body frames.
     Loop(LoopClosure<T>),
 }
@@ -51,11 +59,12 @@ impl<T: Real> Constraint<T> {
         }
     }
 
-    /// What kind of element it came from, for reports: `"loop"`, `"coupling"`.
+    /// Whether it is a loop closure (else a linear relation: a coupling or a mimic joint).
     pub fn is_loop(&self) -> bool {
         matches!(self.kind, ConstraintKind::Loop(_))
     }
 
+    /// The same constraint in scalar `U` (through f64).
     pub fn cast<U: Real>(&self) -> Constraint<U> {
         let c = |x: T| U::from_f64(x.to_f64());
         Constraint {
@@ -174,7 +183,7 @@ pub fn jacobian<T: Real>(model: &Model<T>, ws: &Workspace<T>, out: &mut DMatrix<
 }
 
 /// `J̇ v` for every constraint (raw rows), from the kinematics and the velocity-product accelerations in
-/// `ws` (see [`crate::algorithms::bias_accelerations`]).
+/// `ws` (see [`crate::constraint_kinematics`]).
 pub fn bias<T: Real>(model: &Model<T>, ws: &Workspace<T>, out: &mut [T]) {
     let mut row = 0;
     for c in &model.constraints {

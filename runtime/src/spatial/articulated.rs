@@ -16,6 +16,7 @@ pub struct ArticulatedInertia<T: Real> {
 }
 
 impl<T: Real> ArticulatedInertia<T> {
+    /// All three blocks zero.
     pub fn zero() -> Self {
         Self {
             a: Matrix3::zeros(),

@@ -7,12 +7,16 @@ use nalgebra::{Matrix3, Vector3};
 /// `M = [[I_o, [h]×], [[h]×ᵀ, m 1]]` (the paper's `M(k)` with `p(k) = c`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SpatialInertia<T: Real> {
+    /// Mass `m` (kg).
     pub mass: T,
+    /// First moment `h = m c` (kg·m).
     pub first_moment: Vector3<T>,
+    /// Rotational inertia `I_o` about the frame origin (kg·m²).
     pub rotational: Matrix3<T>,
 }
 
 impl<T: Real> SpatialInertia<T> {
+    /// The inertia of nothing (all zero).
     pub fn zero() -> Self {
         Self {
             mass: T::zero(),
@@ -92,6 +96,7 @@ impl<T: Real> SpatialInertia<T> {
         v.dot(&self.mul_motion(v)) * half
     }
 
+    /// The same inertia in scalar `U` (through f64).
     pub fn cast<U: Real>(&self) -> SpatialInertia<U> {
         SpatialInertia {
             mass: U::from_f64(self.mass.to_f64()),

@@ -5,15 +5,19 @@ use nalgebra::Vector3;
 /// A spatial motion vector (velocity or acceleration) `[ω; v]`, the linear part taken at the frame origin.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Motion<T: Real> {
+    /// Angular part `ω` (rad/s, or rad/s² for an acceleration).
     pub angular: Vector3<T>,
+    /// Linear part `v` at the frame origin (m/s, or m/s²).
     pub linear: Vector3<T>,
 }
 
 impl<T: Real> Motion<T> {
+    /// `[angular; linear]`.
     #[inline(always)]
     pub fn new(angular: Vector3<T>, linear: Vector3<T>) -> Self {
         Self { angular, linear }
     }
+    /// The zero motion.
     #[inline(always)]
     pub fn zero() -> Self {
         Self::new(Vector3::zeros(), Vector3::zeros())
@@ -25,6 +29,7 @@ impl<T: Real> Motion<T> {
             Vector3::new(a[3], a[4], a[5]),
         )
     }
+    /// As `[ω; v]`, a 6-array.
     pub fn to_array(&self) -> [T; 6] {
         let (w, v) = (&self.angular, &self.linear);
         [w.x, w.y, w.z, v.x, v.y, v.z]

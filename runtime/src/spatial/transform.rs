@@ -9,11 +9,14 @@ use nalgebra::{Matrix3, Vector3};
 /// map [`Transform::inv_act_motion`]). Points map child → parent as `p_parent = R p_child + t`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Transform<T: Real> {
+    /// The child's axes as columns, in parent coordinates.
     pub rotation: Matrix3<T>,
+    /// The child origin in parent coordinates (m).
     pub translation: Vector3<T>,
 }
 
 impl<T: Real> Transform<T> {
+    /// From rotation and translation as [`Transform`] defines them.
     #[inline(always)]
     pub fn new(rotation: Matrix3<T>, translation: Vector3<T>) -> Self {
         Self {
@@ -22,6 +25,7 @@ impl<T: Real> Transform<T> {
         }
     }
 
+    /// The child frame coincides with the parent.
     pub fn identity() -> Self {
         Self::new(Matrix3::identity(), Vector3::zeros())
     }
@@ -74,6 +78,7 @@ impl<T: Real> Transform<T> {
         )
     }
 
+    /// The pose of the parent frame in the child frame.
     pub fn inverse(&self) -> Transform<T> {
         let rt = self.rotation.transpose();
         Transform::new(rt, -(rt * self.translation))

@@ -19,7 +19,7 @@
 //! Both are judged at [`resolvable_fraction`] of the reference, i.e. in the precision of the scalar the
 //! check runs in: [`crate::Model::try_cast`] runs it again in the target type.
 
-use super::{aba, Workspace};
+use crate::algorithms::{aba, Workspace};
 #[allow(unused_imports)]
 use crate::alloc_prelude::*;
 use crate::model::{Model, ModelError};
