@@ -504,7 +504,7 @@ fn generate_algorithm(
         helpers,
         &owners,
     )
-    .map_err(|e| gen_error(loaded, e.0))?;
+    .map_err(|e| gen_error(loaded, e.to_string()))?;
     if let Some(wrapper) = spec.wrapper {
         let wrapper = wrapper();
         emitted.code = match emitted.code {

@@ -11,7 +11,7 @@
 
 #[allow(unused_imports)]
 use crate::alloc_prelude::*;
-use crate::constraints::{Constraint, ConstraintKind, Group};
+use crate::constraints::{Constraint, ConstraintKind, Group, GroupLabel};
 use crate::spatial::{Motion, SpatialInertia, Transform};
 use crate::Real;
 use nalgebra::Vector3;
@@ -186,19 +186,19 @@ pub enum ModelError {
     #[error("joint `{joint}`: the bodies of the subtree it moves have no inertia about its axis (D = {d:e}), so its acceleration is undetermined")]
     NoInertiaAboutAxis { joint: String, d: f64 },
     #[error("{group}: the loop's two frames never meet: no configuration closes it (smallest residual found {gap:.3e}; check the <origin> of its predecessor and successor)")]
-    LoopNeverCloses { group: String, gap: f64 },
+    LoopNeverCloses { group: GroupLabel, gap: f64 },
     #[error("constraint `{constraint}` involves no moving joint")]
     EmptyConstraint { constraint: String },
     #[error("joint `{joint}`: a floating joint cannot be part of a loop or coupling")]
     FloatingInGroup { joint: String },
     #[error("{group}: {declared} joint(s) are declared dependent (independent=\"false\" or <mimic>), but the constraints remove {needed} degree(s) of freedom")]
     DependentMismatch {
-        group: String,
+        group: GroupLabel,
         declared: usize,
         needed: usize,
     },
     #[error("{group}: the dependent joints cannot be solved from the independent ones (cond(Y1) = {condition:e} at a generic assembled configuration); declare other joints independent=\"false\"")]
-    SingularDependentChoice { group: String, condition: f64 },
+    SingularDependentChoice { group: GroupLabel, condition: f64 },
     #[error("{element}: its {what} {value:e} {}", fit_problem(.too_large, .value, .scalar))]
     ConstantDoesNotFit {
         element: ModelElement,

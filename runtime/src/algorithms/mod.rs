@@ -26,6 +26,7 @@ pub use workspace::Workspace;
 
 pub(crate) use inertia_check::check_articulated_inertia;
 
+use crate::constraints::{ConstraintSet, GroupLabel};
 use crate::model::{JointType, Model};
 use crate::spatial::{Motion, Transform};
 use crate::Real;
@@ -56,12 +57,12 @@ pub enum DynamicsError {
     SingularJoint { joint: String, d: f64 },
     #[error("{group}: the loop is at or too near a singular configuration: cond(Y1) = {condition:.3e} ≥ {threshold:.1e}, the limit in this scalar type (the dependent joints are not determined by the independent ones here)")]
     SingularConstraint {
-        group: String,
+        group: ConstraintSet,
         condition: f64,
         threshold: f64,
     },
     #[error("{group}: the reduced inertia of the aggregate link is not positive definite")]
-    SingularGroup { group: String },
+    SingularGroup { group: GroupLabel },
 }
 
 pub(crate) fn check_len(
