@@ -54,25 +54,71 @@ impl fmt::Display for Location {
     }
 }
 
-/// A model that cannot be loaded. The message names the file, the element and, where possible, the line.
+/// A model that cannot be loaded, or code that cannot be generated or written from it. The message names
+/// the file, the element and, where possible, the line.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct LoadError {
     pub location: Location,
-    pub message: String,
+    pub kind: LoadErrorKind,
+}
+
+/// What went wrong, with its data; displayed as the message after the location.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum LoadErrorKind {
+    /// The model file cannot be read.
+    #[error("cannot read the model file: {problem}")]
+    Unreadable { problem: String },
+    /// Elements nested deeper than `limit`, refused before parsing.
+    #[error("elements are nested more than {limit} deep here; a URDF needs a handful of levels, so this is not a model file (refused before parsing, which would exhaust the stack)")]
+    NestedTooDeep { limit: usize },
+    /// The text is not well-formed XML.
+    #[error("malformed XML: {problem}")]
+    MalformedXml { problem: String },
+    /// A required attribute is absent.
+    #[error("missing attribute `{attribute}`")]
+    MissingAttribute { attribute: String },
+    /// A required child element is absent.
+    #[error("missing <{tag}>")]
+    MissingElement { tag: String },
+    /// An attribute that must be a number is not one.
+    #[error("`{attribute}=\"{text}\"` is not a number")]
+    NotANumber { attribute: String, text: String },
+    /// An attribute that must be a finite number is infinite or NaN.
+    #[error("`{attribute}=\"{text}\"` is not a finite number")]
+    NotFinite { attribute: String, text: String },
+    /// Any other problem of the model (an unknown link, a cycle, a duplicate name, …), described.
+    #[error("{0}")]
+    Model(String),
+    /// A constant of the model does not fit f32 when f32 functions are generated.
+    #[error("{inner} (generated f32 code cannot hold it; generate the f64 functions only)")]
+    NotForF32 { inner: Box<LoadErrorKind> },
+    /// Code cannot be generated from the model (too large to compile, a constant that is not a number).
+    #[error("{0}")]
+    Generate(String),
+    /// A generated file cannot be written.
+    #[error("{0}")]
+    Write(String),
 }
 
 impl LoadError {
+    /// A problem of the model, described by `message`.
     pub fn new(location: Location, message: impl Into<String>) -> Self {
-        LoadError {
-            location,
-            message: message.into(),
-        }
+        LoadError::at(location, LoadErrorKind::Model(message.into()))
+    }
+
+    pub fn at(location: Location, kind: LoadErrorKind) -> Self {
+        LoadError { location, kind }
     }
 }
 
 impl fmt::Display for LoadError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{}: {}", self.location, Printable(&self.message))
+        write!(
+            f,
+            "{}: {}",
+            self.location,
+            Printable(&self.kind.to_string())
+        )
     }
 }
 
