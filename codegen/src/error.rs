@@ -86,6 +86,15 @@ pub enum LoadErrorKind {
     /// An attribute that must be a finite number is infinite or NaN.
     #[error("`{attribute}=\"{text}\"` is not a finite number")]
     NotFinite { attribute: String, text: String },
+    /// A second `<link>` or `<joint>` (`what`) of a name already used.
+    #[error("a {what} of this name is already defined")]
+    DuplicateName { what: &'static str },
+    /// Every link is some joint's child.
+    #[error("the joints form a cycle: every link is some joint's child, so there is no root link")]
+    NoRootLink,
+    /// A cycle of joints through `link`, apart from the tree of `root`.
+    #[error("the joints form a cycle through link \"{link}\", which is not connected to the root link \"{root}\"")]
+    Cycle { link: String, root: String },
     /// Any other problem of the model (an unknown link, a cycle, a duplicate name, …), described.
     #[error("{0}")]
     Model(String),

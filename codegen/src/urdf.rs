@@ -148,10 +148,10 @@ impl<'a, 'input> Parser<'a, 'input> {
         for node in root.children().filter(|n| n.has_tag_name("link")) {
             let link = self.link(node)?;
             if link_index.insert(link.name.clone(), links.len()).is_some() {
-                return self.err(
+                return self.fail(
                     node,
                     format!("link \"{}\"", link.name),
-                    "a link of this name is already defined",
+                    LoadErrorKind::DuplicateName { what: "link" },
                 );
             }
             links.push(link);
@@ -166,7 +166,7 @@ impl<'a, 'input> Parser<'a, 'input> {
                 .insert(joint.name.clone(), joints.len())
                 .is_some()
             {
-                return self.err(node, what, "a joint of this name is already defined");
+                return self.fail(node, what, LoadErrorKind::DuplicateName { what: "joint" });
             }
             if let Some(other) = parent_joint[joint.child] {
                 return self.err(
@@ -195,9 +195,9 @@ impl<'a, 'input> Parser<'a, 'input> {
             [r] => *r,
             [] => {
                 let j = &joints[0];
-                return Err(LoadError::new(
+                return Err(LoadError::at(
                     Location::new(self.path, j.line, format!("joint \"{}\"", j.name)),
-                    "the joints form a cycle: every link is some joint's child, so there is no root link",
+                    LoadErrorKind::NoRootLink,
                 ));
             }
             [_, second, ..] => {
@@ -225,12 +225,12 @@ impl<'a, 'input> Parser<'a, 'input> {
         }
         if let Some(l) = seen.iter().position(|s| !s) {
             let j = &joints[parent_joint[l].unwrap()];
-            return Err(LoadError::new(
+            return Err(LoadError::at(
                 Location::new(self.path, j.line, format!("joint \"{}\"", j.name)),
-                format!(
-                    "the joints form a cycle through link \"{}\", which is not connected to the root link \"{}\"",
-                    links[l].name, links[root_link].name
-                ),
+                LoadErrorKind::Cycle {
+                    link: links[l].name.clone(),
+                    root: links[root_link].name.clone(),
+                },
             ));
         }
         // Mimic targets must exist.
@@ -856,6 +856,14 @@ mod kind_tests {
         );
         assert!(
             e.to_string().ends_with("`value=\"x\"` is not a number"),
+            "{e}"
+        );
+
+        let e = error_of("<robot name=\"r\"><link name=\"a\"/><link name=\"a\"/></robot>");
+        assert_eq!(e.kind, LoadErrorKind::DuplicateName { what: "link" });
+        assert!(
+            e.to_string()
+                .ends_with("link \"a\": a link of this name is already defined"),
             "{e}"
         );
 
