@@ -728,9 +728,9 @@ pub fn eval_input(data: &[u8]) {
                     .to_string();
                 if let Err(e) = eval_interpreted(loaded, &options, Algo::Aba, Scalar::F64, &input) {
                     assert!(
-                        !e.0.contains("violates"),
+                        !e.to_string().contains("violates"),
                         "{what}: eval refuses the state complete printed: {}",
-                        e.0
+                        e
                     );
                 }
             }

@@ -61,8 +61,8 @@ type TimedState = (Vec<f64>, Vec<f64>, Vec<f64>);
 /// with a random third vector (`tau` for `aba`, `qdd` for `rnea`).
 fn states(model: &Model<f64>) -> Result<Vec<TimedState>, CliError> {
     let mut rng = SplitMix64::new(0x5eed);
-    let found =
-        consistent_states(model, STATES, 0x5eed).map_err(|e| CliError(format!("bench: {e}")))?;
+    let found = consistent_states(model, STATES, 0x5eed)
+        .map_err(|e| CliError::Bench(format!("bench: {e}")))?;
     Ok(found
         .into_iter()
         .map(|s| {
@@ -143,7 +143,7 @@ fn time_generated(
         .first()
         .and_then(|row| row.first().copied())
         .ok_or_else(|| {
-            CliError(format!(
+            CliError::Bench(format!(
                 "the runner reported no time for {algo} in {scalar}"
             ))
         })

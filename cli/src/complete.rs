@@ -32,7 +32,10 @@ pub fn complete(
     let mut ws = Workspace::new(&model);
     let mut out = Vec::with_capacity(samples.len());
     for i in 0..samples.len() {
-        let at = |e: embedyn_runtime::DynamicsError| CliError(format!("sample {i}: {e}"));
+        let at = |e: embedyn_runtime::DynamicsError| CliError::Dynamics {
+            sample: i,
+            error: e,
+        };
         let mut q = samples.vector(i, "q")?.to_vec();
         let mut v = samples.vector(i, "v")?.to_vec();
         normalize_quaternions(&model, &mut q, i)?;
@@ -41,9 +44,8 @@ pub fn complete(
         let (pos, vel) = constraint_violation(&model, &mut ws, &q, &v).map_err(at)?;
         let residual = pos.max(vel);
         if residual.is_nan() || residual > 1e-9 {
-            return Err(CliError(format!(
-                "sample {i}: the loop constraints could not be solved from this guess (residual {residual:e}); the independent coordinates may be outside the mechanism's range, or the guess too far from an assembly"
-            )));
+            return Err(CliError::State { sample: i, problem: format!("the loop constraints could not be solved from this guess (residual {residual:e}); the independent coordinates may be outside the mechanism's range, or the guess too far from an assembly"
+            ) });
         }
         out.push(CompletedSample { q, v, residual });
     }
@@ -63,12 +65,11 @@ fn normalize_quaternions(model: &Model<f64>, q: &mut [f64], sample: usize) -> Re
         // Scaled by the largest entry first, so that a tiny but non-zero quaternion does not underflow.
         let largest = s.iter().fold(0.0f64, |m, x| m.max(x.abs()));
         if !(largest > 0.0 && largest.is_finite()) {
-            return Err(CliError(format!(
-                "sample {sample}: field `q`[{}..{}]: the quaternion of joint `{}` is {s:?}; it must be a non-zero quaternion [qx qy qz qw] (it is normalized)",
+            return Err(CliError::State { sample, problem: format!("field `q`[{}..{}]: the quaternion of joint `{}` is {s:?}; it must be a non-zero quaternion [qx qy qz qw] (it is normalized)",
                 range.start,
                 range.end,
                 j.name.escape_debug()
-            )));
+            ) });
         }
         s.iter_mut().for_each(|x| *x /= largest);
         let norm = s.iter().map(|x| x * x).sum::<f64>().sqrt();

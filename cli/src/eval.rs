@@ -178,9 +178,8 @@ fn eval_generated(
                 Scalar::F32 => singularity_threshold::<f32>(),
             };
             if condition.is_nan() || condition >= threshold {
-                return Err(CliError(format!(
-                    "sample {i}: a loop is at or too near a singular configuration: cond(Y1) = {condition:.3e} ≥ {threshold:.1e}, the limit in this scalar type, {scalar_name} (the dependent joints are not determined by the independent ones here; the generated code gives the worst loop's measure, the interpreted engine names the loop)"
-                )));
+                return Err(CliError::State { sample: i, problem: format!("a loop is at or too near a singular configuration: cond(Y1) = {condition:.3e} ≥ {threshold:.1e}, the limit in this scalar type, {scalar_name} (the dependent joints are not determined by the independent ones here; the generated code gives the worst loop's measure, the interpreted engine names the loop)"
+                ) });
             }
         }
         let o = finite(&o, i, name)?;
@@ -232,7 +231,7 @@ fn project<T: Real>(
     sample: usize,
 ) -> Result<Vec<f64>, CliError> {
     let q = cast::<T>(q);
-    let x = embedding_map(model, ws, &q).map_err(|e| CliError(format!("sample {sample}: {e}")))?;
+    let x = embedding_map(model, ws, &q).map_err(|e| CliError::Dynamics { sample, error: e })?;
     Ok((0..x.ncols())
         .map(|c| (0..tau.len()).map(|r| x[(r, c)].to_f64() * tau[r]).sum())
         .collect())
@@ -261,7 +260,10 @@ fn eval_in<T: Real>(
     let pick = |x: &[f64]| -> Vec<f64> { independent.iter().map(|&i| x[i]).collect() };
     let mut out = Vec::with_capacity(samples.len());
     for i in 0..samples.len() {
-        let at = |e: DynamicsError| CliError(format!("sample {i}: {e}"));
+        let at = |e: DynamicsError| CliError::Dynamics {
+            sample: i,
+            error: e,
+        };
         let q = samples.vector(i, "q")?;
         check_quaternions(model, q, i)?;
         let q = cast::<T>(q);
@@ -325,13 +327,15 @@ fn check_consistent(
     v: &[f64],
     i: usize,
 ) -> Result<(), CliError> {
-    let (pos, vel) =
-        constraint_violation(model, ws, q, v).map_err(|e| CliError(format!("sample {i}: {e}")))?;
+    let (pos, vel) = constraint_violation(model, ws, q, v).map_err(|e| CliError::Dynamics {
+        sample: i,
+        error: e,
+    })?;
     if pos > 1e-9 {
-        return Err(CliError(format!("sample {i}: `q` violates the loop and coupling constraints by {pos:e} (more than 1e-9); `embedyn complete` solves the dependent coordinates")));
+        return Err(CliError::State { sample: i, problem: format!("`q` violates the loop and coupling constraints by {pos:e} (more than 1e-9); `embedyn complete` solves the dependent coordinates") });
     }
     if vel > 1e-9 {
-        return Err(CliError(format!("sample {i}: `v` violates the velocity constraints by {vel:e} (more than 1e-9); `embedyn complete` projects it")));
+        return Err(CliError::State { sample: i, problem: format!("`v` violates the velocity constraints by {vel:e} (more than 1e-9); `embedyn complete` projects it") });
     }
     Ok(())
 }
@@ -345,7 +349,7 @@ fn finite<T: Real>(x: &[T], sample: usize, name: &str) -> Result<Vec<f64>, CliEr
     let y: Vec<f64> = x.iter().map(|v| v.to_f64()).collect();
     match y.iter().position(|v| !v.is_finite()) {
         None => Ok(y),
-        Some(k) => Err(CliError(format!("sample {sample}: `{name}`[{k}] is not finite ({}); the state is outside what the scalar type can represent", y[k]))),
+        Some(k) => Err(CliError::State { sample, problem: format!("`{name}`[{k}] is not finite ({}); the state is outside what the scalar type can represent", y[k]) }),
     }
 }
 
@@ -359,12 +363,11 @@ fn check_quaternions<T: Real>(model: &Model<T>, q: &[f64], sample: usize) -> Res
         let s = &q[j.q_index + 3..j.q_index + 7];
         let n = s.iter().map(|x| x * x).sum::<f64>().sqrt();
         if (n - 1.0).abs() > 1e-6 {
-            return Err(CliError(format!(
-                "sample {sample}: field `q`[{}..{}]: the quaternion of joint `{}` has norm {n}; it must be a unit quaternion [qx qy qz qw]",
+            return Err(CliError::State { sample, problem: format!("field `q`[{}..{}]: the quaternion of joint `{}` has norm {n}; it must be a unit quaternion [qx qy qz qw]",
                 j.q_index + 3,
                 j.q_index + 7,
                 j.name
-            )));
+            ) });
         }
     }
     Ok(())
@@ -373,7 +376,7 @@ fn check_quaternions<T: Real>(model: &Model<T>, q: &[f64], sample: usize) -> Res
 /// An algorithm the command line does not evaluate (`--algo` offers only those with a command-line entry
 /// in their descriptor).
 fn not_evaluated(algo: Algo) -> CliError {
-    CliError(format!(
+    CliError::Unsupported(format!(
         "`embedyn eval` does not evaluate `{}`",
         algo.name()
     ))

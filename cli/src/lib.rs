@@ -41,7 +41,7 @@ pub fn main() -> ExitCode {
         Ok(Ok(Printed::Evaluated(document))) => output::json_document(&document),
         Ok(Ok(Printed::Completed(document))) => output::json_document(&document),
         Ok(Err(e)) => {
-            output::note(&format!("error: {}", e.0));
+            output::note(&format!("error: {e}"));
             ExitCode::from(output::FAILURE)
         }
         Err(_) => {
@@ -202,13 +202,112 @@ pub enum Scalar {
     F32,
 }
 
-/// An error of the command line: a message for stderr.
-#[derive(Debug)]
-pub struct CliError(pub String);
+/// An error of the command line, printed to stderr as `error: …`.
+#[derive(Debug, thiserror::Error)]
+pub enum CliError {
+    /// An option's value that the command line parser could not check (`--only`).
+    #[error("{option}: {problem}")]
+    Usage {
+        /// The option.
+        option: &'static str,
+        /// What is wrong with it.
+        problem: String,
+    },
+    /// The input document as a whole (not JSON, no `samples`).
+    #[error("{0}")]
+    Input(String),
+    /// One field of one sample of the input.
+    #[error("sample {sample}: {}", field_problem(.field, .problem))]
+    Sample {
+        /// The sample, counted from 0.
+        sample: usize,
+        /// The field (`q`, `v`, …).
+        field: String,
+        /// What is wrong with it.
+        problem: SampleProblem,
+    },
+    /// A sample the model cannot evaluate (outside the constraints, a zero quaternion, …).
+    #[error("sample {sample}: {problem}")]
+    State {
+        /// The sample, counted from 0.
+        sample: usize,
+        /// What is wrong with it.
+        problem: String,
+    },
+    /// An algorithm refused a sample.
+    #[error("sample {sample}: {error}")]
+    Dynamics {
+        /// The sample, counted from 0.
+        sample: usize,
+        /// The algorithm's error.
+        #[source]
+        error: embedyn_runtime::DynamicsError,
+    },
+    /// The model file.
+    #[error(transparent)]
+    Load(#[from] LoadError),
+    /// The input could not be read (`path` `None`: stdin).
+    #[error("{}", read_failure(.path.as_deref(), .problem))]
+    ReadInput {
+        /// The file (`None`: stdin).
+        path: Option<PathBuf>,
+        /// What is wrong with it.
+        problem: String,
+    },
+    /// Building, caching or running the generated code's runner.
+    #[error("{0}")]
+    Runner(String),
+    /// Timing (`bench`).
+    #[error("{0}")]
+    Bench(String),
+    /// What the command asked is not possible with these options (an engine that lacks the algorithm).
+    #[error("{0}")]
+    Unsupported(String),
+    /// A broken invariant of embedyn itself.
+    #[error("internal error: {0} (a bug)")]
+    Internal(String),
+}
 
-impl From<LoadError> for CliError {
-    fn from(e: LoadError) -> Self {
-        CliError(e.to_string())
+/// What is wrong with one field of a sample.
+#[derive(Clone, Debug, PartialEq)]
+pub enum SampleProblem {
+    /// The field is absent.
+    Missing,
+    /// The field is not an array of numbers.
+    NotArray,
+    /// Fewer or more entries than the model needs.
+    Length {
+        /// The entries given.
+        got: usize,
+        /// The entries the model needs.
+        expected: usize,
+    },
+    /// Entry `index` is not a finite number (`shown` as written).
+    NotFinite {
+        /// The entry.
+        index: usize,
+        /// The entry as written.
+        shown: String,
+    },
+}
+
+fn field_problem(field: &str, problem: &SampleProblem) -> String {
+    match problem {
+        SampleProblem::Missing => format!("missing field `{field}`"),
+        SampleProblem::NotArray => format!("field `{field}` must be an array of numbers"),
+        SampleProblem::Length { got, expected } => {
+            format!("field `{field}` has {got} entries, the model needs {expected}")
+        }
+        SampleProblem::NotFinite { index, shown } => {
+            format!("field `{field}`[{index}] is not a finite number: {shown}")
+        }
+    }
+}
+
+fn read_failure(path: Option<&Path>, e: &str) -> String {
+    match path {
+        Some(p) => format!("{}: cannot read the input: {e}", p.display()),
+        None => format!("cannot read the input from stdin: {e}"),
     }
 }
 
@@ -270,7 +369,10 @@ pub fn run(cli: Cli) -> Result<Printed, CliError> {
                         .collect::<Result<Vec<_>, _>>()
                 })
                 .transpose()
-                .map_err(|e| CliError(format!("--only: {e}")))?;
+                .map_err(|e| CliError::Usage {
+                    option: "--only",
+                    problem: e.to_string(),
+                })?;
             let requested = if minv {
                 &[embedyn_codegen::Algorithm::Minv][..]
             } else {
@@ -342,11 +444,8 @@ pub fn complete_text(
 
 /// The document as a JSON tree (for the fuzzer, which inspects it; inputs there are small).
 fn as_value<T: serde::Serialize>(document: &T) -> Result<serde_json::Value, CliError> {
-    serde_json::to_value(document).map_err(|e| {
-        CliError(format!(
-            "internal error: the result is not JSON: {e} (a bug)"
-        ))
-    })
+    serde_json::to_value(document)
+        .map_err(|e| CliError::Internal(format!("the result is not JSON: {e}")))
 }
 
 fn options(floating: bool) -> ModelOptions {
@@ -367,9 +466,15 @@ fn load_reporting(path: &Path) -> Result<Loaded, CliError> {
 
 fn read_input(path: Option<&Path>) -> Result<String, CliError> {
     match path {
-        Some(p) => read_file_limited(p, MAX_INPUT_BYTES)
-            .map_err(|e| CliError(format!("{}: cannot read the input: {e}", p.display()))),
-        None => read_to_string_limited(std::io::stdin(), MAX_INPUT_BYTES)
-            .map_err(|e| CliError(format!("cannot read the input from stdin: {e}"))),
+        Some(p) => read_file_limited(p, MAX_INPUT_BYTES).map_err(|problem| CliError::ReadInput {
+            path: Some(p.to_path_buf()),
+            problem,
+        }),
+        None => read_to_string_limited(std::io::stdin(), MAX_INPUT_BYTES).map_err(|problem| {
+            CliError::ReadInput {
+                path: None,
+                problem,
+            }
+        }),
     }
 }

@@ -31,7 +31,7 @@ pub fn cache_dir() -> Result<PathBuf, CliError> {
     }
     match var("HOME") {
         Some(home) => Ok(PathBuf::from(home).join(".cache").join("embedyn")),
-        None => Err(CliError(
+        None => Err(CliError::Runner(
             "the generated engine needs a cache folder of your own to build in, and HOME is not set: set \
              EMBEDYN_CACHE_DIR (or XDG_CACHE_HOME) to a folder that only you can write"
                 .into(),
@@ -42,7 +42,7 @@ pub fn cache_dir() -> Result<PathBuf, CliError> {
 /// The cache folder as an absolute path (cargo runs in another working folder).
 fn absolute_cache_dir() -> Result<PathBuf, CliError> {
     let dir = cache_dir()?;
-    std::path::absolute(&dir).map_err(|e| CliError(format!("{}: {e}", dir.display())))
+    std::path::absolute(&dir).map_err(|e| CliError::Runner(format!("{}: {e}", dir.display())))
 }
 
 /// Creates `dir` and any missing parents with mode 0700 (Unix).
@@ -52,7 +52,7 @@ fn create_private_dir(dir: &Path) -> Result<(), CliError> {
     #[cfg(unix)]
     std::os::unix::fs::DirBuilderExt::mode(&mut builder, 0o700);
     builder.create(dir).map_err(|e| {
-        CliError(format!(
+        CliError::Runner(format!(
             "{}: cannot create the cache folder: {e}",
             dir.display()
         ))
@@ -67,8 +67,8 @@ fn create_private_dir(dir: &Path) -> Result<(), CliError> {
 fn cache_root() -> Result<PathBuf, CliError> {
     let given = absolute_cache_dir()?;
     create_private_dir(&given)?;
-    let root =
-        std::fs::canonicalize(&given).map_err(|e| CliError(format!("{}: {e}", given.display())))?;
+    let root = std::fs::canonicalize(&given)
+        .map_err(|e| CliError::Runner(format!("{}: {e}", given.display())))?;
     #[cfg(unix)]
     check_private_chain(&root)?;
     Ok(root)
@@ -84,24 +84,24 @@ fn check_private_chain(root: &Path) -> Result<(), CliError> {
     let me = unsafe { libc::geteuid() };
     let advice = "set EMBEDYN_CACHE_DIR to a folder of your own";
     let meta_of = |p: &Path| {
-        std::fs::symlink_metadata(p).map_err(|e| CliError(format!("{}: {e}", p.display())))
+        std::fs::symlink_metadata(p).map_err(|e| CliError::Runner(format!("{}: {e}", p.display())))
     };
     let meta = meta_of(root)?;
     if !meta.is_dir() {
-        return Err(CliError(format!(
+        return Err(CliError::Runner(format!(
             "{}: the cache folder is not a folder; {advice}",
             root.display()
         )));
     }
     if meta.uid() != me {
-        return Err(CliError(format!(
+        return Err(CliError::Runner(format!(
             "{}: the cache folder belongs to another user (uid {}); {advice}",
             root.display(),
             meta.uid()
         )));
     }
     if meta.mode() & 0o022 != 0 {
-        return Err(CliError(format!(
+        return Err(CliError::Runner(format!(
             "{}: the cache folder is writable by other users (mode {:o}); `chmod 700` it or {advice}",
             root.display(),
             meta.mode() & 0o7777
@@ -115,7 +115,7 @@ fn check_private_chain(root: &Path) -> Result<(), CliError> {
         let sticky = meta.mode() & 0o1000 != 0;
         let child_safe = !others_write || (sticky && (child_owner == me || child_owner == 0));
         if !owner_trusted || !child_safe {
-            return Err(CliError(format!(
+            return Err(CliError::Runner(format!(
                 "{}: a folder above the cache ({}, owner uid {}, mode {:o}) lets another user replace the cache folder; {advice}",
                 root.display(),
                 folder.display(),
@@ -132,7 +132,8 @@ fn check_private_chain(root: &Path) -> Result<(), CliError> {
 fn write_atomic(path: &Path, bytes: &[u8], executable: bool) -> Result<(), CliError> {
     use std::sync::atomic::{AtomicU64, Ordering};
     static COUNTER: AtomicU64 = AtomicU64::new(0);
-    let err = |e: std::io::Error| CliError(format!("{}: cannot write: {e}", path.display()));
+    let err =
+        |e: std::io::Error| CliError::Runner(format!("{}: cannot write: {e}", path.display()));
     let dir = path.parent().unwrap_or(Path::new("."));
     let name = path
         .file_name()
@@ -221,7 +222,8 @@ pub fn build_runner(loaded: &Loaded, options: &GenerateOptions) -> Result<PathBu
         .into_iter()
         .filter_map(|(on, name)| on.then_some(name))
         .collect();
-    let main = runner_main(&krate, &options.algorithms, constrained, &scalars).map_err(CliError)?;
+    let main = runner_main(&krate, &options.algorithms, constrained, &scalars)
+        .map_err(CliError::Runner)?;
     files.push((PathBuf::from("src/main.rs"), main));
     let key_parts: Vec<&[u8]> = std::iter::once(GENERATOR_VERSION.as_bytes())
         .chain(
@@ -239,7 +241,7 @@ pub fn build_runner(loaded: &Loaded, options: &GenerateOptions) -> Result<PathBu
         name: bin_name.clone(),
         path: "src/main.rs".into(),
     });
-    let cargo_toml = manifest.to_toml().map_err(CliError)?;
+    let cargo_toml = manifest.to_toml().map_err(CliError::Runner)?;
     for (path, text) in &mut files {
         if path == Path::new("Cargo.toml") {
             *text = cargo_toml.clone();
@@ -278,7 +280,7 @@ pub fn build_runner(loaded: &Loaded, options: &GenerateOptions) -> Result<PathBu
         .join("release")
         .join(format!("{bin_name}{}", std::env::consts::EXE_SUFFIX));
     let binary = std::fs::read(&built).map_err(|e| {
-        CliError(format!(
+        CliError::Runner(format!(
             "{}: the built runner cannot be read: {e}",
             built.display()
         ))
@@ -290,13 +292,13 @@ pub fn build_runner(loaded: &Loaded, options: &GenerateOptions) -> Result<PathBu
         binary_sha256: sha256_hex(&[&binary]),
     };
     let json = serde_json::to_vec_pretty(&record)
-        .map_err(|e| CliError(format!("cannot write the cache manifest: {e}")))?;
+        .map_err(|e| CliError::Runner(format!("cannot write the cache manifest: {e}")))?;
     write_atomic(&entry.join(MANIFEST), &json, false)?;
     match check_entry(&entry, &source_sha256) {
         EntryState::Valid => Ok(runner_path(&entry)),
         // Another run replaced the entry between our write and this check with a different binary;
         // never run what was not checked.
-        EntryState::Missing | EntryState::Invalid(_) => Err(CliError(format!(
+        EntryState::Missing | EntryState::Invalid(_) => Err(CliError::Runner(format!(
             "{}: the cache entry changed while it was being written (another embedyn run?); try again",
             entry.display()
         ))),
@@ -333,7 +335,7 @@ fn cargo_build(dir: &Path, target: &Path, bin_name: &str) -> Result<(), CliError
             .stdin(Stdio::null())
             .output()
             .map_err(|e| {
-                CliError(format!(
+                CliError::Runner(format!(
                     "cannot run cargo ({}): {e}",
                     cargo.to_string_lossy()
                 ))
@@ -346,7 +348,7 @@ fn cargo_build(dir: &Path, target: &Path, bin_name: &str) -> Result<(), CliError
     if retry.status.success() {
         Ok(())
     } else {
-        Err(CliError(format!(
+        Err(CliError::Runner(format!(
             "compiling the generated code failed:\n{}",
             String::from_utf8_lossy(&retry.stderr)
         )))
@@ -386,7 +388,7 @@ pub fn run(
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
-        .map_err(|e| CliError(format!("cannot run {}: {e}", binary.display())))?;
+        .map_err(|e| CliError::Runner(format!("cannot run {}: {e}", binary.display())))?;
     let stdin = child.stdin.take();
     // Fed from another thread, so that a runner writing before it has read everything cannot deadlock.
     let (written, out) = std::thread::scope(|s| {
@@ -397,9 +399,9 @@ pub fn run(
         let out = child.wait_with_output();
         (feeder.join(), out)
     });
-    let out = out.map_err(|e| CliError(format!("the generated code's runner: {e}")))?;
+    let out = out.map_err(|e| CliError::Runner(format!("the generated code's runner: {e}")))?;
     if !out.status.success() {
-        return Err(CliError(format!(
+        return Err(CliError::Runner(format!(
             "the generated code's runner failed ({}): {}",
             out.status,
             String::from_utf8_lossy(&out.stderr).trim()
@@ -408,12 +410,12 @@ pub fn run(
     match written {
         Ok(Ok(())) => {}
         Ok(Err(e)) => {
-            return Err(CliError(format!(
+            return Err(CliError::Runner(format!(
                 "the generated code's runner did not read its input: {e}"
             )))
         }
         Err(_) => {
-            return Err(CliError(
+            return Err(CliError::Runner(
                 "the generated code's runner input could not be written".into(),
             ))
         }
@@ -424,7 +426,7 @@ pub fn run(
 
 /// The runner's output as rows of numbers, checked against what was asked for.
 fn parse_rows(stdout: &str, inputs: usize, shape: &RowShape) -> Result<Vec<Vec<f64>>, CliError> {
-    let fail = |what: String| CliError(format!("the generated code's runner {what}"));
+    let fail = |what: String| CliError::Runner(format!("the generated code's runner {what}"));
     let (count, len) = match shape {
         RowShape::Eval { len } => (inputs, *len),
         RowShape::Bench => (1, 1),
@@ -703,7 +705,7 @@ mod tests {
             ("1 2\n3 x\n", "printed \"x\" in row 1, not a number"),
             ("1 2\n3 4\n5 6\n", "printed 3 rows for 2 expected"),
         ] {
-            let e = eval(out, 2, 2).unwrap_err().0;
+            let e = eval(out, 2, 2).unwrap_err().to_string();
             assert!(e.contains(message), "{out:?}: {e}");
         }
         assert_eq!(

@@ -9,7 +9,7 @@
 //! cannot succeed any more, and storing them could cost more than their text), so invalid JSON anywhere
 //! is still reported as such.
 
-use super::CliError;
+use super::{CliError, SampleProblem};
 use serde::de::{self, DeserializeSeed, IgnoredAny, MapAccess, SeqAccess, Visitor};
 use std::fmt;
 
@@ -113,16 +113,16 @@ impl Samples {
             .and_then(|()| deserializer.end());
         if let Err(e) = parsed {
             // A refusal made while reading is the error itself; serde_json's is about the text.
-            return Err(CliError(match reader.refusal.take() {
+            return Err(CliError::Input(match reader.refusal.take() {
                 Some(message) => message,
                 None => format!("the input is not valid JSON: {e}"),
             }));
         }
         match reader.root {
-            Root::NoSamples => Err(CliError(
+            Root::NoSamples => Err(CliError::Input(
                 "the input has no field `samples` (expected {\"samples\": [...]})".into(),
             )),
-            Root::NotArray => Err(CliError(
+            Root::NotArray => Err(CliError::Input(
                 "the input's field `samples` must be an array".into(),
             )),
             Root::Array => Ok(reader.samples),
@@ -149,8 +149,8 @@ impl Samples {
     /// numbers.
     pub fn vector(&self, index: usize, name: &str) -> Result<&[f64], CliError> {
         let Some(field) = self.request.iter().position(|&(n, _)| n == name) else {
-            return Err(CliError(format!(
-                "internal error: field `{name}` of the samples was not read (a bug)"
+            return Err(CliError::Internal(format!(
+                "field `{name}` of the samples was not read"
             )));
         };
         let len = self.request[field].1;
@@ -159,25 +159,27 @@ impl Samples {
             .iter()
             .find(|&&(s, f, _)| (s, f) == (index, field));
         if let Some((_, _, problem)) = problem {
-            return Err(CliError(match problem {
-                Problem::Missing => format!("sample {index}: missing field `{name}`"),
-                Problem::NotArray => {
-                    format!("sample {index}: field `{name}` must be an array of numbers")
-                }
-                Problem::Short(n) => {
-                    format!("sample {index}: field `{name}` has {n} entries, the model needs {len}")
-                }
-                Problem::NotFinite { index: k, shown } => {
-                    format!("sample {index}: field `{name}`[{k}] is not a finite number: {shown}")
-                }
-            }));
+            return Err(CliError::Sample {
+                sample: index,
+                field: name.to_string(),
+                problem: match problem {
+                    Problem::Missing => SampleProblem::Missing,
+                    Problem::NotArray => SampleProblem::NotArray,
+                    Problem::Short(got) => SampleProblem::Length {
+                        got: *got,
+                        expected: len,
+                    },
+                    Problem::NotFinite { index, shown } => SampleProblem::NotFinite {
+                        index: *index,
+                        shown: shown.clone(),
+                    },
+                },
+            });
         }
         let start = index * self.stride + self.offsets[field];
-        self.numbers.get(start..start + len).ok_or_else(|| {
-            CliError(format!(
-                "internal error: sample {index} is not in the input (a bug)"
-            ))
-        })
+        self.numbers
+            .get(start..start + len)
+            .ok_or_else(|| CliError::Internal(format!("sample {index} is not in the input")))
     }
 }
 
@@ -497,4 +499,40 @@ fn skip_seq<'de, A: SeqAccess<'de>>(mut seq: A) -> Result<(), A::Error> {
 fn skip_map<'de, A: MapAccess<'de>>(mut map: A) -> Result<(), A::Error> {
     while map.next_entry::<IgnoredAny, IgnoredAny>()?.is_some() {}
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_sample_problem_is_reported_as_data_with_the_same_message() {
+        let request = [("q", 3), ("v", 2)];
+        let short = Samples::parse(r#"{"samples": [{"q": [1, 2], "v": [0, 0]}]}"#, &request)
+            .unwrap()
+            .vector(0, "q")
+            .unwrap_err();
+        assert!(matches!(
+            &short,
+            CliError::Sample { sample: 0, field, problem: SampleProblem::Length { got: 2, expected: 3 } }
+                if field == "q"
+        ));
+        assert_eq!(
+            short.to_string(),
+            "sample 0: field `q` has 2 entries, the model needs 3"
+        );
+        let missing = Samples::parse(r#"{"samples": [{"q": [1, 2, 3]}]}"#, &request)
+            .unwrap()
+            .vector(0, "v")
+            .unwrap_err();
+        assert!(matches!(
+            &missing,
+            CliError::Sample {
+                sample: 0,
+                problem: SampleProblem::Missing,
+                ..
+            }
+        ));
+        assert_eq!(missing.to_string(), "sample 0: missing field `v`");
+    }
 }

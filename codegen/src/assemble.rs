@@ -8,6 +8,7 @@
 
 use crate::error::{LoadError, Location};
 use crate::ir::{Inertial, JointKind, LoopKind, Origin, Robot};
+use embedyn_runtime::constraints::GroupLabel;
 use embedyn_runtime::nalgebra::{Matrix3, Vector3};
 use embedyn_runtime::{
     JointType, Model, ModelElement, ModelError, Real, SpatialInertia, Transform,
@@ -268,7 +269,7 @@ fn model_build_error(robot: &Robot, e: ModelError, scalar: &str) -> LoadError {
         ModelError::LoopNeverCloses { group, .. }
         | ModelError::DependentMismatch { group, .. }
         | ModelError::SingularDependentChoice { group, .. } => {
-            return LoadError::new(constraint_location(robot, group), e.to_string());
+            return LoadError::new(group_location(robot, group), e.to_string());
         }
         ModelError::EmptyConstraint { constraint } => {
             return LoadError::new(constraint_location(robot, constraint), e.to_string());
@@ -317,23 +318,30 @@ fn link_location(robot: &Robot, name: &str) -> Location {
     Location::new(&robot.source, line, format!("link \"{name}\""))
 }
 
-/// Where the first constraint named in `names` (a comma-separated list) is written.
-fn constraint_location(robot: &Robot, names: &str) -> Location {
-    let first = names.split(", ").next().unwrap_or("");
-    if let Some(l) = robot.loops.iter().find(|l| l.name == first) {
+/// Where a group is written: at its first constraint.
+fn group_location(robot: &Robot, group: &GroupLabel) -> Location {
+    match group.constraints.first() {
+        Some(first) => constraint_location(robot, first),
+        None => Location::new(&robot.source, None, format!("constraints {group}")),
+    }
+}
+
+/// Where the constraint `name` is written.
+fn constraint_location(robot: &Robot, name: &str) -> Location {
+    if let Some(l) = robot.loops.iter().find(|l| l.name == name) {
         return Location::new(&robot.source, l.line, format!("loop \"{}\"", l.name));
     }
-    if let Some(c) = robot.couplings.iter().find(|c| c.name == first) {
+    if let Some(c) = robot.couplings.iter().find(|c| c.name == name) {
         return Location::new(&robot.source, c.line, format!("coupling \"{}\"", c.name));
     }
-    if let Some(j) = robot.joints.iter().find(|j| j.name == first) {
+    if let Some(j) = robot.joints.iter().find(|j| j.name == name) {
         return Location::new(
             &robot.source,
             j.line,
             format!("joint \"{}\" <mimic>", j.name),
         );
     }
-    Location::new(&robot.source, None, format!("constraints {names}"))
+    Location::new(&robot.source, None, format!("constraints {name}"))
 }
 
 /// URDF+ loops and couplings and URDF mimic joints, as runtime constraints (docs/model-format.md).

@@ -141,9 +141,16 @@ pub enum Code {
 /// needed 541 MB with one scalar module, 70 MB of which the compiler needs for any crate).
 pub const TOKEN_BYTES_PER_OPERATION: f64 = 3600.0;
 
-/// Errors of emission (a constant that folded to a non-finite number).
-#[derive(Debug)]
-pub struct EmitError(pub String);
+/// Errors of emission: a value the generated code would have to write as a literal is not a number.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum EmitError {
+    /// An output of `function` folded, at generation time, to a non-finite constant.
+    #[error("`{function}`: an output folded to the non-finite constant {value}")]
+    NonFiniteOutput { function: String, value: f64 },
+    /// An intermediate value of `function` folded to a non-finite constant.
+    #[error("`{function}`: a constant folded to {value}")]
+    NonFiniteConstant { function: String, value: f64 },
+}
 
 /// Emits `pub fn name(args…, outputs…)` for one scalar module; `helpers` is the path of the helper module.
 pub fn function(
@@ -173,9 +180,10 @@ pub fn function(
         match s {
             Sym::Node(n) => stack.push(*n),
             Sym::Const(c) if !c.is_finite() => {
-                return Err(EmitError(format!(
-                    "`{name}`: an output folded to the non-finite constant {c}"
-                )))
+                return Err(EmitError::NonFiniteOutput {
+                    function: name.to_string(),
+                    value: *c,
+                })
             }
             Sym::Const(c) => largest_constant = largest_constant.max(c.abs()),
         }
@@ -189,7 +197,10 @@ pub fn function(
             match operand {
                 Sym::Node(m) => stack.push(m),
                 Sym::Const(c) if !c.is_finite() => {
-                    return Err(EmitError(format!("`{name}`: a constant folded to {c}")))
+                    return Err(EmitError::NonFiniteConstant {
+                        function: name.to_string(),
+                        value: c,
+                    })
                 }
                 Sym::Const(c) => largest_constant = largest_constant.max(c.abs()),
             }

@@ -11,7 +11,7 @@ use crate::names::{code_span, shown};
 use crate::size;
 use crate::trace::{input, record, snap, Sym};
 use crate::value_names::Owners;
-use crate::{build_model, LoadError, Loaded, Location, ModelOptions};
+use crate::{build_model, LoadError, LoadErrorKind, Loaded, Location, ModelOptions};
 use embedyn_runtime::constraints::{singularity_threshold, COMPLETION_MAX_STEPS};
 use embedyn_runtime::{Model, Real, Workspace};
 
@@ -107,14 +107,20 @@ fn snapped(model: &Model<f64>) -> Model<f64> {
     m
 }
 
-fn gen_error(loaded: &Loaded, msg: impl Into<String>) -> LoadError {
-    LoadError::new(
+/// Code that cannot be generated, for the reason `message`.
+fn gen_error(loaded: &Loaded, message: impl Into<String>) -> LoadError {
+    located_at_robot(loaded, LoadErrorKind::Generate(message.into()))
+}
+
+/// An error about the whole robot, at its source file.
+fn located_at_robot(loaded: &Loaded, kind: LoadErrorKind) -> LoadError {
+    LoadError::at(
         Location::new(
             &loaded.robot.source,
             None,
             format!("robot \"{}\"", shown(&loaded.robot.name)),
         ),
-        msg,
+        kind,
     )
 }
 
@@ -134,9 +140,13 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
     let model64 = loaded.model::<f64>(&options.model)?;
     if options.f32 {
         // The f32 functions fold the same constants as f32 literals: each must fit f32.
-        crate::assemble::convert_model::<f32>(&loaded.robot, &model64).map_err(|mut e| {
-            e.message += " (generated f32 code cannot hold it; generate the f64 functions only)";
-            e
+        crate::assemble::convert_model::<f32>(&loaded.robot, &model64).map_err(|e| {
+            LoadError::at(
+                e.location,
+                LoadErrorKind::NotForF32 {
+                    inner: Box::new(e.kind),
+                },
+            )
         })?;
     }
     if let Some(a) = options
@@ -505,7 +515,7 @@ fn generate_algorithm(
         helpers,
         &owners,
     )
-    .map_err(|e| gen_error(loaded, e.0))?;
+    .map_err(|e| gen_error(loaded, e.to_string()))?;
     if let Some(wrapper) = spec.wrapper {
         let wrapper = wrapper();
         emitted.code = match emitted.code {
@@ -553,8 +563,12 @@ pub fn generate_file(
     println!("cargo:rerun-if-changed={shown_path}");
     let loaded = crate::load(model_path)?;
     let text = generate_source(&loaded, options)?;
-    std::fs::write(out, text)
-        .map_err(|e| gen_error(&loaded, format!("cannot write {}: {e}", out.display())))
+    std::fs::write(out, text).map_err(|e| {
+        located_at_robot(
+            &loaded,
+            LoadErrorKind::Write(format!("cannot write {}: {e}", out.display())),
+        )
+    })
 }
 
 /// Builds the f64 model the way generated code sees it (for comparisons in tests).

@@ -32,7 +32,7 @@ mod value_names;
 mod xml_text;
 
 pub use assemble::{build_model, inertial_about_link, ModelOptions, ROOT_JOINT};
-pub use error::{LoadError, Location, Warning};
+pub use error::{LoadError, LoadErrorKind, Location, Warning};
 pub use generate::{
     format_tokens, generate_file, generate_source, generate_tokens, generation_model, Algorithm,
     GenerateOptions, GENERATOR_VERSION,

@@ -22,7 +22,7 @@
 //! measured compiles of generated chains of 50–1000 bodies.
 
 use crate::algorithm::{Algorithm, Growth, SizeCounts};
-use crate::{LoadError, Loaded, Location};
+use crate::{LoadError, LoadErrorKind, Loaded, Location};
 use embedyn_runtime::Model;
 
 /// The default limit on rustc's estimated memory, MB: a 1000-body chain's `aba` (f64 and f32) fits, a
@@ -105,13 +105,13 @@ pub fn check(
         return Ok(());
     }
     let memory = compile_memory_mb(all, scalars.len());
-    Err(LoadError::new(
+    Err(LoadError::at(
         Location::new(
             &loaded.robot.source,
             None,
             format!("robot \"{}\"", loaded.robot.name),
         ),
-        refusal(all, scalars, memory, limit),
+        LoadErrorKind::Generate(refusal(all, scalars, memory, limit)),
     ))
 }
 

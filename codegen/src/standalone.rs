@@ -4,7 +4,7 @@
 
 use crate::generate::{format_tokens, generate_source, GenerateOptions, GENERATOR_VERSION};
 use crate::names::{code_span, table_cell};
-use crate::{LoadError, Loaded, Location};
+use crate::{LoadError, LoadErrorKind, Loaded, Location};
 use quote::quote;
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -119,7 +119,12 @@ pub fn crate_files(
         .file_name()
         .map_or_else(String::new, |f| f.to_string_lossy().into_owned());
     let model = loaded.model::<f64>(&options.model)?;
-    let error = |e: String| LoadError::new(Location::new(&loaded.robot.source, None, ""), e);
+    let error = |e: String| {
+        LoadError::at(
+            Location::new(&loaded.robot.source, None, ""),
+            LoadErrorKind::Generate(e),
+        )
+    };
     let lib = format!(
         "{header}\n/// Sine/cosine and square root used by the generated functions.\npub mod helpers {{\n{HELPERS_SOURCE}}}\n\n{body}",
         header = lib_header(&loaded.robot.name, &file_name).map_err(error)?,
@@ -177,7 +182,10 @@ pub fn write_crate(
     dir: &Path,
 ) -> Result<Vec<PathBuf>, LoadError> {
     let io = |e: std::io::Error, p: &Path| {
-        LoadError::new(Location::new(p, None, ""), format!("cannot write: {e}"))
+        LoadError::at(
+            Location::new(p, None, ""),
+            LoadErrorKind::Write(format!("cannot write: {e}")),
+        )
     };
     let mut written = Vec::new();
     for (rel, text) in crate_files(loaded, options)? {

@@ -4,7 +4,7 @@
 //! `<mimic>` children (a differential).
 
 use crate::bounded_read::read_model_file;
-use crate::error::{LoadError, Location, Warning};
+use crate::error::{LoadError, LoadErrorKind, Location, Warning};
 use crate::ir::{
     Coupling, Inertial, Joint, JointKind, Link, Loop, LoopFrame, LoopKind, Mimic, Origin, Robot,
 };
@@ -52,9 +52,11 @@ fn fold_repeated_warnings(warnings: &mut Vec<Warning>) {
 /// Reads and checks a URDF file.
 pub fn load_urdf(path: &Path) -> Result<Loaded, LoadError> {
     let text = read_model_file(path).map_err(|e| {
-        LoadError::new(
+        LoadError::at(
             Location::new(path, None, ""),
-            format!("cannot read the model file: {e}"),
+            LoadErrorKind::Unreadable {
+                problem: e.to_string(),
+            },
         )
     })?;
     parse_urdf(&text, path)
@@ -64,18 +66,18 @@ pub fn load_urdf(path: &Path) -> Result<Loaded, LoadError> {
 pub fn parse_urdf(text: &str, path: &Path) -> Result<Loaded, LoadError> {
     let lines = LineIndex::new(text);
     if let Some(deep) = nesting_too_deep(text, MAX_NESTING) {
-        return Err(LoadError::new(
+        return Err(LoadError::at(
             Location::new(path, Some(lines.line(deep.offset)), "XML"),
-            format!(
-                "elements are nested more than {MAX_NESTING} deep here; a URDF needs a handful of levels, so this is not a model file (refused before parsing, which would exhaust the stack)"
-            ),
+            LoadErrorKind::NestedTooDeep { limit: MAX_NESTING },
         ));
     }
     let doc = Document::parse(text).map_err(|e| {
         let pos = e.pos();
-        LoadError::new(
+        LoadError::at(
             Location::new(path, Some(pos.row), "XML"),
-            format!("malformed XML: {e}"),
+            LoadErrorKind::MalformedXml {
+                problem: e.to_string(),
+            },
         )
     })?;
     let mut p = Parser {
@@ -113,7 +115,16 @@ impl<'a, 'input> Parser<'a, 'input> {
         element: impl Into<String>,
         msg: impl Into<String>,
     ) -> Result<T, LoadError> {
-        Err(LoadError::new(self.loc(node, element), msg))
+        self.fail(node, element, LoadErrorKind::Model(msg.into()))
+    }
+
+    fn fail<T>(
+        &self,
+        node: Node,
+        element: impl Into<String>,
+        kind: LoadErrorKind,
+    ) -> Result<T, LoadError> {
+        Err(LoadError::at(self.loc(node, element), kind))
     }
 
     fn warn(&mut self, node: Node, element: impl Into<String>, msg: impl Into<String>) {
@@ -139,10 +150,10 @@ impl<'a, 'input> Parser<'a, 'input> {
         for node in root.children().filter(|n| n.has_tag_name("link")) {
             let link = self.link(node)?;
             if link_index.insert(link.name.clone(), links.len()).is_some() {
-                return self.err(
+                return self.fail(
                     node,
                     format!("link \"{}\"", link.name),
-                    "a link of this name is already defined",
+                    LoadErrorKind::DuplicateName { what: "link" },
                 );
             }
             links.push(link);
@@ -157,7 +168,7 @@ impl<'a, 'input> Parser<'a, 'input> {
                 .insert(joint.name.clone(), joints.len())
                 .is_some()
             {
-                return self.err(node, what, "a joint of this name is already defined");
+                return self.fail(node, what, LoadErrorKind::DuplicateName { what: "joint" });
             }
             if let Some(other) = parent_joint[joint.child] {
                 return self.err(
@@ -186,9 +197,9 @@ impl<'a, 'input> Parser<'a, 'input> {
             [r] => *r,
             [] => {
                 let j = &joints[0];
-                return Err(LoadError::new(
+                return Err(LoadError::at(
                     Location::new(self.path, j.line, format!("joint \"{}\"", j.name)),
-                    "the joints form a cycle: every link is some joint's child, so there is no root link",
+                    LoadErrorKind::NoRootLink,
                 ));
             }
             [_, second, ..] => {
@@ -216,12 +227,12 @@ impl<'a, 'input> Parser<'a, 'input> {
         }
         if let Some(l) = seen.iter().position(|s| !s) {
             let j = &joints[parent_joint[l].unwrap()];
-            return Err(LoadError::new(
+            return Err(LoadError::at(
                 Location::new(self.path, j.line, format!("joint \"{}\"", j.name)),
-                format!(
-                    "the joints form a cycle through link \"{}\", which is not connected to the root link \"{}\"",
-                    links[l].name, links[root_link].name
-                ),
+                LoadErrorKind::Cycle {
+                    link: links[l].name.clone(),
+                    root: links[root_link].name.clone(),
+                },
             ));
         }
         // Mimic targets must exist.
@@ -291,7 +302,13 @@ impl<'a, 'input> Parser<'a, 'input> {
 
     fn link(&mut self, node: Node) -> Result<Link, LoadError> {
         let Some(name) = node.attribute("name") else {
-            return self.err(node, "<link>", "missing attribute `name`");
+            return self.fail(
+                node,
+                "<link>",
+                LoadErrorKind::MissingAttribute {
+                    attribute: "name".into(),
+                },
+            );
         };
         let what = format!("link \"{name}\"");
         let inertial = match node.children().find(|n| n.has_tag_name("inertial")) {
@@ -309,7 +326,11 @@ impl<'a, 'input> Parser<'a, 'input> {
         let what = format!("{link} <inertial>");
         let origin = self.origin(node, &what)?;
         let Some(mnode) = node.children().find(|n| n.has_tag_name("mass")) else {
-            return self.err(node, what, "missing <mass>");
+            return self.fail(
+                node,
+                what,
+                LoadErrorKind::MissingElement { tag: "mass".into() },
+            );
         };
         let mass = self.number(mnode, "value", None, &format!("{what} <mass>"))?;
         if mass < 0.0 {
@@ -320,7 +341,13 @@ impl<'a, 'input> Parser<'a, 'input> {
             );
         }
         let Some(inode) = node.children().find(|n| n.has_tag_name("inertia")) else {
-            return self.err(node, what, "missing <inertia>");
+            return self.fail(
+                node,
+                what,
+                LoadErrorKind::MissingElement {
+                    tag: "inertia".into(),
+                },
+            );
         };
         let iw = format!("{what} <inertia>");
         let mut inertia = [0.0; 6];
@@ -366,7 +393,13 @@ impl<'a, 'input> Parser<'a, 'input> {
 
     fn joint(&mut self, node: Node, links: &HashMap<String, usize>) -> Result<Joint, LoadError> {
         let Some(name) = node.attribute("name") else {
-            return self.err(node, "<joint>", "missing attribute `name`");
+            return self.fail(
+                node,
+                "<joint>",
+                LoadErrorKind::MissingAttribute {
+                    attribute: "name".into(),
+                },
+            );
         };
         let what = format!("joint \"{name}\"");
         let kind = match node.attribute("type") {
@@ -381,14 +414,24 @@ impl<'a, 'input> Parser<'a, 'input> {
             Some(t) => {
                 return self.err(node, what, format!("unknown joint type \"{t}\" (expected revolute, continuous, prismatic, fixed or floating)"))
             }
-            None => return self.err(node, what, "missing attribute `type`"),
+            None => return self.fail(node, what, LoadErrorKind::MissingAttribute { attribute: "type".into() }),
         };
         let link_of = |tag: &str| -> Result<usize, LoadError> {
             let Some(n) = node.children().find(|n| n.has_tag_name(tag)) else {
-                return self.err(node, what.clone(), format!("missing <{tag}>"));
+                return self.fail(
+                    node,
+                    what.clone(),
+                    LoadErrorKind::MissingElement { tag: tag.into() },
+                );
             };
             let Some(l) = n.attribute("link") else {
-                return self.err(n, format!("{what} <{tag}>"), "missing attribute `link`");
+                return self.fail(
+                    n,
+                    format!("{what} <{tag}>"),
+                    LoadErrorKind::MissingAttribute {
+                        attribute: "link".into(),
+                    },
+                );
             };
             match links.get(l) {
                 Some(&i) => Ok(i),
@@ -421,7 +464,13 @@ impl<'a, 'input> Parser<'a, 'input> {
         for m in node.children().filter(|n| n.has_tag_name("mimic")) {
             let mw = format!("{what} <mimic>");
             let Some(target) = m.attribute("joint") else {
-                return self.err(m, mw, "missing attribute `joint`");
+                return self.fail(
+                    m,
+                    mw,
+                    LoadErrorKind::MissingAttribute {
+                        attribute: "joint".into(),
+                    },
+                );
             };
             mimics.push(Mimic {
                 joint: target.to_string(),
@@ -474,10 +523,20 @@ impl<'a, 'input> Parser<'a, 'input> {
         links: &HashMap<String, usize>,
     ) -> Result<(usize, Node<'a, 'input>), LoadError> {
         let Some(n) = node.children().find(|n| n.has_tag_name(tag)) else {
-            return self.err(node, what, format!("missing <{tag}>"));
+            return self.fail(
+                node,
+                what,
+                LoadErrorKind::MissingElement { tag: tag.into() },
+            );
         };
         let Some(l) = n.attribute("link") else {
-            return self.err(n, format!("{what} <{tag}>"), "missing attribute `link`");
+            return self.fail(
+                n,
+                format!("{what} <{tag}>"),
+                LoadErrorKind::MissingAttribute {
+                    attribute: "link".into(),
+                },
+            );
         };
         match links.get(l) {
             Some(&i) => Ok((i, n)),
@@ -494,7 +553,13 @@ impl<'a, 'input> Parser<'a, 'input> {
     fn constraint_name(&self, node: Node, tag: &str) -> Result<String, LoadError> {
         match node.attribute("name") {
             Some(name) => Ok(name.to_string()),
-            None => self.err(node, format!("<{tag}>"), "missing attribute `name`"),
+            None => self.fail(
+                node,
+                format!("<{tag}>"),
+                LoadErrorKind::MissingAttribute {
+                    attribute: "name".into(),
+                },
+            ),
         }
     }
 
@@ -568,7 +633,7 @@ impl<'a, 'input> Parser<'a, 'input> {
             Some("fixed") => LoopKind::Fixed,
             Some("planar") => return self.err(node, what, "loop type \"planar\" is not supported"),
             Some(t) => return self.err(node, what, format!("unknown loop type \"{t}\" (expected revolute, continuous, prismatic, spherical or fixed)")),
-            None => return self.err(node, what, "missing attribute `type`"),
+            None => return self.fail(node, what, LoadErrorKind::MissingAttribute { attribute: "type".into() }),
         };
         let (pl, pn) = self.named_link(node, "predecessor", &what, links)?;
         let (sl, sn) = self.named_link(node, "successor", &what, links)?;
@@ -649,16 +714,32 @@ impl<'a, 'input> Parser<'a, 'input> {
         match node.attribute(attr) {
             None => match default {
                 Some(d) => Ok(d),
-                None => self.err(node, what, format!("missing attribute `{attr}`")),
+                None => self.fail(
+                    node,
+                    what,
+                    LoadErrorKind::MissingAttribute {
+                        attribute: attr.into(),
+                    },
+                ),
             },
             Some(s) => match s.trim().parse::<f64>() {
                 Ok(x) if x.is_finite() => Ok(x),
-                Ok(_) => self.err(
+                Ok(_) => self.fail(
                     node,
                     what,
-                    format!("`{attr}=\"{s}\"` is not a finite number"),
+                    LoadErrorKind::NotFinite {
+                        attribute: attr.into(),
+                        text: s.into(),
+                    },
                 ),
-                Err(_) => self.err(node, what, format!("`{attr}=\"{s}\"` is not a number")),
+                Err(_) => self.fail(
+                    node,
+                    what,
+                    LoadErrorKind::NotANumber {
+                        attribute: attr.into(),
+                        text: s.into(),
+                    },
+                ),
             },
         }
     }
@@ -673,7 +754,13 @@ impl<'a, 'input> Parser<'a, 'input> {
         let Some(s) = node.attribute(attr) else {
             return match default {
                 Some(d) => Ok(d),
-                None => self.err(node, what, format!("missing attribute `{attr}`")),
+                None => self.fail(
+                    node,
+                    what,
+                    LoadErrorKind::MissingAttribute {
+                        attribute: attr.into(),
+                    },
+                ),
             };
         };
         let parts: Vec<&str> = s.split_whitespace().collect();
@@ -735,4 +822,55 @@ fn below_rounding(eigenvalue: f64, scale: f64) -> bool {
 /// The smallest eigenvalue of a symmetric 3×3 matrix.
 fn min_eigenvalue(m: &Matrix3<f64>) -> f64 {
     m.symmetric_eigenvalues().min()
+}
+
+#[cfg(test)]
+mod kind_tests {
+    use super::*;
+
+    fn error_of(text: &str) -> LoadError {
+        match parse_urdf(text, Path::new("m.urdf")) {
+            Ok(_) => panic!("{text} loaded"),
+            Err(e) => e,
+        }
+    }
+
+    #[test]
+    fn load_errors_carry_what_went_wrong_as_data_and_keep_their_messages() {
+        let e = error_of("<robot name=\"r\">\n<link/>\n</robot>");
+        assert_eq!(
+            e.kind,
+            LoadErrorKind::MissingAttribute {
+                attribute: "name".into()
+            }
+        );
+        assert_eq!(e.location.line, Some(2));
+        assert_eq!(e.to_string(), "m.urdf:2: <link>: missing attribute `name`");
+
+        let e = error_of("<robot name=\"r\"><link name=\"a\"><inertial><mass value=\"x\"/><inertia ixx=\"1\" iyy=\"1\" izz=\"1\" ixy=\"0\" ixz=\"0\" iyz=\"0\"/></inertial></link></robot>");
+        assert_eq!(
+            e.kind,
+            LoadErrorKind::NotANumber {
+                attribute: "value".into(),
+                text: "x".into()
+            },
+            "{e}"
+        );
+        assert!(
+            e.to_string().ends_with("`value=\"x\"` is not a number"),
+            "{e}"
+        );
+
+        let e = error_of("<robot name=\"r\"><link name=\"a\"/><link name=\"a\"/></robot>");
+        assert_eq!(e.kind, LoadErrorKind::DuplicateName { what: "link" });
+        assert!(
+            e.to_string()
+                .ends_with("link \"a\": a link of this name is already defined"),
+            "{e}"
+        );
+
+        let e = error_of("<robot");
+        assert!(matches!(e.kind, LoadErrorKind::MalformedXml { .. }), "{e}");
+        assert!(e.to_string().contains(": XML: malformed XML: "), "{e}");
+    }
 }

@@ -11,7 +11,7 @@
 
 #[allow(unused_imports)]
 use crate::alloc_prelude::*;
-use crate::constraints::{Constraint, ConstraintKind, Group};
+use crate::constraints::{Constraint, ConstraintKind, Group, GroupLabel};
 use crate::spatial::{Motion, SpatialInertia, Transform};
 use crate::Real;
 use nalgebra::Vector3;
@@ -220,7 +220,7 @@ pub enum ModelError {
     #[error("{group}: the loop's two frames never meet: no configuration closes it (smallest residual found {gap:.3e}; check the <origin> of its predecessor and successor)")]
     LoopNeverCloses {
         /// The group, by the names of its constraints.
-        group: String,
+        group: GroupLabel,
         /// The smallest residual found.
         gap: f64,
     },
@@ -240,7 +240,7 @@ pub enum ModelError {
     #[error("{group}: {declared} joint(s) are declared dependent (independent=\"false\" or <mimic>), but the constraints remove {needed} degree(s) of freedom")]
     DependentMismatch {
         /// The group, by the names of its constraints.
-        group: String,
+        group: GroupLabel,
         /// How many joints the file declares dependent.
         declared: usize,
         /// How many degrees of freedom the constraints remove.
@@ -250,7 +250,7 @@ pub enum ModelError {
     #[error("{group}: the dependent joints cannot be solved from the independent ones (cond(Y1) = {condition:e} at a generic assembled configuration); declare other joints independent=\"false\"")]
     SingularDependentChoice {
         /// The group, by the names of its constraints.
-        group: String,
+        group: GroupLabel,
         /// The condition number of the dependent part of the constraint Jacobian.
         condition: f64,
     },

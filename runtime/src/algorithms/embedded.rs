@@ -20,7 +20,7 @@ use super::{
 };
 #[allow(unused_imports)]
 use crate::alloc_prelude::*;
-use crate::constraints::{embed, group_label, GroupWorkspace};
+use crate::constraints::{embed, ConstraintSet, GroupWorkspace};
 use crate::linalg::{cholesky_in_place, cholesky_solve_in_place, lu_in_place, lu_solve_in_place};
 use crate::model::Model;
 use crate::spatial::{Force, Motion};
@@ -177,7 +177,7 @@ fn group_backward<T: Real>(
     let pivot = cholesky_in_place(&mut gw.d);
     if pivot.value().is_some_and(|p| !(p > 0.0 && p.is_finite())) {
         return Err(DynamicsError::SingularGroup {
-            group: group_label(model, g),
+            group: g.label.clone(),
         });
     }
     if let Some(p) = g.parent {
@@ -407,7 +407,7 @@ pub fn kkt_forward_dynamics<T: Real>(
     }
     let mut perm = vec![0; n];
     lu_in_place(&mut kkt, &mut perm).map_err(|_| DynamicsError::SingularConstraint {
-        group: "KKT system".into(),
+        group: ConstraintSet::KktSystem,
         condition: f64::INFINITY,
         threshold: crate::constraints::singularity_threshold::<T>(),
     })?;

@@ -23,6 +23,7 @@ pub use minv::mass_matrix_inverse;
 pub use rnea::{rnea, rnea_with_gravity};
 pub use workspace::Workspace;
 
+use crate::constraints::{ConstraintSet, GroupLabel};
 use crate::model::{JointType, Model};
 use crate::spatial::{Motion, Transform};
 use crate::Real;
@@ -73,8 +74,8 @@ pub enum DynamicsError {
     /// A loop is at or too near a singular configuration.
     #[error("{group}: the loop is at or too near a singular configuration: cond(Y1) = {condition:.3e} ≥ {threshold:.1e}, the limit in this scalar type (the dependent joints are not determined by the independent ones here)")]
     SingularConstraint {
-        /// The group, by the names of its constraints.
-        group: String,
+        /// The group, by the names of its constraints (or the whole KKT system).
+        group: ConstraintSet,
         /// cond₁(Y1) at this configuration.
         condition: f64,
         /// The limit in this scalar type.
@@ -84,7 +85,7 @@ pub enum DynamicsError {
     #[error("{group}: the reduced inertia of the aggregate link is not positive definite")]
     SingularGroup {
         /// The group, by the names of its constraints.
-        group: String,
+        group: GroupLabel,
     },
 }
 

@@ -3,7 +3,7 @@
 //! Jacobian `Y = [Y1 Y2]` (Eqs. 35–38). Linear constraints (gears) give a constant `X_G` and `κ_G = 0`
 //! (Eq. 42) through the same code.
 
-use super::{ConstraintKind, Group};
+use super::{ConstraintKind, ConstraintSet, Group};
 use crate::algorithms::{DynamicsError, Workspace};
 #[allow(unused_imports)]
 use crate::alloc_prelude::*;
@@ -283,7 +283,7 @@ pub(crate) fn embed<T: Real>(
     if let Some(c) = cond.value() {
         if c.is_nan() || c >= singularity_threshold::<T>() {
             return Err(DynamicsError::SingularConstraint {
-                group: group_label(model, g),
+                group: ConstraintSet::Group(g.label.clone()),
                 condition: c,
                 threshold: singularity_threshold::<T>(),
             });
@@ -325,13 +325,4 @@ fn max_column_sum<T: Real>(n: usize, a: impl Fn(usize, usize) -> T) -> T {
         norm = super::max_keeping_nan(norm, s);
     }
     norm
-}
-
-/// How messages name a group: its constraints' names.
-pub(crate) fn group_label<T: Real>(model: &Model<T>, g: &Group) -> String {
-    g.constraints
-        .iter()
-        .map(|&c| model.constraints[c].name.as_str())
-        .collect::<Vec<_>>()
-        .join(", ")
 }

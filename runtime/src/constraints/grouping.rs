@@ -12,9 +12,84 @@ use crate::model::{JointType, Model, ModelError};
 use crate::Real;
 use nalgebra::DMatrix;
 
+/// A group's position in `model.groups`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct GroupId(pub usize);
+
+/// How errors name a group: its id and the names of its constraints (displayed as `loop1, gear`).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct GroupLabel {
+    /// The group's index in `Model::groups`.
+    pub id: GroupId,
+    /// The names of the group's constraints, in the order of `Group::constraints`.
+    pub constraints: Vec<String>,
+}
+
+impl core::fmt::Display for GroupLabel {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        for (k, name) in self.constraints.iter().enumerate() {
+            if k > 0 {
+                f.write_str(", ")?;
+            }
+            f.write_str(name)?;
+        }
+        Ok(())
+    }
+}
+
+/// A label equals the text it displays as (`label == "loop1"`).
+impl PartialEq<str> for GroupLabel {
+    fn eq(&self, text: &str) -> bool {
+        let mut rest = text;
+        for (k, name) in self.constraints.iter().enumerate() {
+            if k > 0 {
+                match rest.strip_prefix(", ") {
+                    Some(r) => rest = r,
+                    None => return false,
+                }
+            }
+            match rest.strip_prefix(name.as_str()) {
+                Some(r) => rest = r,
+                None => return false,
+            }
+        }
+        rest.is_empty()
+    }
+}
+
+/// What a constraint error is about: one group, or the whole system of a KKT solve.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum ConstraintSet {
+    /// One group of constraints.
+    Group(GroupLabel),
+    /// Every constraint at once, in the KKT system of `kkt_forward_dynamics`.
+    KktSystem,
+}
+
+impl core::fmt::Display for ConstraintSet {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            ConstraintSet::Group(label) => label.fmt(f),
+            ConstraintSet::KktSystem => f.write_str("KKT system"),
+        }
+    }
+}
+
+/// A set equals the text it displays as (`group == "loop1"`).
+impl PartialEq<str> for ConstraintSet {
+    fn eq(&self, text: &str) -> bool {
+        match self {
+            ConstraintSet::Group(label) => label == text,
+            ConstraintSet::KktSystem => text == "KKT system",
+        }
+    }
+}
+
 /// An aggregate link: bodies tied together by loops, couplings or mimic joints.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Group {
+    /// Its id and its constraints' names, for messages.
+    pub label: GroupLabel,
     /// Member bodies (= their joints), ascending (parents before children).
     pub bodies: Vec<usize>,
     /// The one body every member hangs from (`None`: the world).
@@ -133,11 +208,13 @@ pub(crate) fn build_groups<T: Real>(
             .iter()
             .flat_map(|&c| row_offset[c]..row_offset[c] + model.constraints[c].raw_rows())
             .collect();
-        let name = constraints
-            .iter()
-            .map(|&c| model.constraints[c].name.as_str())
-            .collect::<Vec<_>>()
-            .join(", ");
+        let label = GroupLabel {
+            id: GroupId(groups.len()),
+            constraints: constraints
+                .iter()
+                .map(|&c| model.constraints[c].name.clone())
+                .collect(),
+        };
         // An assembled, generic configuration of this group: from the neutral configuration, assemble,
         // then move the group's coordinates away (off any symmetric, possibly singular pose) and assemble
         // again. If assembly fails, the rank is still taken where we are: never reject for that.
@@ -173,7 +250,7 @@ pub(crate) fn build_groups<T: Real>(
             let gap = raw_rows
                 .iter()
                 .fold(0.0f64, |m, &i| m.max(r[i].to_f64().abs()));
-            return Err(ModelError::LoopNeverCloses { group: name, gap });
+            return Err(ModelError::LoopNeverCloses { group: label, gap });
         }
         let k_mat = group_jacobian(model, &mut ws, &q, &raw_rows, &cols);
         let kept_local = independent_rows(&k_mat, RANK_TOLERANCE);
@@ -194,7 +271,7 @@ pub(crate) fn build_groups<T: Real>(
         } else {
             if declared.len() != rank {
                 return Err(ModelError::DependentMismatch {
-                    group: name,
+                    group: label,
                     declared: declared.len(),
                     needed: rank,
                 });
@@ -207,6 +284,7 @@ pub(crate) fn build_groups<T: Real>(
             .filter(|b| !dependent.contains(b))
             .collect();
         let mut group = Group {
+            label,
             bodies,
             parent,
             constraints,
@@ -222,7 +300,7 @@ pub(crate) fn build_groups<T: Real>(
             && rank > 0
         {
             return Err(ModelError::SingularDependentChoice {
-                group: name,
+                group: group.label.clone(),
                 condition: group.condition_at_load,
             });
         }
@@ -302,4 +380,25 @@ fn y1_condition<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, q: &[T], g: &G
     group_rows(model, ws, g, &mut gw, false);
     fill_y1(g, &mut gw);
     y1_condition_of(&mut gw)
+}
+
+#[cfg(test)]
+mod label_tests {
+    use super::*;
+
+    #[test]
+    fn a_group_label_shows_its_constraint_names_in_order_and_keeps_them_apart() {
+        let label = GroupLabel {
+            id: GroupId(2),
+            constraints: vec!["loop, with comma".to_string(), "gear".to_string()],
+        };
+        assert_eq!(label.to_string(), "loop, with comma, gear");
+        // The names stay separate: a name containing ", " is not split.
+        assert_eq!(label.constraints[0], "loop, with comma");
+        assert!(label == *"loop, with comma, gear");
+        assert!(label != *"loop, with comma");
+        assert!(label != *"loop, with comma, gear, belt");
+        assert_eq!(ConstraintSet::KktSystem.to_string(), "KKT system");
+        assert!(ConstraintSet::Group(label) == *"loop, with comma, gear");
+    }
 }

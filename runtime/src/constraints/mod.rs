@@ -18,11 +18,10 @@ pub use completion::{
     complete_configuration, complete_configuration_with, complete_velocity, completion_step,
     constraint_violation, y1_condition, COMPLETION_MAX_STEPS,
 };
-pub(crate) use embedding::group_label;
 pub use embedding::{constraint_condition, singularity_threshold};
 pub(crate) use embedding::{embed, GroupWorkspace};
 pub(crate) use grouping::build_groups;
-pub use grouping::Group;
+pub use grouping::{ConstraintSet, Group, GroupId, GroupLabel};
 
 use crate::Real;
 
