@@ -13,37 +13,9 @@ mod hostile {
     embedyn::robot!("tests/data/hostile_names.urdf", f64_only);
 }
 
-/// The names as tests/data/hostile_names.urdf means them (XML entities resolved), written here
-/// independently of the loader.
-const JOINTS: [&str; 12] = [
-    "q\"uote",
-    "back\\slash",
-    "new\nline\rbuild = \"evil.rs\"",
-    "*/ compile_error!(\"boom\") /*",
-    "fn",
-    "self",
-    "Self",
-    "crate",
-    "肩 joint ✓",
-    "a-b",
-    "a.b",
-    "a b",
-];
-const FRAMES: [&str; 13] = [
-    "l\\1",
-    "</robot>",
-    "r#type",
-    "_",
-    "ロボット",
-    "tab\tbed",
-    "back`tick|pipe",
-    "super",
-    "1st",
-    "x-y",
-    "x.y",
-    "x y",
-    "merged \"*/\"",
-];
+#[path = "data/hostile_names.rs"]
+mod names;
+use names::{FRAMES, JOINTS};
 
 #[test]
 fn hostile_names_through_the_macro_mean_what_the_model_says() {

@@ -88,37 +88,9 @@ fn embedyn(args: &[&str], stdin: &str) -> Run {
 
 const HOSTILE: &str = "tests/data/hostile_names.urdf";
 
-/// The names in tests/data/hostile_names.urdf as the file means them (XML entities resolved), written
-/// here independently of the loader.
-const HOSTILE_JOINTS: [&str; 12] = [
-    "q\"uote",
-    "back\\slash",
-    "new\nline\rbuild = \"evil.rs\"",
-    "*/ compile_error!(\"boom\") /*",
-    "fn",
-    "self",
-    "Self",
-    "crate",
-    "肩 joint ✓",
-    "a-b",
-    "a.b",
-    "a b",
-];
-const HOSTILE_FRAMES: [&str; 13] = [
-    "l\\1",
-    "</robot>",
-    "r#type",
-    "_",
-    "ロボット",
-    "tab\tbed",
-    "back`tick|pipe",
-    "super",
-    "1st",
-    "x-y",
-    "x.y",
-    "x y",
-    "merged \"*/\"",
-];
+#[path = "../../tests/data/hostile_names.rs"]
+mod hostile_names;
+use hostile_names::{FRAMES as HOSTILE_FRAMES, JOINTS as HOSTILE_JOINTS};
 
 /// The string values of `pub const NAME: [&str; N] = [...]` in a generated source file.
 fn string_constant(file: &syn::File, name: &str) -> Vec<String> {
