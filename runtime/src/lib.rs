@@ -54,7 +54,8 @@ pub mod tree;
 pub use algorithms::{
     aba, constraint_kinematics, crba, embedding_map, embedding_map_in, forward_kinematics,
     kinetic_energy, kkt_forward_dynamics, link_poses, mass_matrix_inverse, potential_energy,
-    reduced_mass_matrix, reduced_mass_matrix_in, rnea, rnea_with_gravity, DynamicsError, Workspace,
+    reduced_mass_matrix, reduced_mass_matrix_in, rnea, rnea_with_gravity, DynamicsError,
+    Kinematics, Workspace,
 };
 #[cfg(feature = "alloc")]
 pub use model::{Body, Joint, JointType, Model, ModelBuilder, ModelElement, ModelError};

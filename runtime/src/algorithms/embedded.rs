@@ -20,7 +20,7 @@ use super::{
 };
 #[allow(unused_imports)]
 use crate::alloc_prelude::*;
-use crate::constraints::{embed, ConstraintSet, GroupWorkspace};
+use crate::constraints::{embed, ConstraintSet};
 use crate::linalg::{cholesky_in_place, cholesky_solve_in_place, lu_in_place, lu_solve_in_place};
 use crate::model::Model;
 use crate::spatial::{Force, Motion};
@@ -45,17 +45,30 @@ pub fn constraint_kinematics<T: Real>(
     Ok(())
 }
 
-/// [`constraint_kinematics`] at zero velocity (what position-level constraint work needs: placements
-/// and the constraint Jacobian), with the workspace's own zero vector: no allocation.
+/// [`constraint_kinematics`] at rest (what position-level constraint work needs: placements and the
+/// constraint Jacobian): placements from `q`, every velocity and acceleration zero.
 pub(crate) fn position_kinematics<T: Real>(
     model: &Model<T>,
     ws: &mut Workspace<T>,
     q: &[T],
 ) -> Result<(), DynamicsError> {
-    let zeros = core::mem::take(&mut ws.zero_velocity);
-    let result = constraint_kinematics(model, ws, q, &zeros);
-    ws.zero_velocity = zeros;
-    result
+    check_configuration(model, q)?;
+    for (i, (joint, body)) in model.joints.iter().zip(&model.bodies).enumerate() {
+        let x = joint
+            .placement
+            .compose(&joint.joint_transform(q))
+            .named(&joint.name, "x");
+        ws.parent_placement[i] = x;
+        ws.world_placement[i] = match joint.parent {
+            Some(p) => ws.world_placement[p].compose(&x),
+            None => x,
+        }
+        .named(&body.name, "pose");
+        ws.velocity[i] = Motion::zero();
+        ws.coriolis[i] = Motion::zero();
+        ws.acceleration[i] = Motion::zero();
+    }
+    Ok(())
 }
 
 /// Forward dynamics with aggregate links: `qdd` over all spanning joints (consistent with the constraints
@@ -68,43 +81,26 @@ pub(crate) fn aba<'w, T: Real>(
     tau: &[T],
 ) -> Result<&'w [T], DynamicsError> {
     constraint_kinematics(model, ws, q, v)?;
-    let mut groups = core::mem::take(&mut ws.groups);
-    let result = aba_with(model, ws, &mut groups, v, tau);
-    ws.groups = groups;
-    result?;
-    Ok(&ws.qdd)
-}
-
-fn aba_with<T: Real>(
-    model: &Model<T>,
-    ws: &mut Workspace<T>,
-    groups: &mut [GroupWorkspace<T>],
-    v: &[T],
-    tau: &[T],
-) -> Result<(), DynamicsError> {
-    for (g, gw) in groups.iter_mut().enumerate() {
-        embed(model, ws, g, gw, true)?;
+    let (kin, scratch) = ws.split_constraints();
+    for (g, gw) in scratch.groups.iter_mut().enumerate() {
+        embed(model, kin, g, gw, true)?;
     }
     init_articulated(model, ws);
     for i in (0..model.nbodies()).rev() {
         match model.group_of(i) {
             None => backward_step(model, ws, i, tau),
-            Some(g) if model.groups[g].bodies[0] == i => {
-                group_backward(model, ws, g, &mut groups[g], v, tau)?
-            }
+            Some(g) if model.groups[g].bodies[0] == i => group_backward(model, ws, g, v, tau)?,
             Some(_) => {}
         }
     }
     for i in 0..model.nbodies() {
         match model.group_of(i) {
             None => forward_step(model, ws, i)?,
-            Some(g) if model.groups[g].bodies[0] == i => {
-                group_forward(model, ws, g, &mut groups[g])
-            }
+            Some(g) if model.groups[g].bodies[0] == i => group_forward(model, ws, g),
             Some(_) => {}
         }
     }
-    Ok(())
+    Ok(&ws.qdd)
 }
 
 /// Eqs. 19–22 for one aggregate link: its members' articulated inertias and bias forces in the parent
@@ -113,11 +109,11 @@ fn group_backward<T: Real>(
     model: &Model<T>,
     ws: &mut Workspace<T>,
     gi: usize,
-    gw: &mut GroupWorkspace<T>,
     v: &[T],
     tau: &[T],
 ) -> Result<(), DynamicsError> {
     let g = &model.groups[gi];
+    let gw = &mut ws.constraints.groups[gi];
     let ni = g.independent.len();
     for (m, &b) in g.bodies.iter().enumerate() {
         let joint = &model.joints[b];
@@ -211,13 +207,9 @@ fn group_backward<T: Real>(
 }
 
 /// Eqs. 23–24: `θ̈_R = D⁻¹(ε − Ūᵀ α_parent)`, the members' accelerations, and `θ̈_G = X_G θ̈_R + κ_G`.
-fn group_forward<T: Real>(
-    model: &Model<T>,
-    ws: &mut Workspace<T>,
-    gi: usize,
-    gw: &mut GroupWorkspace<T>,
-) {
+fn group_forward<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, gi: usize) {
     let g = &model.groups[gi];
+    let gw = &mut ws.constraints.groups[gi];
     let ni = g.independent.len();
     let a_parent = match g.parent {
         Some(p) => ws.acceleration[p],
@@ -258,30 +250,14 @@ pub fn embedding_map_in<'w, T: Real>(
 ) -> Result<&'w DMatrix<T>, DynamicsError> {
     check_configuration(model, q)?;
     ws.reserve_embedding(model);
-    let mut out = core::mem::take(&mut ws.embedding);
-    let result = fill_embedding(model, ws, q, &mut out);
-    ws.embedding = out;
-    result?;
-    Ok(&ws.embedding)
-}
-
-fn fill_embedding<T: Real>(
-    model: &Model<T>,
-    ws: &mut Workspace<T>,
-    q: &[T],
-    out: &mut DMatrix<T>,
-) -> Result<(), DynamicsError> {
     position_kinematics(model, ws, q)?;
-    let mut groups = core::mem::take(&mut ws.groups);
-    let mut result = Ok(());
-    for (g, gw) in groups.iter_mut().enumerate() {
-        result = embed(model, ws, g, gw, false);
-        if result.is_err() {
-            break;
-        }
+    let (kin, scratch) = ws.split_constraints();
+    for (g, gw) in scratch.groups.iter_mut().enumerate() {
+        embed(model, kin, g, gw, false)?;
     }
+    let (out, groups) = (&mut ws.embedding, &ws.constraints.groups);
     out.fill(T::zero());
-    if result.is_ok() {
+    {
         let mut col = 0;
         for j in (0..model.joints.len()).filter(|&j| model.is_independent(j)) {
             let joint = &model.joints[j];
@@ -306,8 +282,7 @@ fn fill_embedding<T: Real>(
             col += joint.nv();
         }
     }
-    ws.groups = groups;
-    result
+    Ok(&ws.embedding)
 }
 
 /// The reduced mass matrix `Xᵀ M X` over the independent coordinates (docs/command-line.md `crba` for models with

@@ -1,9 +1,35 @@
 #[allow(unused_imports)]
 use crate::alloc_prelude::*;
+use crate::constraints::GroupWorkspace;
 use crate::model::Model;
 use crate::spatial::{ArticulatedInertia, Force, Motion, SpatialInertia, Transform};
 use crate::Real;
 use nalgebra::DMatrix;
+
+/// The kinematics of the last pass, borrowed from a [`Workspace`]: what constraint rows are computed
+/// from. Per-body entries are indexed like `model.bodies`.
+#[derive(Clone, Copy, Debug)]
+pub struct Kinematics<'w, T: Real> {
+    /// Pose of each body frame in the world.
+    pub world_placement: &'w [Transform<T>],
+    /// Spatial velocity of each body, in its own frame.
+    pub velocity: &'w [Motion<T>],
+    /// Spatial acceleration of each body, in its own frame (after [`crate::constraint_kinematics`]: the
+    /// velocity-product accelerations at q̈ = 0, without gravity).
+    pub acceleration: &'w [Motion<T>],
+}
+
+/// Scratch of the aggregate links: per group, its embedding maps and articulated-body quantities; for
+/// position completion, every constraint row's residual and the magnitude it is relative to.
+#[derive(Clone, Debug)]
+pub(crate) struct ConstraintScratch<T: Real> {
+    /// Per aggregate link, indexed like `model.groups`.
+    pub(crate) groups: Vec<GroupWorkspace<T>>,
+    /// Residuals of every constraint row.
+    pub(crate) residual: Vec<T>,
+    /// The magnitude each residual is computed from (see [`crate::constraints::residuals_scaled`]).
+    pub(crate) scale: Vec<T>,
+}
 
 /// Scratch memory for the algorithms of one model, allocated once by [`Workspace::new`] and reused by
 /// every call, so that no algorithm call touches the heap (what a real-time loop needs).
@@ -50,15 +76,10 @@ pub struct Workspace<T: Real> {
     pub inverse_mass_matrix: DMatrix<T>,
     /// Per body, `6 × nv` force columns and acceleration columns for the operator inverse of Eq. 6.
     pub(crate) minv_force: Vec<[T; 6]>,
-    /// Per aggregate link: the embedding maps and its articulated-body scratch.
-    pub(crate) groups: Vec<crate::constraints::GroupWorkspace<T>>,
     pub(crate) minv_accel: Vec<[T; 6]>,
-    /// `nv` zeros (the velocity of position-level constraint kinematics); never written.
-    pub(crate) zero_velocity: Vec<T>,
-    /// Residuals of every constraint row (position completion).
-    pub(crate) constraint_residual: Vec<T>,
-    /// The magnitude each residual is computed from (see [`crate::constraints::residuals_scaled`]).
-    pub(crate) constraint_scale: Vec<T>,
+    /// The aggregate links' own scratch, a field of its own so that an algorithm can hold one group's
+    /// scratch and the bodies' kinematics at once (see [`Workspace::split_constraints`]).
+    pub(crate) constraints: ConstraintScratch<T>,
     /// Output of [`crate::embedding_map_in`]: `X`, nv × independent nv.
     pub embedding: DMatrix<T>,
     /// Output of [`crate::reduced_mass_matrix_in`]: `Xᵀ M X`.
@@ -103,19 +124,42 @@ impl<T: Real> Workspace<T> {
             mass_matrix: DMatrix::zeros(0, 0),
             inverse_mass_matrix: DMatrix::zeros(0, 0),
             minv_force: Vec::new(),
-            groups: model
-                .groups
-                .iter()
-                .map(|g| crate::constraints::GroupWorkspace::new(model, g))
-                .collect(),
             minv_accel: Vec::new(),
-            zero_velocity: vec![T::zero(); nv],
-            constraint_residual: vec![T::zero(); model.constraint_raw_rows()],
-            constraint_scale: vec![T::zero(); model.constraint_raw_rows()],
+            constraints: ConstraintScratch {
+                groups: model
+                    .groups
+                    .iter()
+                    .map(|g| GroupWorkspace::new(model, g))
+                    .collect(),
+                residual: vec![T::zero(); model.constraint_raw_rows()],
+                scale: vec![T::zero(); model.constraint_raw_rows()],
+            },
             embedding: DMatrix::zeros(0, 0),
             reduced_mass_matrix: DMatrix::zeros(0, 0),
             mass_times_x: DMatrix::zeros(0, 0),
         }
+    }
+
+    /// The kinematics of the last [`crate::forward_kinematics`] (or [`crate::constraint_kinematics`]) call.
+    pub fn kinematics(&self) -> Kinematics<'_, T> {
+        Kinematics {
+            world_placement: &self.world_placement,
+            velocity: &self.velocity,
+            acceleration: &self.acceleration,
+        }
+    }
+
+    /// The kinematics, read-only, beside the aggregate links' scratch, writable: two disjoint parts of
+    /// the workspace borrowed at once, so that no algorithm moves a group's scratch out and back.
+    pub(crate) fn split_constraints(&mut self) -> (Kinematics<'_, T>, &mut ConstraintScratch<T>) {
+        (
+            Kinematics {
+                world_placement: &self.world_placement,
+                velocity: &self.velocity,
+                acceleration: &self.acceleration,
+            },
+            &mut self.constraints,
+        )
     }
 
     /// Allocates every output buffer of every algorithm, so that no later call allocates (O(nv²) memory:

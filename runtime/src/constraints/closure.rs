@@ -6,7 +6,7 @@
 //! position residual is chosen so that its derivative along the motion is exactly these rows wherever
 //! the loop is assembled, which is what Newton's method and the finite-difference tests rely on.
 
-use crate::algorithms::Workspace;
+use crate::algorithms::Kinematics;
 #[allow(unused_imports)]
 use crate::alloc_prelude::*;
 use crate::model::Model;
@@ -130,7 +130,7 @@ impl<T: Real> LoopClosure<T> {
     }
 
     fn frame(
-        ws: &Workspace<T>,
+        kin: Kinematics<'_, T>,
         body: Option<usize>,
         frame: &Transform<T>,
         with_motion: bool,
@@ -146,12 +146,12 @@ impl<T: Real> LoopClosure<T> {
                 acceleration: z,
             },
             Some(b) => {
-                let x = &ws.world_placement[b];
+                let x = &kin.world_placement[b];
                 let r = &x.rotation;
                 let c = &frame.translation;
                 let (omega, velocity, omega_dot, acceleration) = if with_motion {
-                    let v = &ws.velocity[b];
-                    let a = &ws.acceleration[b];
+                    let v = &kin.velocity[b];
+                    let a = &kin.acceleration[b];
                     let vc = v.linear + v.angular.cross(c);
                     (
                         r * v.angular,
@@ -174,18 +174,18 @@ impl<T: Real> LoopClosure<T> {
         }
     }
 
-    /// Position residual (raw rows), from `ws.world_placement`.
-    pub fn residual(&self, ws: &Workspace<T>, out: &mut [T]) {
+    /// Position residual (raw rows), from `kin.world_placement`.
+    pub fn residual(&self, kin: Kinematics<'_, T>, out: &mut [T]) {
         let mut scale = [T::zero(); 6];
-        self.residual_scaled(ws, out, &mut scale[..out.len()]);
+        self.residual_scaled(kin, out, &mut scale[..out.len()]);
     }
 
     /// [`Self::residual`] and, per row, the magnitude of the numbers it was computed from (what rounding
     /// errors scale with): the larger world coordinate of the two frame origins for a position row (m), 1
     /// for an orientation row. A residual is judged against `max(1, magnitude)` (docs/conventions.md).
-    pub fn residual_scaled(&self, ws: &Workspace<T>, out: &mut [T], scale: &mut [T]) {
-        let p = Self::frame(ws, self.predecessor, &self.predecessor_frame, false);
-        let s = Self::frame(ws, self.successor, &self.successor_frame, false);
+    pub fn residual_scaled(&self, kin: Kinematics<'_, T>, out: &mut [T], scale: &mut [T]) {
+        let p = Self::frame(kin, self.predecessor, &self.predecessor_frame, false);
+        let s = Self::frame(kin, self.successor, &self.successor_frame, false);
         let mut reach = T::zero();
         for x in p.position.iter().chain(s.position.iter()) {
             let a = x.abs();
@@ -256,15 +256,21 @@ impl<T: Real> LoopClosure<T> {
     }
 
     /// Rows `row..row + rows()` of the constraint Jacobian `J` (all `nv` columns), from
-    /// `ws.world_placement`. Only joints between the loop's common ancestor and its two frames appear.
-    pub fn jacobian(&self, model: &Model<T>, ws: &Workspace<T>, jac: &mut DMatrix<T>, row: usize) {
+    /// `kin.world_placement`. Only joints between the loop's common ancestor and its two frames appear.
+    pub fn jacobian(
+        &self,
+        model: &Model<T>,
+        kin: Kinematics<'_, T>,
+        jac: &mut DMatrix<T>,
+        row: usize,
+    ) {
         let n = self.kind.rows();
         for r in row..row + n {
             for c in 0..jac.ncols() {
                 jac[(r, c)] = T::zero();
             }
         }
-        self.for_each_column(model, ws, |v_index, rows| {
+        self.for_each_column(model, kin, |v_index, rows| {
             for (r, x) in rows.iter().enumerate() {
                 jac[(row + r, v_index)] = *x;
             }
@@ -275,11 +281,11 @@ impl<T: Real> LoopClosure<T> {
     pub fn for_each_column(
         &self,
         model: &Model<T>,
-        ws: &Workspace<T>,
+        kin: Kinematics<'_, T>,
         mut f: impl FnMut(usize, &[T]),
     ) {
-        let p = Self::frame(ws, self.predecessor, &self.predecessor_frame, false);
-        let s = Self::frame(ws, self.successor, &self.successor_frame, false);
+        let p = Self::frame(kin, self.predecessor, &self.predecessor_frame, false);
+        let s = Self::frame(kin, self.successor, &self.successor_frame, false);
         let n = self.kind.rows();
         let mut buf = [T::zero(); 6];
         // Joints above S count +1, above P −1; joints above both cancel exactly and are skipped.
@@ -294,7 +300,7 @@ impl<T: Real> LoopClosure<T> {
                     break;
                 }
                 let joint = &model.joints[b];
-                let x = &ws.world_placement[b];
+                let x = &kin.world_placement[b];
                 for k in 0..joint.nv() {
                     let m = x.act_motion(&joint.subspace_column(k));
                     let w = p.rotation.tr_mul(&m.angular) * sign;
@@ -310,11 +316,11 @@ impl<T: Real> LoopClosure<T> {
         }
     }
 
-    /// `J̇ v` (raw rows): the rows' time derivative at q̈ = 0, from `ws.world_placement`, `ws.velocity`
-    /// and `ws.acceleration` holding the velocity-product accelerations.
-    pub fn bias(&self, ws: &Workspace<T>, out: &mut [T]) {
-        let p = Self::frame(ws, self.predecessor, &self.predecessor_frame, true);
-        let s = Self::frame(ws, self.successor, &self.successor_frame, true);
+    /// `J̇ v` (raw rows): the rows' time derivative at q̈ = 0, from `kin.world_placement`, `kin.velocity`
+    /// and `kin.acceleration` holding the velocity-product accelerations.
+    pub fn bias(&self, kin: Kinematics<'_, T>, out: &mut [T]) {
+        let p = Self::frame(kin, self.predecessor, &self.predecessor_frame, true);
+        let s = Self::frame(kin, self.successor, &self.successor_frame, true);
         let r = s.position - p.position;
         let rdot = s.velocity - p.velocity;
         let w_world = s.omega - p.omega;

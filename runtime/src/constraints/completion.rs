@@ -35,7 +35,7 @@ pub fn constraint_violation<T: Real>(
     let rows = model.constraint_raw_rows();
     let mut r = vec![T::zero(); rows];
     let mut scale = vec![T::zero(); rows];
-    residuals_scaled(model, ws, q, &mut r, &mut scale);
+    residuals_scaled(model, ws.kinematics(), q, &mut r, &mut scale);
     let pos = r.iter().zip(&scale).fold(0.0, |m, (&x, &s)| {
         max_nan(m, relative_residual(x, s).to_f64())
     });
@@ -131,18 +131,18 @@ fn newton_step<T: Real>(
 ) -> Result<T, DynamicsError> {
     position_kinematics(model, ws, q)?;
     let g = &model.groups[gi];
-    let mut gw = core::mem::take(&mut ws.groups[gi]);
-    let mut r = core::mem::take(&mut ws.constraint_residual);
-    let mut scale = core::mem::take(&mut ws.constraint_scale);
-    residuals_scaled(model, ws, q, &mut r, &mut scale);
+    let (kin, scratch) = ws.split_constraints();
+    let gw = &mut scratch.groups[gi];
+    let (r, scale) = (&mut scratch.residual, &mut scratch.scale);
+    residuals_scaled(model, kin, q, r, scale);
     let mut worst = T::zero();
     for &row in &g.rows {
         let e = relative_residual(r[row], scale[row]);
         worst = super::max_keeping_nan(worst, e);
     }
     if take_step && !g.rows.is_empty() {
-        group_rows(model, ws, g, &mut gw, false);
-        fill_y1(g, &mut gw);
+        group_rows(model, kin, g, gw, false);
+        fill_y1(g, gw);
         let n = g.rows.len();
         for (k, &row) in g.rows.iter().enumerate() {
             for col in 0..n {
@@ -179,9 +179,6 @@ fn newton_step<T: Real>(
             q[model.joints[b].q_index] += gw.col[d] * limit;
         }
     }
-    ws.groups[gi] = gw;
-    ws.constraint_residual = r;
-    ws.constraint_scale = scale;
     Ok(worst)
 }
 
@@ -193,13 +190,9 @@ pub fn complete_velocity<T: Real>(
     v: &mut [T],
 ) -> Result<(), DynamicsError> {
     position_kinematics(model, ws, q)?;
-    let mut groups = core::mem::take(&mut ws.groups);
-    let mut result = Ok(());
-    for (gi, gw) in groups.iter_mut().enumerate() {
-        if let Err(e) = embed(model, ws, gi, gw, false) {
-            result = Err(e);
-            break;
-        }
+    let (kin, scratch) = ws.split_constraints();
+    for (gi, gw) in scratch.groups.iter_mut().enumerate() {
+        embed(model, kin, gi, gw, false)?;
         let g = &model.groups[gi];
         for &b in &g.dependent {
             let m = member(g, b).expect("dependent joints are members");
@@ -210,8 +203,7 @@ pub fn complete_velocity<T: Real>(
             v[model.joints[b].v_index] = s;
         }
     }
-    ws.groups = groups;
-    result
+    Ok(())
 }
 
 /// cond₁(Y1) of group `group` at `q` (by an LU factorization: an independent check of the condition
@@ -223,11 +215,9 @@ pub fn y1_condition<T: Real>(
     group: usize,
 ) -> Result<f64, DynamicsError> {
     position_kinematics(model, ws, q)?;
-    let mut groups = core::mem::take(&mut ws.groups);
-    let gw = &mut groups[group];
-    group_rows(model, ws, &model.groups[group], gw, false);
+    let (kin, scratch) = ws.split_constraints();
+    let gw = &mut scratch.groups[group];
+    group_rows(model, kin, &model.groups[group], gw, false);
     fill_y1(&model.groups[group], gw);
-    let cond = y1_condition_of(gw);
-    ws.groups = groups;
-    Ok(cond)
+    Ok(y1_condition_of(gw))
 }

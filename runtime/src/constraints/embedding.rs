@@ -4,7 +4,7 @@
 //! (Eq. 42) through the same code.
 
 use super::{ConstraintKind, ConstraintSet, Group};
-use crate::algorithms::{DynamicsError, Workspace};
+use crate::algorithms::{DynamicsError, Kinematics, Workspace};
 #[allow(unused_imports)]
 use crate::alloc_prelude::*;
 use crate::linalg::{condition_number_1, lu_in_place, solve_pivoted_in_place};
@@ -172,10 +172,10 @@ pub(crate) fn member(g: &Group, body: usize) -> Option<usize> {
 }
 
 /// Fills `K` (kept rows × members) and, with `with_bias`, the kept rows of `J̇ v`, from the kinematics
-/// in `ws` (world placements; velocities and velocity-product accelerations for the bias).
+/// in `kin` (world placements; velocities and velocity-product accelerations for the bias).
 pub(crate) fn group_rows<T: Real>(
     model: &Model<T>,
-    ws: &Workspace<T>,
+    kin: Kinematics<'_, T>,
     g: &Group,
     gw: &mut GroupWorkspace<T>,
     with_bias: bool,
@@ -196,14 +196,14 @@ pub(crate) fn group_rows<T: Real>(
             }
             ConstraintKind::Loop(l) => {
                 let k = &mut gw.k;
-                l.for_each_column(model, ws, |v_index, column| {
+                l.for_each_column(model, kin, |v_index, column| {
                     // Loop columns are the member joints' (1-DoF) velocities.
                     if let Some(col) = model_member_of_v(model, g, v_index) {
                         k[(slot, col)] = column[local];
                     }
                 });
                 if with_bias {
-                    l.bias(ws, &mut buf);
+                    l.bias(kin, &mut buf);
                     gw.bias[slot] = buf[local];
                 }
             }
@@ -239,13 +239,13 @@ pub(crate) fn y1_condition_of<T: Real>(gw: &mut GroupWorkspace<T>) -> f64 {
 /// `X_G` and `κ_G` of group `gi` at the current kinematics. Fails past the singularity threshold.
 pub(crate) fn embed<T: Real>(
     model: &Model<T>,
-    ws: &Workspace<T>,
+    kin: Kinematics<'_, T>,
     gi: usize,
     gw: &mut GroupWorkspace<T>,
     with_bias: bool,
 ) -> Result<(), DynamicsError> {
     let g = &model.groups[gi];
-    group_rows(model, ws, g, gw, with_bias);
+    group_rows(model, kin, g, gw, with_bias);
     let r = g.rows.len();
     // Y1 = K[:, dependent], factor it; X[dep, :] = −Y1⁻¹ Y2, X[indep, :] = I; κ[dep] = −Y1⁻¹ J̇v.
     fill_y1(g, gw);
@@ -306,7 +306,8 @@ pub(crate) fn embed<T: Real>(
 /// above [`singularity_threshold`] where the interpreted solver refuses. Generated code returns it from
 /// `aba`, `embedding` and `crba_independent` of models with constraints, for its caller to compare.
 pub fn constraint_condition<T: Real>(ws: &Workspace<T>) -> T {
-    ws.groups
+    ws.constraints
+        .groups
         .iter()
         .fold(T::one(), |m, gw| gw.condition.select_gt(m, gw.condition, m))
 }

@@ -343,7 +343,7 @@ pub(crate) fn assemble<T: Real>(
     let tolerance = (64.0 * T::epsilon().to_f64()).max(1e-12);
     for _ in 0..iterations {
         forward_kinematics(model, ws, q, &zeros).expect("sizes match");
-        residuals_scaled(model, ws, q, &mut r, &mut scale);
+        residuals_scaled(model, ws.kinematics(), q, &mut r, &mut scale);
         let rr: Vec<T> = rows.iter().map(|&i| -r[i]).collect();
         // A NaN residual (a configuration outside the representable range) never converges.
         let converged = rows
@@ -377,7 +377,7 @@ fn y1_condition<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, q: &[T], g: &G
     let zeros = vec![T::zero(); model.nv()];
     forward_kinematics(model, ws, q, &zeros).expect("sizes match");
     let mut gw = GroupWorkspace::new(model, g);
-    group_rows(model, ws, g, &mut gw, false);
+    group_rows(model, ws.kinematics(), g, &mut gw, false);
     fill_y1(g, &mut gw);
     y1_condition_of(&mut gw)
 }

@@ -79,28 +79,30 @@ impl<T: Real> Constraint<T> {
     }
 }
 
-use crate::algorithms::Workspace;
+use crate::algorithms::{Kinematics, Workspace};
 use crate::model::Model;
 use nalgebra::DMatrix;
 
 /// Position residuals of every constraint (raw rows, in constraint order), from `ws.world_placement`
 /// (run [`crate::forward_kinematics`] first) and `q` (for the linear ones).
 pub fn residuals<T: Real>(model: &Model<T>, ws: &Workspace<T>, q: &[T], out: &mut [T]) {
+    let kin = ws.kinematics();
     let mut row = 0;
     let mut scale = [T::zero(); 6];
     for c in &model.constraints {
         let n = c.raw_rows();
-        residual_of(model, ws, q, c, &mut out[row..row + n], &mut scale[..n]);
+        residual_of(model, kin, q, c, &mut out[row..row + n], &mut scale[..n]);
         row += n;
     }
 }
 
 /// [`residuals`] and the magnitude each row was computed from (see [`LoopClosure::residual_scaled`]; for
 /// a linear row the largest of its terms and its offset): a row is satisfied to tolerance `tol` when
-/// `|r| ≤ tol · max(1, magnitude)` (docs/conventions.md).
+/// `|r| ≤ tol · max(1, magnitude)` (docs/conventions.md). From the kinematics `kin`
+/// ([`Workspace::kinematics`]) and `q`.
 pub fn residuals_scaled<T: Real>(
     model: &Model<T>,
-    ws: &Workspace<T>,
+    kin: Kinematics<'_, T>,
     q: &[T],
     out: &mut [T],
     scale: &mut [T],
@@ -110,7 +112,7 @@ pub fn residuals_scaled<T: Real>(
         let n = c.raw_rows();
         residual_of(
             model,
-            ws,
+            kin,
             q,
             c,
             &mut out[row..row + n],
@@ -122,7 +124,7 @@ pub fn residuals_scaled<T: Real>(
 
 fn residual_of<T: Real>(
     model: &Model<T>,
-    ws: &Workspace<T>,
+    kin: Kinematics<'_, T>,
     q: &[T],
     c: &Constraint<T>,
     out: &mut [T],
@@ -141,7 +143,7 @@ fn residual_of<T: Real>(
             out[0] = sum;
             scale[0] = magnitude;
         }
-        ConstraintKind::Loop(l) => l.residual_scaled(ws, out, scale),
+        ConstraintKind::Loop(l) => l.residual_scaled(kin, out, scale),
     }
 }
 
@@ -164,6 +166,7 @@ pub(crate) fn relative_residual<T: Real>(r: T, magnitude: T) -> T {
 
 /// The constraint Jacobian over all spanning velocities (raw rows × nv), from `ws.world_placement`.
 pub fn jacobian<T: Real>(model: &Model<T>, ws: &Workspace<T>, out: &mut DMatrix<T>) {
+    let kin = ws.kinematics();
     let mut row = 0;
     for c in &model.constraints {
         match &c.kind {
@@ -175,7 +178,7 @@ pub fn jacobian<T: Real>(model: &Model<T>, ws: &Workspace<T>, out: &mut DMatrix<
                     out[(row, model.joints[j].v_index)] += k;
                 }
             }
-            ConstraintKind::Loop(l) => l.jacobian(model, ws, out, row),
+            ConstraintKind::Loop(l) => l.jacobian(model, kin, out, row),
         }
         row += c.raw_rows();
     }
@@ -184,12 +187,13 @@ pub fn jacobian<T: Real>(model: &Model<T>, ws: &Workspace<T>, out: &mut DMatrix<
 /// `J̇ v` for every constraint (raw rows), from the kinematics and the velocity-product accelerations in
 /// `ws` (see [`crate::constraint_kinematics`]).
 pub fn bias<T: Real>(model: &Model<T>, ws: &Workspace<T>, out: &mut [T]) {
+    let kin = ws.kinematics();
     let mut row = 0;
     for c in &model.constraints {
         let n = c.raw_rows();
         match &c.kind {
             ConstraintKind::Linear { .. } => out[row] = T::zero(),
-            ConstraintKind::Loop(l) => l.bias(ws, &mut out[row..row + n]),
+            ConstraintKind::Loop(l) => l.bias(kin, &mut out[row..row + n]),
         }
         row += n;
     }
