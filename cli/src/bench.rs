@@ -77,8 +77,7 @@ type TimedState = (Vec<f64>, Vec<f64>, Vec<f64>);
 /// with a random third vector (`tau` for `aba`, `qdd` for `rnea`).
 fn states(model: &Model<f64>) -> Result<Vec<TimedState>, CliError> {
     let mut rng = SplitMix64::new(0x5eed);
-    let found = consistent_states(model, STATES, 0x5eed)
-        .map_err(BenchError::NoStates)?;
+    let found = consistent_states(model, STATES, 0x5eed).map_err(BenchError::NoStates)?;
     Ok(found
         .into_iter()
         .map(|s| {

@@ -594,3 +594,73 @@ fn read_input(path: Option<&Path>) -> Result<String, CliError> {
             .map_err(|error| CliError::ReadInput { path: None, error }),
     }
 }
+
+#[cfg(test)]
+mod kind_tests {
+    use super::*;
+
+    fn slider() -> Loaded {
+        load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/data/unit_slider.urdf")).unwrap()
+    }
+
+    #[test]
+    fn input_errors_carry_their_kind() {
+        let loaded = slider();
+        let options = ModelOptions::default();
+        let nq = loaded.model::<f64>(&options).unwrap().nq();
+        let refused = |input: &str| complete_text(&loaded, &options, input).unwrap_err();
+        assert!(matches!(
+            refused("{"),
+            CliError::Input(InputError::NotJson(_))
+        ));
+        assert!(matches!(
+            refused("{}"),
+            CliError::Input(InputError::NoSamples)
+        ));
+        assert!(matches!(
+            refused(r#"{"samples": 1}"#),
+            CliError::Input(InputError::SamplesNotArray)
+        ));
+        let q = vec!["0"; nq + 1].join(", ");
+        match refused(&format!(r#"{{"samples": [{{"q": [{q}], "v": []}}]}}"#)) {
+            CliError::Input(InputError::TooManyEntries { sample, field, len }) => {
+                assert_eq!((sample, field, len), (0, "q", nq));
+            }
+            other => panic!("{other:?}"),
+        }
+    }
+
+    #[test]
+    fn state_problems_carry_their_data() {
+        let loaded =
+            load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("../models/arm7.urdf")).unwrap();
+        let options = ModelOptions {
+            floating: true,
+            ..Default::default()
+        };
+        let model = loaded.model::<f64>(&options).unwrap();
+        let zeros = |n: usize| vec!["0"; n].join(", ");
+        let input = format!(
+            r#"{{"samples": [{{"q": [{}], "v": [{}]}}]}}"#,
+            zeros(model.nq()),
+            zeros(model.nv())
+        );
+        match complete_text(&loaded, &options, &input).unwrap_err() {
+            CliError::State {
+                sample: 0,
+                problem:
+                    StateProblem::ZeroQuaternion {
+                        joint,
+                        start,
+                        end,
+                        values,
+                    },
+            } => {
+                assert_eq!(joint, embedyn_codegen::ROOT_JOINT);
+                assert_eq!((start, end), (3, 7));
+                assert_eq!(values, [0.0; 4]);
+            }
+            other => panic!("{other:?}"),
+        }
+    }
+}

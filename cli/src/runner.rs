@@ -633,13 +633,12 @@ fn parse_rows(stdout: &str, inputs: usize, shape: &RowShape) -> Result<Vec<Vec<f
         let row = line
             .split_whitespace()
             .map(|x| {
-                x.parse::<f64>()
-                    .map_err(|_| {
-                        fail(RunnerOutputProblem::NotANumber {
-                            text: x.to_string(),
-                            row: i,
-                        })
+                x.parse::<f64>().map_err(|_| {
+                    fail(RunnerOutputProblem::NotANumber {
+                        text: x.to_string(),
+                        row: i,
                     })
+                })
             })
             .collect::<Result<Vec<f64>, _>>()?;
         if row.len() != len {
@@ -766,7 +765,7 @@ fn runner_main(
         let module = format_ident!("{}", name);
         quote! {
             /// Evaluates or times the functions of one scalar module; output is appended to `text`.
-            fn #function(algo: &str, bench: bool, rows: &[Vec<f64>], text: &mut String) -> Result<(), String> {
+            fn #function(algo: &str, bench: bool, rows: &[Vec<f64>], text: &mut String) -> Result<(), Refusal> {
                 use #krate::#module as m;
                 type S = #scalar;
                 let states: Vec<([S; NQ], [S; NV], [S; NV])> = rows
@@ -786,7 +785,7 @@ fn runner_main(
                 if bench {
                     let n = states.len();
                     if n == 0 {
-                        return Err("bench needs at least one state".into());
+                        return Err(Refusal::NoStates);
                     }
                     let mut k = 0usize;
                     let ns = match algo {
@@ -796,7 +795,7 @@ fn runner_main(
                             #bench_calls
                             black_box((&out, &mat, &mat_i));
                         }),)*
-                        other => return Err(format!("unknown algorithm {other:?}")),
+                        other => return Err(Refusal::UnknownAlgorithm(other.to_string())),
                     };
                     text.push_str(&format!("{ns:?}\n"));
                 } else {
@@ -804,7 +803,7 @@ fn runner_main(
                         let _ = (q, a, b);
                         match algo {
                             #(#names => { #eval_calls })*
-                            other => return Err(format!("unknown algorithm {other:?}")),
+                            other => return Err(Refusal::UnknownAlgorithm(other.to_string())),
                         }
                     }
                 }
@@ -831,42 +830,81 @@ fn runner_main(
 
         #time
 
+        /// Why the runner refuses its input (printed on stderr, exit status 2).
+        enum Refusal {
+            ReadStdin(std::io::Error),
+            BadHeader(Vec<String>),
+            UnknownMode(String),
+            NotANumber { row: usize, text: String, error: std::num::ParseFloatError },
+            RowLength { row: usize, numbers: usize },
+            ScalarNotGenerated(String),
+            UnknownAlgorithm(String),
+            NoStates,
+            WriteStdout(std::io::Error),
+        }
+
+        impl std::fmt::Display for Refusal {
+            fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                match self {
+                    Refusal::ReadStdin(e) => write!(f, "cannot read stdin: {e}"),
+                    Refusal::BadHeader(header) => {
+                        write!(f, "bad header {header:?}, expected `ALGO SCALAR eval|bench`")
+                    }
+                    Refusal::UnknownMode(mode) => write!(f, "unknown mode {mode:?}"),
+                    Refusal::NotANumber { row, text, error } => write!(f, "row {row}: {text:?}: {error}"),
+                    Refusal::RowLength { row, numbers } => {
+                        write!(f, "row {row} has {numbers} numbers, expected {}", NQ + 2 * NV)
+                    }
+                    Refusal::ScalarNotGenerated(scalar) => write!(f, "scalar {scalar:?} was not generated"),
+                    Refusal::UnknownAlgorithm(algo) => write!(f, "unknown algorithm {algo:?}"),
+                    Refusal::NoStates => write!(f, "bench needs at least one state"),
+                    Refusal::WriteStdout(e) => write!(f, "cannot write stdout: {e}"),
+                }
+            }
+        }
+
         #(#per_scalar)*
 
-        fn run() -> Result<(), String> {
+        fn run() -> Result<(), Refusal> {
             let mut input = String::new();
             std::io::stdin()
                 .read_to_string(&mut input)
-                .map_err(|e| format!("cannot read stdin: {e}"))?;
+                .map_err(Refusal::ReadStdin)?;
             let mut lines = input.split_terminator('\n');
             let header: Vec<&str> = lines.next().unwrap_or("").split_whitespace().collect();
             let [algo, scalar, mode] = header[..] else {
-                return Err(format!("bad header {header:?}, expected `ALGO SCALAR eval|bench`"));
+                return Err(Refusal::BadHeader(header.iter().map(|w| w.to_string()).collect()));
             };
             let bench = match mode {
                 "bench" => true,
                 "eval" => false,
-                other => return Err(format!("unknown mode {other:?}")),
+                other => return Err(Refusal::UnknownMode(other.to_string())),
             };
             let mut rows = Vec::new();
             for (i, line) in lines.enumerate() {
                 let row = line
                     .split_whitespace()
-                    .map(|x| x.parse::<f64>().map_err(|e| format!("row {i}: {x:?}: {e}")))
-                    .collect::<Result<Vec<f64>, String>>()?;
+                    .map(|x| {
+                        x.parse::<f64>().map_err(|error| Refusal::NotANumber {
+                            row: i,
+                            text: x.to_string(),
+                            error,
+                        })
+                    })
+                    .collect::<Result<Vec<f64>, Refusal>>()?;
                 if row.len() != NQ + 2 * NV {
-                    return Err(format!("row {i} has {} numbers, expected {}", row.len(), NQ + 2 * NV));
+                    return Err(Refusal::RowLength { row: i, numbers: row.len() });
                 }
                 rows.push(row);
             }
             let mut text = String::new();
             match scalar {
                 #(#dispatch)*
-                other => return Err(format!("scalar {other:?} was not generated")),
+                other => return Err(Refusal::ScalarNotGenerated(other.to_string())),
             }
             std::io::stdout()
                 .write_all(text.as_bytes())
-                .map_err(|e| format!("cannot write stdout: {e}"))
+                .map_err(Refusal::WriteStdout)
         }
 
         fn main() -> std::process::ExitCode {
@@ -906,6 +944,15 @@ mod tests {
             let e = eval(out, 2, 2).unwrap_err().to_string();
             assert!(e.contains(message), "{out:?}: {e}");
         }
+        assert!(matches!(
+            eval("1 2\n", 2, 2),
+            Err(CliError::Runner(RunnerError::Output(
+                RunnerOutputProblem::RowCount {
+                    printed: 1,
+                    expected: 2
+                }
+            )))
+        ));
         assert_eq!(
             parse_rows("12.5\n", 64, &RowShape::Bench).unwrap(),
             vec![vec![12.5]]

@@ -233,7 +233,9 @@ fn build_model_f64(robot: &Robot, options: &ModelOptions) -> Result<Model<f64>, 
                 robot.links[pending.link].name.clone(),
                 pending.inertia,
             )
-            .map_err(|e| LoadError::at(joint_location(robot, bodies_joint(&bodies, b)), e.into()))?;
+            .map_err(|e| {
+                LoadError::at(joint_location(robot, bodies_joint(&bodies, b)), e.into())
+            })?;
         let mut links = pending.links.clone();
         // The body's own link first.
         if let Some(k) = links
@@ -467,5 +469,68 @@ fn joint_location(robot: &Robot, joint: Option<usize>) -> Location {
             )
         }
         None => Location::new(&robot.source, None, format!("joint \"{ROOT_JOINT}\"")),
+    }
+}
+
+#[cfg(test)]
+mod kind_tests {
+    use super::*;
+    use crate::{generate_tokens, load, Algorithm, GenerateOptions, LoadErrorKind};
+    use std::path::PathBuf;
+
+    fn fixture(name: &str) -> PathBuf {
+        PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+            .join("../tests/data")
+            .join(name)
+    }
+
+    fn model_error(name: &str, options: &ModelOptions) -> LoadError {
+        let loaded = load(&fixture(name)).unwrap();
+        build_model::<f64>(&loaded.robot, options).unwrap_err()
+    }
+
+    #[test]
+    fn model_errors_carry_their_kind() {
+        let e = model_error("bad/floating_not_root.urdf", &ModelOptions::default());
+        assert_eq!(e.kind, LoadErrorKind::FloatingNotAtRoot);
+        assert_eq!(e.location.element, "joint \"joint2\"");
+
+        // The runtime's error itself, not its text, and the source of the LoadError.
+        let e = model_error("bad/loop_never_meets.urdf", &ModelOptions::default());
+        match &e.kind {
+            LoadErrorKind::Model(ModelError::LoopNeverCloses { group, gap }) => {
+                assert_eq!(group.constraints, ["loop1"]);
+                assert!(*gap > 1.0, "{gap}");
+            }
+            other => panic!("{other:?}"),
+        }
+        let source = std::error::Error::source(&e).expect("the runtime's error is the source");
+        assert!(source.to_string().contains("never meet"), "{source}");
+
+        let e = model_error("bad/massless_leaf.urdf", &ModelOptions::default());
+        assert!(
+            matches!(
+                e.kind,
+                LoadErrorKind::UndeterminedAcceleration { d, scalar: "f64" } if d == 0.0
+            ),
+            "{e:?}"
+        );
+    }
+
+    #[test]
+    fn generation_errors_carry_their_kind() {
+        let loaded = load(&fixture("unit_slider.urdf")).unwrap();
+        let options =
+            GenerateOptions::default().with_requested(Some(vec![Algorithm::Complete]), &[]);
+        let e = generate_tokens(&loaded, &options).unwrap_err();
+        assert_eq!(
+            e.kind,
+            LoadErrorKind::NeedsConstraints {
+                function: Algorithm::Complete
+            }
+        );
+        assert!(e.to_string().ends_with(
+            "`complete` exists only for a model with loops, couplings or mimic joints; this one is a tree"
+        ));
     }
 }

@@ -103,7 +103,9 @@ mod tests {
     #[cfg(unix)]
     #[test]
     fn a_model_file_must_be_a_regular_file() {
-        let e = read_model_file("/dev/zero".as_ref()).unwrap_err().to_string();
+        let e = read_model_file("/dev/zero".as_ref())
+            .unwrap_err()
+            .to_string();
         assert_eq!(e, "not a regular file");
         let e = read_model_file("/".as_ref()).unwrap_err().to_string();
         assert_eq!(e, "not a regular file");

@@ -76,8 +76,9 @@ impl fmt::Display for Location {
 /// working unchanged.
 #[derive(Clone, Debug, PartialEq)]
 pub struct LoadError {
-    /// Where in the model file.
-    pub location: Location,
+    /// Where in the model file. Boxed so that a `Result<_, LoadError>` stays small (clippy's
+    /// `result_large_err`) while the kind holds the runtime's errors inline, where they can be matched.
+    pub location: Box<Location>,
     /// What is wrong.
     pub kind: LoadErrorKind,
     /// Further problems found in the same pass over the file, in the order they were found (each with an
@@ -532,7 +533,7 @@ impl LoadError {
     /// An error at `location` of `kind`.
     pub fn at(location: Location, kind: LoadErrorKind) -> Self {
         LoadError {
-            location,
+            location: Box::new(location),
             kind,
             also: Vec::new(),
         }

@@ -7,11 +7,11 @@
 pub use crate::algorithm::Algorithm;
 use crate::algorithm::{Dims, Shape, WhenGenerated};
 use crate::emit::{function, Arg, Code, Emitted, Output};
+use crate::error::{DescriptorMismatch, Shared};
 use crate::names::{code_span, shown};
 use crate::size;
 use crate::trace::{input, record, snap, Sym};
 use crate::value_names::Owners;
-use crate::error::{DescriptorMismatch, Shared};
 use crate::{build_model, LoadError, LoadErrorKind, Loaded, Location, ModelOptions};
 use embedyn_runtime::constraints::{singularity_threshold, COMPLETION_MAX_STEPS};
 use embedyn_runtime::{Model, Real, Workspace};
@@ -136,13 +136,11 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
     let model64 = loaded.model::<f64>(&options.model)?;
     if options.f32 {
         // The f32 functions fold the same constants as f32 literals: each must fit f32.
-        crate::assemble::convert_model::<f32>(&loaded.robot, &model64).map_err(|e| {
-            LoadError::at(
-                e.location,
-                LoadErrorKind::NotForF32 {
-                    inner: Box::new(e.kind),
-                },
-            )
+        crate::assemble::convert_model::<f32>(&loaded.robot, &model64).map_err(|e| LoadError {
+            kind: LoadErrorKind::NotForF32 {
+                inner: Box::new(e.kind),
+            },
+            ..e
         })?;
     }
     if let Some(a) = options
@@ -306,9 +304,8 @@ pub fn generate_tokens(
         .map(|f| match f.code {
             Code::Tokens(t) => Ok(t),
             // Lexed by syn, whose error (unlike proc_macro2's) may cross threads with the LoadError.
-            Code::Text(text) => syn::parse_str::<TokenStream>(&text).map_err(|e| {
-                located_at_robot(loaded, LoadErrorKind::Tokenize { error: e.into() })
-            }),
+            Code::Text(text) => syn::parse_str::<TokenStream>(&text)
+                .map_err(|e| located_at_robot(loaded, LoadErrorKind::Tokenize { error: e.into() })),
         })
         .collect::<Result<Vec<_>, _>>()?;
     let modules = generated
@@ -523,10 +520,8 @@ fn generate_algorithm(
         emitted.code = match emitted.code {
             Code::Tokens(t) => Code::Tokens(quote! { #t #wrapper }),
             Code::Text(text) => {
-                let formatted =
-                    format_tokens(&quote!(mod m { #wrapper })).map_err(|e| {
-                        located_at_robot(loaded, e.into())
-                    })?;
+                let formatted = format_tokens(&quote!(mod m { #wrapper }))
+                    .map_err(|e| located_at_robot(loaded, e.into()))?;
                 Code::Text(text + module_body(&formatted))
             }
         };
@@ -541,8 +536,7 @@ pub struct UnparsableCode(#[source] pub Shared<syn::Error>);
 
 /// Formats generated items as a source file with `prettyplease`.
 pub fn format_tokens(tokens: &TokenStream) -> Result<String, UnparsableCode> {
-    let file: syn::File =
-        syn::parse2(tokens.clone()).map_err(|e| UnparsableCode(e.into()))?;
+    let file: syn::File = syn::parse2(tokens.clone()).map_err(|e| UnparsableCode(e.into()))?;
     Ok(prettyplease::unparse(&file))
 }
 

@@ -31,8 +31,8 @@ mod urdf;
 mod value_names;
 mod xml_text;
 
-pub use assemble::{build_model, inertial_about_link, ModelOptions, ROOT_JOINT};
 pub use algorithm::UnknownAlgorithm;
+pub use assemble::{build_model, inertial_about_link, ModelOptions, ROOT_JOINT};
 pub use bounded_read::ReadError;
 pub use emit::EmitError;
 pub use error::{

@@ -127,7 +127,8 @@ pub fn crate_files(
         .file_name()
         .map_or_else(String::new, |f| f.to_string_lossy().into_owned());
     let model = loaded.model::<f64>(&options.model)?;
-    let error = |kind: LoadErrorKind| LoadError::at(Location::new(&loaded.robot.source, None, ""), kind);
+    let error =
+        |kind: LoadErrorKind| LoadError::at(Location::new(&loaded.robot.source, None, ""), kind);
     let lib = format!(
         "{header}\n/// Sine/cosine and square root used by the generated functions.\npub mod helpers {{\n{HELPERS_SOURCE}}}\n\n{body}",
         header = lib_header(&loaded.robot.name, &file_name).map_err(|e| error(e.into()))?,

@@ -910,6 +910,7 @@ fn min_eigenvalue(m: &Matrix3<f64>) -> f64 {
 #[cfg(test)]
 mod kind_tests {
     use super::*;
+    use crate::error::MAX_LISTED_ERRORS;
 
     fn error_of(text: &str) -> LoadError {
         match parse_urdf(text, Path::new("m.urdf")) {
@@ -955,5 +956,163 @@ mod kind_tests {
         let e = error_of("<robot");
         assert!(matches!(e.kind, LoadErrorKind::MalformedXml { .. }), "{e}");
         assert!(e.to_string().contains(": XML: malformed XML: "), "{e}");
+    }
+
+    /// The file `m.urdf` with `body` inside `<robot>`, the first line being line 2.
+    fn robot_of(body: &str) -> String {
+        format!("<robot name=\"r\">\n{body}\n</robot>")
+    }
+
+    const INERTIA: &str = r#"<inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/>"#;
+
+    #[test]
+    fn problems_of_several_elements_are_reported_together() {
+        let text = robot_of(&format!(
+            r#"<link name="a"/>
+<link name="b"><inertial><mass value="-1"/>{INERTIA}</inertial></link>
+<joint name="j1" type="hinge"><parent link="a"/><child link="b"/></joint>
+<joint name="j2" type="fixed"><parent link="a"/><child link="c"/></joint>"#
+        ));
+        let e = error_of(&text);
+        let found: Vec<(Option<u32>, &LoadErrorKind)> =
+            e.problems().map(|p| (p.location.line, &p.kind)).collect();
+        assert_eq!(
+            found,
+            [
+                (Some(3), &LoadErrorKind::NegativeMass { mass: -1.0 }),
+                (
+                    Some(4),
+                    &LoadErrorKind::UnknownJointType {
+                        joint_type: "hinge".into()
+                    }
+                ),
+                (Some(5), &LoadErrorKind::UnknownLink { link: "c".into() }),
+            ],
+            "{e}"
+        );
+        // The first line is the message of the first problem alone; each other is a line of its own.
+        let message = e.to_string();
+        let lines: Vec<&str> = message.lines().collect();
+        assert_eq!(lines.len(), 3, "{message}");
+        assert_eq!(
+            lines[0],
+            "m.urdf:3: link \"b\" <inertial> <mass>: negative mass -1"
+        );
+        assert!(lines[1].starts_with("m.urdf:4: joint \"j1\": unknown joint type \"hinge\""));
+        assert_eq!(
+            lines[2],
+            "m.urdf:5: joint \"j2\" <child>: names link \"c\", which does not exist"
+        );
+    }
+
+    #[test]
+    fn every_problem_of_one_element_is_reported() {
+        let text = robot_of(
+            r#"<link name="a"/><link name="b"/>
+<joint name="j" type="revolute"><parent link="a"/><child link="b"/><origin xyz="1 2" rpy="0 x 0"/></joint>"#,
+        );
+        let e = error_of(&text);
+        let kinds: Vec<&LoadErrorKind> = e.problems().map(|p| &p.kind).collect();
+        assert_eq!(
+            kinds,
+            [
+                &LoadErrorKind::NotThreeNumbers {
+                    attribute: "xyz".into(),
+                    text: "1 2".into()
+                },
+                &LoadErrorKind::EntryNotANumber {
+                    attribute: "rpy".into(),
+                    text: "0 x 0".into(),
+                    entry: "x".into()
+                },
+            ],
+            "{e}"
+        );
+        // An axis is judged zero only when the joint's type is known and its axis read.
+        let text = robot_of(
+            r#"<link name="a"/><link name="b"/>
+<joint name="j" type="revolute"><parent link="a"/><child link="b"/><axis xyz="0 0 0"/></joint>"#,
+        );
+        let e = error_of(&text);
+        assert_eq!(e.kind, LoadErrorKind::ZeroAxis { of: AxisOf::Joint });
+        assert!(e.also.is_empty(), "{e}");
+    }
+
+    #[test]
+    fn a_joint_left_out_raises_no_problems_of_the_tree() {
+        // Without `j1` (its type unknown), `b` would be a second root and `j2`'s mimic would name a
+        // joint that is not there: neither is news, so only `j1`'s own problem is reported.
+        let text = robot_of(
+            r#"<link name="a"/><link name="b"/><link name="c"/>
+<joint name="j1" type="hinge"><parent link="a"/><child link="b"/></joint>
+<joint name="j2" type="revolute"><parent link="a"/><child link="c"/><mimic joint="j1"/></joint>"#,
+        );
+        let e = error_of(&text);
+        assert_eq!(
+            e.kind,
+            LoadErrorKind::UnknownJointType {
+                joint_type: "hinge".into()
+            }
+        );
+        assert!(e.also.is_empty(), "{e}");
+    }
+
+    #[test]
+    fn a_problem_that_ends_the_reading_is_reported_alone() {
+        let e = error_of("<robot name=\"r\">\n<link name=\"a\"><mass value=\"x\"/>\n</robot");
+        assert!(matches!(e.kind, LoadErrorKind::MalformedXml { .. }), "{e}");
+        assert!(e.also.is_empty());
+        // The tree's shape is judged once its elements are read without problems: two roots.
+        let e = error_of(&robot_of(r#"<link name="a"/><link name="b"/>"#));
+        assert_eq!(
+            e.kind,
+            LoadErrorKind::SeveralRoots {
+                roots: vec!["a".into(), "b".into()]
+            }
+        );
+        assert!(e.also.is_empty());
+    }
+
+    #[test]
+    fn a_long_list_of_problems_is_cut_short() {
+        let links: Vec<String> = (0..25)
+            .map(|k| format!(r#"<link name="l{k}"><inertial><mass value="-{k}.5"/>{INERTIA}</inertial></link>"#))
+            .collect();
+        let e = error_of(&robot_of(&links.join("\n")));
+        assert_eq!(e.problems().count(), 25);
+        let message = e.to_string();
+        let lines: Vec<&str> = message.lines().collect();
+        assert_eq!(lines.len(), MAX_LISTED_ERRORS + 1, "{message}");
+        assert!(lines[MAX_LISTED_ERRORS - 1].starts_with("m.urdf:21: link \"l19\""));
+        assert_eq!(lines[MAX_LISTED_ERRORS], "and 5 more errors");
+    }
+
+    #[test]
+    fn warnings_carry_their_kind_and_fold_repeats() {
+        let joint = |k: u32| {
+            format!(
+                r#"<joint name="g{k}" type="fixed"><parent link="a"/><child link="b{k}"/><mimic joint="j"/></joint>"#
+            )
+        };
+        let text = robot_of(&format!(
+            r#"<link name="a"/><link name="b0"/><link name="b1"/><link name="b2"/><link name="c"/>
+<joint name="j" type="revolute"><parent link="a"/><child link="c"/></joint>
+{}
+{}
+{}"#,
+            joint(0),
+            joint(1),
+            joint(2)
+        ));
+        let loaded = parse_urdf(&text, Path::new("m.urdf")).unwrap();
+        assert_eq!(loaded.warnings.len(), 1);
+        let w = &loaded.warnings[0];
+        assert_eq!(w.kind, WarningKind::MimicOnFixedJoint);
+        assert_eq!(w.location.line, Some(4));
+        assert_eq!(w.same_for, ["joint \"g1\"", "joint \"g2\""]);
+        assert_eq!(
+            w.to_string(),
+            "warning: m.urdf:4: joint \"g0\": <mimic> on a fixed joint has nothing to drive; ignored (the same for joint \"g1\", joint \"g2\")"
+        );
     }
 }

@@ -139,11 +139,12 @@ fn expand(args: &Args) -> Result<proc_macro2::TokenStream, ExpandError> {
         .or_else(|_| std::env::var("CARGO_MANIFEST_DIR"))
         .unwrap_or_else(|_| ".".into());
     let full = std::path::Path::new(&base).join(&given);
-    let text = embedyn_codegen::bounded_read::read_model_file(&full)
-        .map_err(|error| ExpandError::Unreadable {
+    let text = embedyn_codegen::bounded_read::read_model_file(&full).map_err(|error| {
+        ExpandError::Unreadable {
             given: given.clone(),
             error,
-        })?;
+        }
+    })?;
     // Messages name the file as the user wrote it, not the absolute path.
     let loaded = embedyn_codegen::parse_urdf(&text, given.as_ref())?;
     let krate = args
