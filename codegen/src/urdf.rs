@@ -115,11 +115,14 @@ impl<'a, 'input> Parser<'a, 'input> {
         Location::new(self.path, self.line(node), element)
     }
 
-    /// Records a problem of `element` at `node`.
+    /// Records a problem at `location`; the reading goes on.
+    fn record(&self, location: Location, kind: LoadErrorKind) {
+        self.errors.borrow_mut().push(LoadError::at(location, kind));
+    }
+
+    /// Records a problem of `element` at `node`, and returns that the element is [`Reported`].
     fn fail<T>(&self, node: Node, element: impl Into<String>, kind: LoadErrorKind) -> Parsed<T> {
-        self.errors
-            .borrow_mut()
-            .push(LoadError::at(self.loc(node, element), kind));
+        self.record(self.loc(node, element), kind);
         Err(Reported)
     }
 
@@ -159,9 +162,8 @@ impl<'a, 'input> Parser<'a, 'input> {
         for node in root.children().filter(|n| n.has_tag_name("link")) {
             let Ok(link) = self.link(node) else { continue };
             if link_index.contains_key(&link.name) {
-                let _ = self.fail::<()>(
-                    node,
-                    format!("link \"{}\"", link.name),
+                self.record(
+                    self.loc(node, format!("link \"{}\"", link.name)),
                     LoadErrorKind::DuplicateName { what: "link" },
                 );
                 continue;
@@ -178,7 +180,10 @@ impl<'a, 'input> Parser<'a, 'input> {
             };
             let what = format!("joint \"{}\"", joint.name);
             if !joint_names.insert(joint.name.clone()) {
-                let _ = self.fail::<()>(node, what, LoadErrorKind::DuplicateName { what: "joint" });
+                self.record(
+                    self.loc(node, what),
+                    LoadErrorKind::DuplicateName { what: "joint" },
+                );
                 continue;
             }
             if let Some(other) = parent_joint[joint.child] {
@@ -186,11 +191,11 @@ impl<'a, 'input> Parser<'a, 'input> {
                     link: links[joint.child].name.clone(),
                     joint: joints[other].name.clone(),
                 };
-                let _ = self.fail::<()>(node, what, kind);
+                self.record(self.loc(node, what), kind);
                 continue;
             }
             if joint.parent == joint.child {
-                let _ = self.fail::<()>(node, what, LoadErrorKind::SelfParent);
+                self.record(self.loc(node, what), LoadErrorKind::SelfParent);
                 continue;
             }
             parent_joint[joint.child] = Some(joints.len());
@@ -213,7 +218,7 @@ impl<'a, 'input> Parser<'a, 'input> {
         for joint in &joints {
             for m in &joint.mimics {
                 if !written_joints.contains(m.joint.as_str()) {
-                    self.errors.borrow_mut().push(LoadError::at(
+                    self.record(
                         Location::new(
                             self.path,
                             m.line,
@@ -222,7 +227,7 @@ impl<'a, 'input> Parser<'a, 'input> {
                         LoadErrorKind::UnknownMimicTarget {
                             joint: m.joint.clone(),
                         },
-                    ));
+                    );
                 }
             }
         }
@@ -255,9 +260,8 @@ impl<'a, 'input> Parser<'a, 'input> {
                 named
             };
             if let Some(&(other, other_line)) = constraint_names.get(&name) {
-                let _ = self.fail::<()>(
-                    node,
-                    format!("{tag} \"{name}\""),
+                self.record(
+                    self.loc(node, format!("{tag} \"{name}\"")),
                     LoadErrorKind::ConstraintNameTaken {
                         name: name.clone(),
                         other,
