@@ -4,7 +4,7 @@
 
 use super::runner::{build_runner, run, RowShape};
 use super::CliError;
-use crate::sampling::consistent_states;
+use crate::sampling::{consistent_states, NoConsistentStates};
 use embedyn_codegen::{Algorithm, GenerateOptions, Loaded, ModelOptions};
 use embedyn_runtime::random::SplitMix64;
 use embedyn_runtime::{Model, Workspace};
@@ -51,6 +51,22 @@ with_source! {
     }
 }
 
+/// Why `bench` cannot time the model.
+#[derive(Debug, thiserror::Error)]
+pub enum BenchError {
+    /// Too few consistent states to time on.
+    #[error("bench: {0}")]
+    NoStates(#[source] NoConsistentStates),
+    /// The runner printed no time.
+    #[error("the runner reported no time for {algorithm} in {scalar}")]
+    NoTime {
+        /// The algorithm timed.
+        algorithm: String,
+        /// The scalar type.
+        scalar: String,
+    },
+}
+
 /// States timed per algorithm.
 const STATES: usize = 64;
 
@@ -61,8 +77,7 @@ type TimedState = (Vec<f64>, Vec<f64>, Vec<f64>);
 /// with a random third vector (`tau` for `aba`, `qdd` for `rnea`).
 fn states(model: &Model<f64>) -> Result<Vec<TimedState>, CliError> {
     let mut rng = SplitMix64::new(0x5eed);
-    let found = consistent_states(model, STATES, 0x5eed)
-        .map_err(|e| CliError::Bench(format!("bench: {e}")))?;
+    let found = consistent_states(model, STATES, 0x5eed).map_err(BenchError::NoStates)?;
     Ok(found
         .into_iter()
         .map(|s| {
@@ -143,9 +158,11 @@ fn time_generated(
         .first()
         .and_then(|row| row.first().copied())
         .ok_or_else(|| {
-            CliError::Bench(format!(
-                "the runner reported no time for {algo} in {scalar}"
-            ))
+            BenchError::NoTime {
+                algorithm: algo.to_string(),
+                scalar: scalar.to_string(),
+            }
+            .into()
         })
 }
 

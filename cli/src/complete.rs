@@ -1,7 +1,7 @@
 //! `embedyn complete`: dependent coordinates solved from the independent ones, velocities projected.
 
 use super::samples::Samples;
-use super::CliError;
+use super::{CliError, StateProblem};
 use embedyn_codegen::{Loaded, ModelOptions};
 use embedyn_runtime::constraints::{
     complete_configuration, complete_velocity, constraint_violation,
@@ -44,8 +44,10 @@ pub fn complete(
         let (pos, vel) = constraint_violation(&model, &mut ws, &q, &v).map_err(at)?;
         let residual = pos.max(vel);
         if residual.is_nan() || residual > 1e-9 {
-            return Err(CliError::State { sample: i, problem: format!("the loop constraints could not be solved from this guess (residual {residual:e}); the independent coordinates may be outside the mechanism's range, or the guess too far from an assembly"
-            ) });
+            return Err(CliError::State {
+                sample: i,
+                problem: StateProblem::NotAssembled { residual },
+            });
         }
         out.push(CompletedSample { q, v, residual });
     }
@@ -65,11 +67,15 @@ fn normalize_quaternions(model: &Model<f64>, q: &mut [f64], sample: usize) -> Re
         // Scaled by the largest entry first, so that a tiny but non-zero quaternion does not underflow.
         let largest = s.iter().fold(0.0f64, |m, x| m.max(x.abs()));
         if !(largest > 0.0 && largest.is_finite()) {
-            return Err(CliError::State { sample, problem: format!("field `q`[{}..{}]: the quaternion of joint `{}` is {s:?}; it must be a non-zero quaternion [qx qy qz qw] (it is normalized)",
-                range.start,
-                range.end,
-                j.name.escape_debug()
-            ) });
+            return Err(CliError::State {
+                sample,
+                problem: StateProblem::ZeroQuaternion {
+                    joint: j.name.clone(),
+                    start: range.start,
+                    end: range.end,
+                    values: s.to_vec(),
+                },
+            });
         }
         s.iter_mut().for_each(|x| *x /= largest);
         let norm = s.iter().map(|x| x * x).sum::<f64>().sqrt();

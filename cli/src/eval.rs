@@ -2,7 +2,7 @@
 
 use super::runner::RowShape;
 use super::samples::Samples;
-use super::{Algo, CliError, Engine, Scalar};
+use super::{Algo, CliError, Engine, Scalar, StateProblem};
 use embedyn_codegen::{Loaded, ModelOptions};
 use embedyn_runtime::constraints::{constraint_violation, singularity_threshold};
 use embedyn_runtime::nalgebra;
@@ -178,8 +178,14 @@ fn eval_generated(
                 Scalar::F32 => singularity_threshold::<f32>(),
             };
             if condition.is_nan() || condition >= threshold {
-                return Err(CliError::State { sample: i, problem: format!("a loop is at or too near a singular configuration: cond(Y1) = {condition:.3e} ≥ {threshold:.1e}, the limit in this scalar type, {scalar_name} (the dependent joints are not determined by the independent ones here; the generated code gives the worst loop's measure, the interpreted engine names the loop)"
-                ) });
+                return Err(CliError::State {
+                    sample: i,
+                    problem: StateProblem::Singular {
+                        condition,
+                        threshold,
+                        scalar: scalar_name,
+                    },
+                });
             }
         }
         let o = finite(&o, i, name)?;
@@ -332,10 +338,16 @@ fn check_consistent(
         error: e,
     })?;
     if pos > 1e-9 {
-        return Err(CliError::State { sample: i, problem: format!("`q` violates the loop and coupling constraints by {pos:e} (more than 1e-9); `embedyn complete` solves the dependent coordinates") });
+        return Err(CliError::State {
+            sample: i,
+            problem: StateProblem::PositionViolation { violation: pos },
+        });
     }
     if vel > 1e-9 {
-        return Err(CliError::State { sample: i, problem: format!("`v` violates the velocity constraints by {vel:e} (more than 1e-9); `embedyn complete` projects it") });
+        return Err(CliError::State {
+            sample: i,
+            problem: StateProblem::VelocityViolation { violation: vel },
+        });
     }
     Ok(())
 }
@@ -345,11 +357,18 @@ fn cast<T: Real>(x: &[f64]) -> Vec<T> {
 }
 
 /// The result as f64, or an error if any entry is not finite (never a silent NaN).
-fn finite<T: Real>(x: &[T], sample: usize, name: &str) -> Result<Vec<f64>, CliError> {
+fn finite<T: Real>(x: &[T], sample: usize, name: &'static str) -> Result<Vec<f64>, CliError> {
     let y: Vec<f64> = x.iter().map(|v| v.to_f64()).collect();
     match y.iter().position(|v| !v.is_finite()) {
         None => Ok(y),
-        Some(k) => Err(CliError::State { sample, problem: format!("`{name}`[{k}] is not finite ({}); the state is outside what the scalar type can represent", y[k]) }),
+        Some(k) => Err(CliError::State {
+            sample,
+            problem: StateProblem::NotFinite {
+                output: name,
+                index: k,
+                value: y[k],
+            },
+        }),
     }
 }
 
@@ -363,11 +382,15 @@ fn check_quaternions<T: Real>(model: &Model<T>, q: &[f64], sample: usize) -> Res
         let s = &q[j.q_index + 3..j.q_index + 7];
         let n = s.iter().map(|x| x * x).sum::<f64>().sqrt();
         if (n - 1.0).abs() > 1e-6 {
-            return Err(CliError::State { sample, problem: format!("field `q`[{}..{}]: the quaternion of joint `{}` has norm {n}; it must be a unit quaternion [qx qy qz qw]",
-                j.q_index + 3,
-                j.q_index + 7,
-                j.name
-            ) });
+            return Err(CliError::State {
+                sample,
+                problem: StateProblem::NotUnitQuaternion {
+                    joint: j.name.clone(),
+                    start: j.q_index + 3,
+                    end: j.q_index + 7,
+                    norm: n,
+                },
+            });
         }
     }
     Ok(())
@@ -376,8 +399,5 @@ fn check_quaternions<T: Real>(model: &Model<T>, q: &[f64], sample: usize) -> Res
 /// An algorithm the command line does not evaluate (`--algo` offers only those with a command-line entry
 /// in their descriptor).
 fn not_evaluated(algo: Algo) -> CliError {
-    CliError::Unsupported(format!(
-        "`embedyn eval` does not evaluate `{}`",
-        algo.name()
-    ))
+    CliError::NotEvaluated { algorithm: algo }
 }

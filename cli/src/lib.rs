@@ -18,7 +18,11 @@ mod sampling;
 
 use clap::{Parser, Subcommand, ValueEnum};
 use embedyn_codegen::bounded_read::{read_file_limited, read_to_string_limited, MAX_INPUT_BYTES};
-use embedyn_codegen::{load, LoadError, Loaded, ModelOptions};
+use embedyn_codegen::{load, LoadError, Loaded, ModelOptions, ReadError, UnknownAlgorithm};
+
+pub use bench::BenchError;
+pub use runner::{RunnerError, RunnerOutputProblem, RunnerSourceError};
+pub use sampling::NoConsistentStates;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -211,11 +215,12 @@ pub enum CliError {
         /// The option.
         option: &'static str,
         /// What is wrong with it.
-        problem: String,
+        #[source]
+        problem: UnknownAlgorithm,
     },
     /// The input document as a whole (not JSON, no `samples`).
     #[error("{0}")]
-    Input(String),
+    Input(#[from] InputError),
     /// One field of one sample of the input.
     #[error("sample {sample}: {}", field_problem(.field, .problem))]
     Sample {
@@ -232,7 +237,7 @@ pub enum CliError {
         /// The sample, counted from 0.
         sample: usize,
         /// What is wrong with it.
-        problem: String,
+        problem: StateProblem,
     },
     /// An algorithm refused a sample.
     #[error("sample {sample}: {error}")]
@@ -247,25 +252,141 @@ pub enum CliError {
     #[error(transparent)]
     Load(#[from] LoadError),
     /// The input could not be read (`path` `None`: stdin).
-    #[error("{}", read_failure(.path.as_deref(), .problem))]
+    #[error("{}", read_failure(.path.as_deref(), .error))]
     ReadInput {
         /// The file (`None`: stdin).
         path: Option<PathBuf>,
-        /// What is wrong with it.
-        problem: String,
+        /// Why.
+        #[source]
+        error: ReadError,
     },
     /// Building, caching or running the generated code's runner.
     #[error("{0}")]
-    Runner(String),
+    Runner(#[from] RunnerError),
     /// Timing (`bench`).
     #[error("{0}")]
-    Bench(String),
-    /// What the command asked is not possible with these options (an engine that lacks the algorithm).
-    #[error("{0}")]
-    Unsupported(String),
+    Bench(#[from] BenchError),
+    /// An algorithm `embedyn eval` does not evaluate (`--algo` offers only those it does).
+    #[error("`embedyn eval` does not evaluate `{}`", .algorithm.name())]
+    NotEvaluated {
+        /// The algorithm asked for.
+        algorithm: Algo,
+    },
     /// A broken invariant of embedyn itself.
     #[error("internal error: {0} (a bug)")]
-    Internal(String),
+    Internal(#[from] InternalError),
+}
+
+/// What is wrong with the input document as a whole.
+#[derive(Debug, thiserror::Error)]
+pub enum InputError {
+    /// The text is not JSON.
+    #[error("the input is not valid JSON: {0}")]
+    NotJson(#[source] serde_json::Error),
+    /// The document has no field `samples`.
+    #[error("the input has no field `samples` (expected {{\"samples\": [...]}})")]
+    NoSamples,
+    /// The field `samples` is not an array.
+    #[error("the input's field `samples` must be an array")]
+    SamplesNotArray,
+    /// A field of a sample has more entries than the model needs (refused as soon as the first extra
+    /// entry is read).
+    #[error("sample {sample}: field `{field}` has more than {len} entries, the model needs {len}")]
+    TooManyEntries {
+        /// The sample, counted from 0.
+        sample: usize,
+        /// The field.
+        field: &'static str,
+        /// The entries the model needs.
+        len: usize,
+    },
+}
+
+/// Why a sample's state cannot be evaluated or completed.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum StateProblem {
+    /// `complete` found no assembly from the sample's guess.
+    #[error("the loop constraints could not be solved from this guess (residual {residual:e}); the independent coordinates may be outside the mechanism's range, or the guess too far from an assembly")]
+    NotAssembled {
+        /// The largest residual left.
+        residual: f64,
+    },
+    /// A free joint's quaternion is zero (or not finite), so `complete` cannot normalize it.
+    #[error("field `q`[{start}..{end}]: the quaternion of joint `{}` is {values:?}; it must be a non-zero quaternion [qx qy qz qw] (it is normalized)", .joint.escape_debug())]
+    ZeroQuaternion {
+        /// The joint.
+        joint: String,
+        /// The quaternion's first index in `q`.
+        start: usize,
+        /// One past its last index.
+        end: usize,
+        /// The quaternion as given.
+        values: Vec<f64>,
+    },
+    /// A free joint's quaternion is not of unit norm.
+    #[error("field `q`[{start}..{end}]: the quaternion of joint `{joint}` has norm {norm}; it must be a unit quaternion [qx qy qz qw]")]
+    NotUnitQuaternion {
+        /// The joint.
+        joint: String,
+        /// The quaternion's first index in `q`.
+        start: usize,
+        /// One past its last index.
+        end: usize,
+        /// Its norm.
+        norm: f64,
+    },
+    /// A loop is at or too near a singular configuration (by the generated code's measure).
+    #[error("a loop is at or too near a singular configuration: cond(Y1) = {condition:.3e} ≥ {threshold:.1e}, the limit in this scalar type, {scalar} (the dependent joints are not determined by the independent ones here; the generated code gives the worst loop's measure, the interpreted engine names the loop)")]
+    Singular {
+        /// The condition number cond₁(Y1) the generated code returned.
+        condition: f64,
+        /// The scalar type's limit.
+        threshold: f64,
+        /// The scalar type.
+        scalar: &'static str,
+    },
+    /// `q` does not satisfy the constraints.
+    #[error("`q` violates the loop and coupling constraints by {violation:e} (more than 1e-9); `embedyn complete` solves the dependent coordinates")]
+    PositionViolation {
+        /// The largest residual.
+        violation: f64,
+    },
+    /// `v` does not satisfy the velocity constraints.
+    #[error("`v` violates the velocity constraints by {violation:e} (more than 1e-9); `embedyn complete` projects it")]
+    VelocityViolation {
+        /// The largest residual.
+        violation: f64,
+    },
+    /// A result is not finite in the scalar type.
+    #[error("`{output}`[{index}] is not finite ({value}); the state is outside what the scalar type can represent")]
+    NotFinite {
+        /// The output.
+        output: &'static str,
+        /// The entry.
+        index: usize,
+        /// Its value.
+        value: f64,
+    },
+}
+
+/// A broken invariant of embedyn itself.
+#[derive(Debug, thiserror::Error)]
+pub enum InternalError {
+    /// A result could not be turned into JSON.
+    #[error("the result is not JSON: {0}")]
+    NotJson(#[source] serde_json::Error),
+    /// A field of the samples was asked for that was not read.
+    #[error("field `{field}` of the samples was not read")]
+    FieldNotRead {
+        /// The field.
+        field: String,
+    },
+    /// A sample was asked for that the input does not hold.
+    #[error("sample {sample} is not in the input")]
+    SampleNotInInput {
+        /// The sample, counted from 0.
+        sample: usize,
+    },
 }
 
 /// What is wrong with one field of a sample.
@@ -304,7 +425,7 @@ fn field_problem(field: &str, problem: &SampleProblem) -> String {
     }
 }
 
-fn read_failure(path: Option<&Path>, e: &str) -> String {
+fn read_failure(path: Option<&Path>, e: &ReadError) -> String {
     match path {
         Some(p) => format!("{}: cannot read the input: {e}", p.display()),
         None => format!("cannot read the input from stdin: {e}"),
@@ -369,9 +490,9 @@ pub fn run(cli: Cli) -> Result<Printed, CliError> {
                         .collect::<Result<Vec<_>, _>>()
                 })
                 .transpose()
-                .map_err(|e| CliError::Usage {
+                .map_err(|problem| CliError::Usage {
                     option: "--only",
-                    problem: e.to_string(),
+                    problem,
                 })?;
             let requested = if minv {
                 &[embedyn_codegen::Algorithm::Minv][..]
@@ -444,8 +565,7 @@ pub fn complete_text(
 
 /// The document as a JSON tree (for the fuzzer, which inspects it; inputs there are small).
 fn as_value<T: serde::Serialize>(document: &T) -> Result<serde_json::Value, CliError> {
-    serde_json::to_value(document)
-        .map_err(|e| CliError::Internal(format!("the result is not JSON: {e}")))
+    serde_json::to_value(document).map_err(|e| InternalError::NotJson(e).into())
 }
 
 fn options(floating: bool) -> ModelOptions {
@@ -466,15 +586,81 @@ fn load_reporting(path: &Path) -> Result<Loaded, CliError> {
 
 fn read_input(path: Option<&Path>) -> Result<String, CliError> {
     match path {
-        Some(p) => read_file_limited(p, MAX_INPUT_BYTES).map_err(|problem| CliError::ReadInput {
+        Some(p) => read_file_limited(p, MAX_INPUT_BYTES).map_err(|error| CliError::ReadInput {
             path: Some(p.to_path_buf()),
-            problem,
+            error,
         }),
-        None => read_to_string_limited(std::io::stdin(), MAX_INPUT_BYTES).map_err(|problem| {
-            CliError::ReadInput {
-                path: None,
-                problem,
+        None => read_to_string_limited(std::io::stdin(), MAX_INPUT_BYTES)
+            .map_err(|error| CliError::ReadInput { path: None, error }),
+    }
+}
+
+#[cfg(test)]
+mod kind_tests {
+    use super::*;
+
+    fn slider() -> Loaded {
+        load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/data/unit_slider.urdf")).unwrap()
+    }
+
+    #[test]
+    fn input_errors_carry_their_kind() {
+        let loaded = slider();
+        let options = ModelOptions::default();
+        let nq = loaded.model::<f64>(&options).unwrap().nq();
+        let refused = |input: &str| complete_text(&loaded, &options, input).unwrap_err();
+        assert!(matches!(
+            refused("{"),
+            CliError::Input(InputError::NotJson(_))
+        ));
+        assert!(matches!(
+            refused("{}"),
+            CliError::Input(InputError::NoSamples)
+        ));
+        assert!(matches!(
+            refused(r#"{"samples": 1}"#),
+            CliError::Input(InputError::SamplesNotArray)
+        ));
+        let q = vec!["0"; nq + 1].join(", ");
+        match refused(&format!(r#"{{"samples": [{{"q": [{q}], "v": []}}]}}"#)) {
+            CliError::Input(InputError::TooManyEntries { sample, field, len }) => {
+                assert_eq!((sample, field, len), (0, "q", nq));
             }
-        }),
+            other => panic!("{other:?}"),
+        }
+    }
+
+    #[test]
+    fn state_problems_carry_their_data() {
+        let loaded =
+            load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("../models/arm7.urdf")).unwrap();
+        let options = ModelOptions {
+            floating: true,
+            ..Default::default()
+        };
+        let model = loaded.model::<f64>(&options).unwrap();
+        let zeros = |n: usize| vec!["0"; n].join(", ");
+        let input = format!(
+            r#"{{"samples": [{{"q": [{}], "v": [{}]}}]}}"#,
+            zeros(model.nq()),
+            zeros(model.nv())
+        );
+        match complete_text(&loaded, &options, &input).unwrap_err() {
+            CliError::State {
+                sample: 0,
+                problem:
+                    StateProblem::ZeroQuaternion {
+                        joint,
+                        start,
+                        end,
+                        values,
+                    },
+            } => {
+                assert_eq!(joint, embedyn_codegen::ROOT_JOINT);
+                assert_eq!((start, end), (3, 7));
+                assert_eq!(values, [0.0; 4]);
+            }
+            other => panic!("{other:?}"),
+        }
     }
 }

@@ -8,8 +8,8 @@
 //! place, so concurrent runs never see half a file.
 
 use super::CliError;
-use embedyn_codegen::standalone::{crate_files, crate_name, Binary, Manifest};
-use embedyn_codegen::{format_tokens, GenerateOptions, GENERATOR_VERSION};
+use embedyn_codegen::standalone::{crate_files, crate_name, Binary, Manifest, ManifestError};
+use embedyn_codegen::{format_tokens, GenerateOptions, UnparsableCode, GENERATOR_VERSION};
 use embedyn_codegen::{Algorithm, Loaded};
 use proc_macro2::TokenStream;
 use quote::{format_ident, quote};
@@ -17,6 +17,204 @@ use sha2::{Digest, Sha256};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
+
+/// Why the generated code's runner cannot be built, found in the cache or run.
+#[derive(Debug, thiserror::Error)]
+pub enum RunnerError {
+    /// No cache folder: neither `EMBEDYN_CACHE_DIR`, `XDG_CACHE_HOME` nor `HOME` is set.
+    #[error("the generated engine needs a cache folder of your own to build in, and HOME is not set: set \
+             EMBEDYN_CACHE_DIR (or XDG_CACHE_HOME) to a folder that only you can write")]
+    NoCacheFolder,
+    /// A path of the cache cannot be resolved or examined.
+    #[error("{}: {error}", .path.display())]
+    Path {
+        /// The path.
+        path: PathBuf,
+        /// Why.
+        #[source]
+        error: std::io::Error,
+    },
+    /// A folder of the cache cannot be created.
+    #[error("{}: cannot create the cache folder: {error}", .path.display())]
+    CreateFolder {
+        /// The folder.
+        path: PathBuf,
+        /// Why.
+        #[source]
+        error: std::io::Error,
+    },
+    /// The cache root is not a folder.
+    #[error("{}: the cache folder is not a folder; {CACHE_ADVICE}", .path.display())]
+    NotAFolder {
+        /// The cache root.
+        path: PathBuf,
+    },
+    /// The cache root belongs to another user.
+    #[error("{}: the cache folder belongs to another user (uid {uid}); {CACHE_ADVICE}", .path.display())]
+    OtherOwner {
+        /// The cache root.
+        path: PathBuf,
+        /// Its owner.
+        uid: u32,
+    },
+    /// Other users can write to the cache root.
+    #[error("{}: the cache folder is writable by other users (mode {mode:o}); `chmod 700` it or {CACHE_ADVICE}", .path.display())]
+    WritableByOthers {
+        /// The cache root.
+        path: PathBuf,
+        /// Its permission bits.
+        mode: u32,
+    },
+    /// A folder above the cache root lets another user replace it.
+    #[error("{}: a folder above the cache ({}, owner uid {uid}, mode {mode:o}) lets another user replace the cache folder; {CACHE_ADVICE}", .path.display(), .folder.display())]
+    UnsafeAncestor {
+        /// The cache root.
+        path: PathBuf,
+        /// The folder above it.
+        folder: PathBuf,
+        /// That folder's owner.
+        uid: u32,
+        /// Its permission bits.
+        mode: u32,
+    },
+    /// A file of the cache cannot be written.
+    #[error("{}: cannot write: {error}", .path.display())]
+    Write {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        #[source]
+        error: std::io::Error,
+    },
+    /// The runner's source cannot be generated.
+    #[error("{0}")]
+    Source(#[from] RunnerSourceError),
+    /// The runner's `Cargo.toml` cannot be written as TOML.
+    #[error("{0}")]
+    Manifest(#[from] ManifestError),
+    /// Cargo cannot be started.
+    #[error("cannot run cargo ({}): {error}", .cargo.to_string_lossy())]
+    CannotRunCargo {
+        /// The cargo program (`$CARGO`, else `cargo`).
+        cargo: std::ffi::OsString,
+        /// Why.
+        #[source]
+        error: std::io::Error,
+    },
+    /// Cargo could not compile the runner.
+    #[error("compiling the generated code failed:\n{stderr}")]
+    CompileFailed {
+        /// What cargo printed on stderr.
+        stderr: String,
+    },
+    /// The runner cargo built cannot be read.
+    #[error("{}: the built runner cannot be read: {error}", .path.display())]
+    BuiltUnreadable {
+        /// The binary.
+        path: PathBuf,
+        /// Why.
+        #[source]
+        error: std::io::Error,
+    },
+    /// The cache entry's manifest cannot be written as JSON.
+    #[error("cannot write the cache manifest: {0}")]
+    EntryManifest(#[source] serde_json::Error),
+    /// The cache entry changed between writing and checking it.
+    #[error("{}: the cache entry changed while it was being written (another embedyn run?); try again", .path.display())]
+    EntryChanged {
+        /// The entry.
+        path: PathBuf,
+    },
+    /// The runner cannot be started.
+    #[error("cannot run {}: {error}", .binary.display())]
+    CannotRun {
+        /// The runner.
+        binary: PathBuf,
+        /// Why.
+        #[source]
+        error: std::io::Error,
+    },
+    /// Waiting for the runner failed.
+    #[error("the generated code's runner: {0}")]
+    Wait(#[source] std::io::Error),
+    /// The runner exited with an error.
+    #[error("the generated code's runner failed ({status}): {}", .stderr.trim())]
+    Failed {
+        /// Its exit status.
+        status: std::process::ExitStatus,
+        /// What it printed on stderr.
+        stderr: String,
+    },
+    /// The runner stopped before reading all its input.
+    #[error("the generated code's runner did not read its input: {0}")]
+    InputNotRead(#[source] std::io::Error),
+    /// The thread feeding the runner's input failed.
+    #[error("the generated code's runner input could not be written")]
+    InputNotWritten,
+    /// The runner's output is not what was asked for.
+    #[error("the generated code's runner {0}")]
+    Output(#[from] RunnerOutputProblem),
+}
+
+/// What to do about a cache folder that is not private.
+const CACHE_ADVICE: &str = "set EMBEDYN_CACHE_DIR to a folder of your own";
+
+/// How the runner's output differs from what was asked for.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum RunnerOutputProblem {
+    /// Another count of rows.
+    #[error("printed {printed} rows for {expected} expected")]
+    RowCount {
+        /// The rows printed.
+        printed: usize,
+        /// The rows expected.
+        expected: usize,
+    },
+    /// A word that is not a number.
+    #[error("printed {text:?} in row {row}, not a number")]
+    NotANumber {
+        /// The word.
+        text: String,
+        /// The row, counted from 0.
+        row: usize,
+    },
+    /// A row of another length.
+    #[error("printed {printed} numbers in row {row}, expected {expected}")]
+    RowLength {
+        /// The numbers printed.
+        printed: usize,
+        /// The row, counted from 0.
+        row: usize,
+        /// The numbers expected.
+        expected: usize,
+    },
+    /// A time that is not a positive number.
+    #[error("reported a time of {ns} ns")]
+    BadTime {
+        /// The time reported.
+        ns: f64,
+    },
+}
+
+/// Why the runner's `main.rs` cannot be generated.
+#[derive(Debug, thiserror::Error)]
+pub enum RunnerSourceError {
+    /// The model's crate name is not a Rust identifier.
+    #[error("`{krate}` is not an identifier: {error}")]
+    NotAnIdentifier {
+        /// The crate name.
+        krate: String,
+        /// The parser's error.
+        #[source]
+        error: syn::Error,
+    },
+    /// The timing loop's source does not lex (a bug).
+    #[error("internal error: the timing loop does not parse: {0}")]
+    TimingLoop(#[source] syn::Error),
+    /// The generated `main.rs` does not parse (a bug).
+    #[error("{0}")]
+    Unparsable(#[from] UnparsableCode),
+}
 
 /// The cache folder: `$EMBEDYN_CACHE_DIR`, else `$XDG_CACHE_HOME/embedyn`, else `$HOME/.cache/embedyn`.
 /// Never a shared folder such as the temporary directory: other users could plant a binary there.
@@ -31,18 +229,14 @@ pub fn cache_dir() -> Result<PathBuf, CliError> {
     }
     match var("HOME") {
         Some(home) => Ok(PathBuf::from(home).join(".cache").join("embedyn")),
-        None => Err(CliError::Runner(
-            "the generated engine needs a cache folder of your own to build in, and HOME is not set: set \
-             EMBEDYN_CACHE_DIR (or XDG_CACHE_HOME) to a folder that only you can write"
-                .into(),
-        )),
+        None => Err(RunnerError::NoCacheFolder.into()),
     }
 }
 
 /// The cache folder as an absolute path (cargo runs in another working folder).
 fn absolute_cache_dir() -> Result<PathBuf, CliError> {
     let dir = cache_dir()?;
-    std::path::absolute(&dir).map_err(|e| CliError::Runner(format!("{}: {e}", dir.display())))
+    std::path::absolute(&dir).map_err(|error| RunnerError::Path { path: dir, error }.into())
 }
 
 /// Creates `dir` and any missing parents with mode 0700 (Unix).
@@ -51,11 +245,12 @@ fn create_private_dir(dir: &Path) -> Result<(), CliError> {
     builder.recursive(true);
     #[cfg(unix)]
     std::os::unix::fs::DirBuilderExt::mode(&mut builder, 0o700);
-    builder.create(dir).map_err(|e| {
-        CliError::Runner(format!(
-            "{}: cannot create the cache folder: {e}",
-            dir.display()
-        ))
+    builder.create(dir).map_err(|error| {
+        RunnerError::CreateFolder {
+            path: dir.to_path_buf(),
+            error,
+        }
+        .into()
     })
 }
 
@@ -67,8 +262,10 @@ fn create_private_dir(dir: &Path) -> Result<(), CliError> {
 fn cache_root() -> Result<PathBuf, CliError> {
     let given = absolute_cache_dir()?;
     create_private_dir(&given)?;
-    let root = std::fs::canonicalize(&given)
-        .map_err(|e| CliError::Runner(format!("{}: {e}", given.display())))?;
+    let root = std::fs::canonicalize(&given).map_err(|error| RunnerError::Path {
+        path: given.clone(),
+        error,
+    })?;
     #[cfg(unix)]
     check_private_chain(&root)?;
     Ok(root)
@@ -82,30 +279,30 @@ fn check_private_chain(root: &Path) -> Result<(), CliError> {
     use std::os::unix::fs::MetadataExt;
     // SAFETY: geteuid has no preconditions and cannot fail.
     let me = unsafe { libc::geteuid() };
-    let advice = "set EMBEDYN_CACHE_DIR to a folder of your own";
     let meta_of = |p: &Path| {
-        std::fs::symlink_metadata(p).map_err(|e| CliError::Runner(format!("{}: {e}", p.display())))
+        std::fs::symlink_metadata(p).map_err(|error| RunnerError::Path {
+            path: p.to_path_buf(),
+            error,
+        })
     };
+    let path = root.to_path_buf();
     let meta = meta_of(root)?;
     if !meta.is_dir() {
-        return Err(CliError::Runner(format!(
-            "{}: the cache folder is not a folder; {advice}",
-            root.display()
-        )));
+        return Err(RunnerError::NotAFolder { path }.into());
     }
     if meta.uid() != me {
-        return Err(CliError::Runner(format!(
-            "{}: the cache folder belongs to another user (uid {}); {advice}",
-            root.display(),
-            meta.uid()
-        )));
+        return Err(RunnerError::OtherOwner {
+            path,
+            uid: meta.uid(),
+        }
+        .into());
     }
     if meta.mode() & 0o022 != 0 {
-        return Err(CliError::Runner(format!(
-            "{}: the cache folder is writable by other users (mode {:o}); `chmod 700` it or {advice}",
-            root.display(),
-            meta.mode() & 0o7777
-        )));
+        return Err(RunnerError::WritableByOthers {
+            path,
+            mode: meta.mode() & 0o7777,
+        }
+        .into());
     }
     let mut child_owner = meta.uid();
     for folder in root.ancestors().skip(1) {
@@ -115,13 +312,13 @@ fn check_private_chain(root: &Path) -> Result<(), CliError> {
         let sticky = meta.mode() & 0o1000 != 0;
         let child_safe = !others_write || (sticky && (child_owner == me || child_owner == 0));
         if !owner_trusted || !child_safe {
-            return Err(CliError::Runner(format!(
-                "{}: a folder above the cache ({}, owner uid {}, mode {:o}) lets another user replace the cache folder; {advice}",
-                root.display(),
-                folder.display(),
-                meta.uid(),
-                meta.mode() & 0o7777
-            )));
+            return Err(RunnerError::UnsafeAncestor {
+                path,
+                folder: folder.to_path_buf(),
+                uid: meta.uid(),
+                mode: meta.mode() & 0o7777,
+            }
+            .into());
         }
         child_owner = meta.uid();
     }
@@ -132,8 +329,12 @@ fn check_private_chain(root: &Path) -> Result<(), CliError> {
 fn write_atomic(path: &Path, bytes: &[u8], executable: bool) -> Result<(), CliError> {
     use std::sync::atomic::{AtomicU64, Ordering};
     static COUNTER: AtomicU64 = AtomicU64::new(0);
-    let err =
-        |e: std::io::Error| CliError::Runner(format!("{}: cannot write: {e}", path.display()));
+    let err = |error: std::io::Error| {
+        CliError::from(RunnerError::Write {
+            path: path.to_path_buf(),
+            error,
+        })
+    };
     let dir = path.parent().unwrap_or(Path::new("."));
     let name = path
         .file_name()
@@ -223,7 +424,7 @@ pub fn build_runner(loaded: &Loaded, options: &GenerateOptions) -> Result<PathBu
         .filter_map(|(on, name)| on.then_some(name))
         .collect();
     let main = runner_main(&krate, &options.algorithms, constrained, &scalars)
-        .map_err(CliError::Runner)?;
+        .map_err(RunnerError::from)?;
     files.push((PathBuf::from("src/main.rs"), main));
     let key_parts: Vec<&[u8]> = std::iter::once(GENERATOR_VERSION.as_bytes())
         .chain(
@@ -241,7 +442,7 @@ pub fn build_runner(loaded: &Loaded, options: &GenerateOptions) -> Result<PathBu
         name: bin_name.clone(),
         path: "src/main.rs".into(),
     });
-    let cargo_toml = manifest.to_toml().map_err(CliError::Runner)?;
+    let cargo_toml = manifest.to_toml().map_err(RunnerError::from)?;
     for (path, text) in &mut files {
         if path == Path::new("Cargo.toml") {
             *text = cargo_toml.clone();
@@ -279,11 +480,9 @@ pub fn build_runner(loaded: &Loaded, options: &GenerateOptions) -> Result<PathBu
     let built = target
         .join("release")
         .join(format!("{bin_name}{}", std::env::consts::EXE_SUFFIX));
-    let binary = std::fs::read(&built).map_err(|e| {
-        CliError::Runner(format!(
-            "{}: the built runner cannot be read: {e}",
-            built.display()
-        ))
+    let binary = std::fs::read(&built).map_err(|error| RunnerError::BuiltUnreadable {
+        path: built.clone(),
+        error,
     })?;
     write_atomic(&runner_path(&entry), &binary, true)?;
     let record = EntryManifest {
@@ -291,17 +490,15 @@ pub fn build_runner(loaded: &Loaded, options: &GenerateOptions) -> Result<PathBu
         source_sha256: source_sha256.clone(),
         binary_sha256: sha256_hex(&[&binary]),
     };
-    let json = serde_json::to_vec_pretty(&record)
-        .map_err(|e| CliError::Runner(format!("cannot write the cache manifest: {e}")))?;
+    let json = serde_json::to_vec_pretty(&record).map_err(RunnerError::EntryManifest)?;
     write_atomic(&entry.join(MANIFEST), &json, false)?;
     match check_entry(&entry, &source_sha256) {
         EntryState::Valid => Ok(runner_path(&entry)),
         // Another run replaced the entry between our write and this check with a different binary;
         // never run what was not checked.
-        EntryState::Missing | EntryState::Invalid(_) => Err(CliError::Runner(format!(
-            "{}: the cache entry changed while it was being written (another embedyn run?); try again",
-            entry.display()
-        ))),
+        EntryState::Missing | EntryState::Invalid(_) => {
+            Err(RunnerError::EntryChanged { path: entry }.into())
+        }
     }
 }
 
@@ -334,11 +531,9 @@ fn cargo_build(dir: &Path, target: &Path, bin_name: &str) -> Result<(), CliError
             .env("CARGO_TARGET_DIR", target)
             .stdin(Stdio::null())
             .output()
-            .map_err(|e| {
-                CliError::Runner(format!(
-                    "cannot run cargo ({}): {e}",
-                    cargo.to_string_lossy()
-                ))
+            .map_err(|error| RunnerError::CannotRunCargo {
+                cargo: cargo.clone(),
+                error,
             })
     };
     if build(true)?.status.success() {
@@ -348,10 +543,10 @@ fn cargo_build(dir: &Path, target: &Path, bin_name: &str) -> Result<(), CliError
     if retry.status.success() {
         Ok(())
     } else {
-        Err(CliError::Runner(format!(
-            "compiling the generated code failed:\n{}",
-            String::from_utf8_lossy(&retry.stderr)
-        )))
+        Err(RunnerError::CompileFailed {
+            stderr: String::from_utf8_lossy(&retry.stderr).into_owned(),
+        }
+        .into())
     }
 }
 
@@ -388,7 +583,10 @@ pub fn run(
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
-        .map_err(|e| CliError::Runner(format!("cannot run {}: {e}", binary.display())))?;
+        .map_err(|error| RunnerError::CannotRun {
+            binary: binary.to_path_buf(),
+            error,
+        })?;
     let stdin = child.stdin.take();
     // Fed from another thread, so that a runner writing before it has read everything cannot deadlock.
     let (written, out) = std::thread::scope(|s| {
@@ -399,26 +597,18 @@ pub fn run(
         let out = child.wait_with_output();
         (feeder.join(), out)
     });
-    let out = out.map_err(|e| CliError::Runner(format!("the generated code's runner: {e}")))?;
+    let out = out.map_err(RunnerError::Wait)?;
     if !out.status.success() {
-        return Err(CliError::Runner(format!(
-            "the generated code's runner failed ({}): {}",
-            out.status,
-            String::from_utf8_lossy(&out.stderr).trim()
-        )));
+        return Err(RunnerError::Failed {
+            status: out.status,
+            stderr: String::from_utf8_lossy(&out.stderr).into_owned(),
+        }
+        .into());
     }
     match written {
         Ok(Ok(())) => {}
-        Ok(Err(e)) => {
-            return Err(CliError::Runner(format!(
-                "the generated code's runner did not read its input: {e}"
-            )))
-        }
-        Err(_) => {
-            return Err(CliError::Runner(
-                "the generated code's runner input could not be written".into(),
-            ))
-        }
+        Ok(Err(e)) => return Err(RunnerError::InputNotRead(e).into()),
+        Err(_) => return Err(RunnerError::InputNotWritten.into()),
     }
     let stdout = String::from_utf8_lossy(&out.stdout);
     parse_rows(&stdout, rows.len(), &shape)
@@ -426,35 +616,40 @@ pub fn run(
 
 /// The runner's output as rows of numbers, checked against what was asked for.
 fn parse_rows(stdout: &str, inputs: usize, shape: &RowShape) -> Result<Vec<Vec<f64>>, CliError> {
-    let fail = |what: String| CliError::Runner(format!("the generated code's runner {what}"));
+    let fail = |problem: RunnerOutputProblem| CliError::from(RunnerError::Output(problem));
     let (count, len) = match shape {
         RowShape::Eval { len } => (inputs, *len),
         RowShape::Bench => (1, 1),
     };
     let lines: Vec<&str> = stdout.split_terminator('\n').collect();
     if lines.len() != count {
-        return Err(fail(format!(
-            "printed {} rows for {count} expected",
-            lines.len()
-        )));
+        return Err(fail(RunnerOutputProblem::RowCount {
+            printed: lines.len(),
+            expected: count,
+        }));
     }
     let mut out = Vec::with_capacity(count);
     for (i, line) in lines.iter().enumerate() {
         let row = line
             .split_whitespace()
             .map(|x| {
-                x.parse::<f64>()
-                    .map_err(|_| fail(format!("printed {x:?} in row {i}, not a number")))
+                x.parse::<f64>().map_err(|_| {
+                    fail(RunnerOutputProblem::NotANumber {
+                        text: x.to_string(),
+                        row: i,
+                    })
+                })
             })
             .collect::<Result<Vec<f64>, _>>()?;
         if row.len() != len {
-            return Err(fail(format!(
-                "printed {} numbers in row {i}, expected {len}",
-                row.len()
-            )));
+            return Err(fail(RunnerOutputProblem::RowLength {
+                printed: row.len(),
+                row: i,
+                expected: len,
+            }));
         }
         if matches!(shape, RowShape::Bench) && !(row[0].is_finite() && row[0] > 0.0) {
-            return Err(fail(format!("reported a time of {} ns", row[0])));
+            return Err(fail(RunnerOutputProblem::BadTime { ns: row[0] }));
         }
         out.push(row);
     }
@@ -536,9 +731,12 @@ fn runner_main(
     algorithms: &[Algorithm],
     constrained: bool,
     scalars: &[&str],
-) -> Result<String, String> {
+) -> Result<String, RunnerSourceError> {
     let krate: syn::Ident =
-        syn::parse_str(krate).map_err(|e| format!("`{krate}` is not an identifier: {e}"))?;
+        syn::parse_str(krate).map_err(|error| RunnerSourceError::NotAnIdentifier {
+            krate: krate.to_string(),
+            error,
+        })?;
     let mut names = Vec::new();
     let mut eval_calls = Vec::new();
     let mut bench_calls = Vec::new();
@@ -567,7 +765,7 @@ fn runner_main(
         let module = format_ident!("{}", name);
         quote! {
             /// Evaluates or times the functions of one scalar module; output is appended to `text`.
-            fn #function(algo: &str, bench: bool, rows: &[Vec<f64>], text: &mut String) -> Result<(), String> {
+            fn #function(algo: &str, bench: bool, rows: &[Vec<f64>], text: &mut String) -> Result<(), Refusal> {
                 use #krate::#module as m;
                 type S = #scalar;
                 let states: Vec<([S; NQ], [S; NV], [S; NV])> = rows
@@ -587,7 +785,7 @@ fn runner_main(
                 if bench {
                     let n = states.len();
                     if n == 0 {
-                        return Err("bench needs at least one state".into());
+                        return Err(Refusal::NoStates);
                     }
                     let mut k = 0usize;
                     let ns = match algo {
@@ -597,7 +795,7 @@ fn runner_main(
                             #bench_calls
                             black_box((&out, &mat, &mat_i));
                         }),)*
-                        other => return Err(format!("unknown algorithm {other:?}")),
+                        other => return Err(Refusal::UnknownAlgorithm(other.to_string())),
                     };
                     text.push_str(&format!("{ns:?}\n"));
                 } else {
@@ -605,7 +803,7 @@ fn runner_main(
                         let _ = (q, a, b);
                         match algo {
                             #(#names => { #eval_calls })*
-                            other => return Err(format!("unknown algorithm {other:?}")),
+                            other => return Err(Refusal::UnknownAlgorithm(other.to_string())),
                         }
                     }
                 }
@@ -614,9 +812,8 @@ fn runner_main(
         }
     });
     // The timing loop `bench` uses for the interpreted solver, the same text.
-    let time: TokenStream = super::bench::TIME_SOURCE
-        .parse()
-        .map_err(|e| format!("internal error: the timing loop does not parse: {e}"))?;
+    let time: TokenStream =
+        syn::parse_str(super::bench::TIME_SOURCE).map_err(RunnerSourceError::TimingLoop)?;
     let file = quote! {
         //! Evaluates or times the generated functions for `embedyn eval --engine generated` and
         //! `embedyn bench` (protocol: see embedyn's `cli/runner.rs`).
@@ -633,42 +830,81 @@ fn runner_main(
 
         #time
 
+        /// Why the runner refuses its input (printed on stderr, exit status 2).
+        enum Refusal {
+            ReadStdin(std::io::Error),
+            BadHeader(Vec<String>),
+            UnknownMode(String),
+            NotANumber { row: usize, text: String, error: std::num::ParseFloatError },
+            RowLength { row: usize, numbers: usize },
+            ScalarNotGenerated(String),
+            UnknownAlgorithm(String),
+            NoStates,
+            WriteStdout(std::io::Error),
+        }
+
+        impl std::fmt::Display for Refusal {
+            fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                match self {
+                    Refusal::ReadStdin(e) => write!(f, "cannot read stdin: {e}"),
+                    Refusal::BadHeader(header) => {
+                        write!(f, "bad header {header:?}, expected `ALGO SCALAR eval|bench`")
+                    }
+                    Refusal::UnknownMode(mode) => write!(f, "unknown mode {mode:?}"),
+                    Refusal::NotANumber { row, text, error } => write!(f, "row {row}: {text:?}: {error}"),
+                    Refusal::RowLength { row, numbers } => {
+                        write!(f, "row {row} has {numbers} numbers, expected {}", NQ + 2 * NV)
+                    }
+                    Refusal::ScalarNotGenerated(scalar) => write!(f, "scalar {scalar:?} was not generated"),
+                    Refusal::UnknownAlgorithm(algo) => write!(f, "unknown algorithm {algo:?}"),
+                    Refusal::NoStates => write!(f, "bench needs at least one state"),
+                    Refusal::WriteStdout(e) => write!(f, "cannot write stdout: {e}"),
+                }
+            }
+        }
+
         #(#per_scalar)*
 
-        fn run() -> Result<(), String> {
+        fn run() -> Result<(), Refusal> {
             let mut input = String::new();
             std::io::stdin()
                 .read_to_string(&mut input)
-                .map_err(|e| format!("cannot read stdin: {e}"))?;
+                .map_err(Refusal::ReadStdin)?;
             let mut lines = input.split_terminator('\n');
             let header: Vec<&str> = lines.next().unwrap_or("").split_whitespace().collect();
             let [algo, scalar, mode] = header[..] else {
-                return Err(format!("bad header {header:?}, expected `ALGO SCALAR eval|bench`"));
+                return Err(Refusal::BadHeader(header.iter().map(|w| w.to_string()).collect()));
             };
             let bench = match mode {
                 "bench" => true,
                 "eval" => false,
-                other => return Err(format!("unknown mode {other:?}")),
+                other => return Err(Refusal::UnknownMode(other.to_string())),
             };
             let mut rows = Vec::new();
             for (i, line) in lines.enumerate() {
                 let row = line
                     .split_whitespace()
-                    .map(|x| x.parse::<f64>().map_err(|e| format!("row {i}: {x:?}: {e}")))
-                    .collect::<Result<Vec<f64>, String>>()?;
+                    .map(|x| {
+                        x.parse::<f64>().map_err(|error| Refusal::NotANumber {
+                            row: i,
+                            text: x.to_string(),
+                            error,
+                        })
+                    })
+                    .collect::<Result<Vec<f64>, Refusal>>()?;
                 if row.len() != NQ + 2 * NV {
-                    return Err(format!("row {i} has {} numbers, expected {}", row.len(), NQ + 2 * NV));
+                    return Err(Refusal::RowLength { row: i, numbers: row.len() });
                 }
                 rows.push(row);
             }
             let mut text = String::new();
             match scalar {
                 #(#dispatch)*
-                other => return Err(format!("scalar {other:?} was not generated")),
+                other => return Err(Refusal::ScalarNotGenerated(other.to_string())),
             }
             std::io::stdout()
                 .write_all(text.as_bytes())
-                .map_err(|e| format!("cannot write stdout: {e}"))
+                .map_err(Refusal::WriteStdout)
         }
 
         fn main() -> std::process::ExitCode {
@@ -681,7 +917,7 @@ fn runner_main(
             }
         }
     };
-    format_tokens(&file)
+    Ok(format_tokens(&file)?)
 }
 
 #[cfg(test)]
@@ -708,6 +944,15 @@ mod tests {
             let e = eval(out, 2, 2).unwrap_err().to_string();
             assert!(e.contains(message), "{out:?}: {e}");
         }
+        assert!(matches!(
+            eval("1 2\n", 2, 2),
+            Err(CliError::Runner(RunnerError::Output(
+                RunnerOutputProblem::RowCount {
+                    printed: 1,
+                    expected: 2
+                }
+            )))
+        ));
         assert_eq!(
             parse_rows("12.5\n", 64, &RowShape::Bench).unwrap(),
             vec![vec![12.5]]

@@ -9,7 +9,7 @@
 //! cannot succeed any more, and storing them could cost more than their text), so invalid JSON anywhere
 //! is still reported as such.
 
-use super::{CliError, SampleProblem};
+use super::{CliError, InputError, InternalError, SampleProblem};
 use serde::de::{self, DeserializeSeed, IgnoredAny, MapAccess, SeqAccess, Visitor};
 use std::fmt;
 
@@ -114,17 +114,13 @@ impl Samples {
         if let Err(e) = parsed {
             // A refusal made while reading is the error itself; serde_json's is about the text.
             return Err(CliError::Input(match reader.refusal.take() {
-                Some(message) => message,
-                None => format!("the input is not valid JSON: {e}"),
+                Some(refusal) => refusal,
+                None => InputError::NotJson(e),
             }));
         }
         match reader.root {
-            Root::NoSamples => Err(CliError::Input(
-                "the input has no field `samples` (expected {\"samples\": [...]})".into(),
-            )),
-            Root::NotArray => Err(CliError::Input(
-                "the input's field `samples` must be an array".into(),
-            )),
+            Root::NoSamples => Err(InputError::NoSamples.into()),
+            Root::NotArray => Err(InputError::SamplesNotArray.into()),
             Root::Array => Ok(reader.samples),
         }
     }
@@ -149,9 +145,10 @@ impl Samples {
     /// numbers.
     pub fn vector(&self, index: usize, name: &str) -> Result<&[f64], CliError> {
         let Some(field) = self.request.iter().position(|&(n, _)| n == name) else {
-            return Err(CliError::Internal(format!(
-                "field `{name}` of the samples was not read"
-            )));
+            return Err(InternalError::FieldNotRead {
+                field: name.to_string(),
+            }
+            .into());
         };
         let len = self.request[field].1;
         let problem = self
@@ -179,7 +176,7 @@ impl Samples {
         let start = index * self.stride + self.offsets[field];
         self.numbers
             .get(start..start + len)
-            .ok_or_else(|| CliError::Internal(format!("sample {index} is not in the input")))
+            .ok_or_else(|| InternalError::SampleNotInInput { sample: index }.into())
     }
 }
 
@@ -197,14 +194,14 @@ struct Reader {
     root: Root,
     /// A sample with a problem has been read: the rest is skipped.
     stopped: bool,
-    refusal: Option<String>,
+    refusal: Option<InputError>,
 }
 
 impl Reader {
-    /// Stops the read with `message` as the command's error.
-    fn refuse<E: de::Error>(&mut self, message: String) -> E {
-        let error = E::custom(&message);
-        self.refusal = Some(message);
+    /// Stops the read with `refusal` as the command's error.
+    fn refuse<E: de::Error>(&mut self, refusal: InputError) -> E {
+        let error = E::custom(&refusal);
+        self.refusal = Some(refusal);
         error
     }
 }
@@ -386,9 +383,11 @@ impl<'de> Visitor<'de> for FieldSeed<'_> {
         while let Some(entry) = seq.next_element::<Entry>()? {
             if count == len {
                 let sample = self.sample;
-                return Err(self.reader.refuse(format!(
-                    "sample {sample}: field `{name}` has more than {len} entries, the model needs {len}"
-                )));
+                return Err(self.reader.refuse(InputError::TooManyEntries {
+                    sample,
+                    field: name,
+                    len,
+                }));
             }
             match entry {
                 Entry::Number(x) if x.is_finite() => self.reader.samples.numbers[start + count] = x,

@@ -35,12 +35,31 @@ pub struct State {
     pub v: Vec<f64>,
 }
 
+/// Too few consistent states found: the model assembles rarely, or not at all, among the
+/// configurations drawn.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("found {found} of the {count} consistent states asked for in {attempts} attempts: `{}` assembles \
+         (loop and coupling constraints met to {CONSISTENT:e}) at {} of the configurations tried \
+         (independent angles drawn in ±π, displacements in ±1 m, and around the states found)",
+    .model.escape_debug(),
+    if *.found == 0 { "none" } else { "too few" })]
+pub struct NoConsistentStates {
+    /// The states found.
+    pub found: usize,
+    /// The states asked for.
+    pub count: usize,
+    /// The configurations tried.
+    pub attempts: usize,
+    /// The model's name.
+    pub model: String,
+}
+
 /// Draws `count` consistent states of `model` (deterministic for a given `seed`).
 pub fn consistent_states(
     model: &Model<f64>,
     count: usize,
     seed: u64,
-) -> Result<Vec<State>, String> {
+) -> Result<Vec<State>, NoConsistentStates> {
     let mut rng = SplitMix64::new(seed);
     let mut ws = Workspace::new(model);
     let mut found: Vec<State> = Vec::with_capacity(count);
@@ -70,14 +89,12 @@ pub fn consistent_states(
         }
     }
     if found.len() < count {
-        return Err(format!(
-            "found {} of the {count} consistent states asked for in {attempts} attempts: `{}` assembles \
-             (loop and coupling constraints met to {CONSISTENT:e}) at {} of the configurations tried \
-             (independent angles drawn in ±π, displacements in ±1 m, and around the states found)",
-            found.len(),
-            model.name.escape_debug(),
-            if found.is_empty() { "none" } else { "too few" },
-        ));
+        return Err(NoConsistentStates {
+            found: found.len(),
+            count,
+            attempts,
+            model: model.name.clone(),
+        });
     }
     Ok(found)
 }
@@ -205,7 +222,9 @@ mod tests {
         let (text, path) = narrow_four_bar_text();
         let text = text.replace("0.09871154946931424 0 0", "0.230131987978223966 0 0");
         let model = model_of(&text, &path);
-        let e = consistent_states(&model, 8, 1).unwrap_err();
+        let error = consistent_states(&model, 8, 1).unwrap_err();
+        assert_eq!((error.found, error.count), (0, 8));
+        let e = error.to_string();
         assert!(
             e.contains("found 0 of the 8") && e.contains("narrow_four_bar"),
             "{e}"

@@ -592,13 +592,12 @@ impl Algorithm {
 
     /// The algorithm with this generated function name (`"aba"`, `"crba_independent"`, …); the error
     /// lists the names there are.
-    pub fn from_name(name: &str) -> Result<Algorithm, String> {
+    pub fn from_name(name: &str) -> Result<Algorithm, UnknownAlgorithm> {
         Algorithm::ALL
             .into_iter()
             .find(|a| a.name() == name)
-            .ok_or_else(|| {
-                let known: Vec<&str> = Algorithm::ALL.iter().map(|a| a.name()).collect();
-                format!("unknown function `{name}` (expected {})", known.join(", "))
+            .ok_or_else(|| UnknownAlgorithm {
+                name: name.to_string(),
             })
     }
 
@@ -678,6 +677,20 @@ impl AlgorithmSpec {
             arguments.join(", ")
         )
     }
+}
+
+/// A function name that no algorithm has (`--only`, `only(…)` in `robot!`); the message lists the names
+/// there are.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("unknown function `{name}` (expected {})", known_names())]
+pub struct UnknownAlgorithm {
+    /// The name given.
+    pub name: String,
+}
+
+fn known_names() -> String {
+    let known: Vec<&str> = Algorithm::ALL.iter().map(|a| a.name()).collect();
+    known.join(", ")
 }
 
 #[cfg(test)]
@@ -825,7 +838,13 @@ mod tests {
             assert_eq!(Algorithm::from_name(a.name()), Ok(a));
             assert_eq!(a.spec().algorithm, a);
         }
-        let e = Algorithm::from_name("abba").unwrap_err();
+        assert_eq!(
+            Algorithm::from_name("abba"),
+            Err(UnknownAlgorithm {
+                name: "abba".into()
+            })
+        );
+        let e = Algorithm::from_name("abba").unwrap_err().to_string();
         assert_eq!(
             e,
             "unknown function `abba` (expected kinematics, aba, rnea, crba, minv, complete, embedding, crba_independent)"

@@ -6,7 +6,7 @@
 //! accelerations) is decided once, in f64, so that every scalar type gets the same model, and a
 //! constant that does not fit the narrower type is an error rather than another model.
 
-use crate::error::{LoadError, Location};
+use crate::error::{LoadError, LoadErrorKind, Location};
 use crate::ir::{Inertial, JointKind, LoopKind, Origin, Robot};
 use embedyn_runtime::constraints::GroupLabel;
 use embedyn_runtime::nalgebra::{Matrix3, Vector3};
@@ -93,16 +93,13 @@ fn build_model_f64(robot: &Robot, options: &ModelOptions) -> Result<Model<f64>, 
         .position(|j| j.kind == JointKind::Floating);
     if options.floating {
         if let Some(j) = has_floating {
-            return Err(LoadError::new(
-                joint_loc(j),
-                "--floating makes the root free, but the file already has a floating joint",
-            ));
+            return Err(LoadError::at(joint_loc(j), LoadErrorKind::AlreadyFloating));
         }
         // Coordinates are matched to joints by name: two joints of one name would be ambiguous.
         if let Some(j) = robot.joints.iter().position(|j| j.name == ROOT_JOINT) {
-            return Err(LoadError::new(
+            return Err(LoadError::at(
                 joint_loc(j),
-                format!("--floating adds the root's joint \"{ROOT_JOINT}\", but the file already has a joint of that name; rename it"),
+                LoadErrorKind::RootJointNameTaken,
             ));
         }
     }
@@ -146,9 +143,9 @@ fn build_model_f64(robot: &Robot, options: &ModelOptions) -> Result<Model<f64>, 
         let pose = parent_pose.compose(&origin_transform(&joint.origin));
         if joint.kind.is_moving() {
             if joint.kind == JointKind::Floating && parent_body.is_some() {
-                return Err(LoadError::new(
+                return Err(LoadError::at(
                     joint_loc(j),
-                    "a floating joint must connect the root (a link fixed to the world) to the rest of the tree",
+                    LoadErrorKind::FloatingNotAtRoot,
                 ));
             }
             bodies.push(Pending {
@@ -178,19 +175,29 @@ fn build_model_f64(robot: &Robot, options: &ModelOptions) -> Result<Model<f64>, 
                     format!("link \"{}\" <inertial>", link.name),
                 );
                 if !is_finite(&i) {
-                    return Err(LoadError::new(at, format!(
-                        "the link's inertia about its body frame overflows f64 (mass {:e} kg, centre of mass {:e} m from the frame, rotational inertia up to {:e} kg·m²): the numbers are too large to combine",
-                        inertial.mass,
-                        pose.act_point(&Vector3::from(inertial.origin.xyz)).norm(),
-                        inertial.inertia.iter().fold(0.0f64, |m, x| m.max(x.abs())),
-                    )));
+                    return Err(LoadError::at(
+                        at,
+                        LoadErrorKind::InertiaOverflow {
+                            mass: inertial.mass,
+                            com_distance: pose
+                                .act_point(&Vector3::from(inertial.origin.xyz))
+                                .norm(),
+                            largest_moment: inertial
+                                .inertia
+                                .iter()
+                                .fold(0.0f64, |m, x| m.max(x.abs())),
+                        },
+                    ));
                 }
                 let merged = bodies[b].inertia + i;
                 if !is_finite(&merged) {
                     let body_link = &robot.links[bodies[b].link].name;
-                    return Err(LoadError::new(at, format!(
-                        "adding this link's inertia to the body it is fixed to (link \"{body_link}\") overflows f64: the numbers are too large to combine"
-                    )));
+                    return Err(LoadError::at(
+                        at,
+                        LoadErrorKind::MergedInertiaOverflow {
+                            body_link: body_link.clone(),
+                        },
+                    ));
                 }
                 bodies[b].inertia = merged;
             }
@@ -227,10 +234,7 @@ fn build_model_f64(robot: &Robot, options: &ModelOptions) -> Result<Model<f64>, 
                 pending.inertia,
             )
             .map_err(|e| {
-                LoadError::new(
-                    joint_location(robot, bodies_joint(&bodies, b)),
-                    e.to_string(),
-                )
+                LoadError::at(joint_location(robot, bodies_joint(&bodies, b)), e.into())
             })?;
         let mut links = pending.links.clone();
         // The body's own link first.
@@ -263,16 +267,16 @@ fn build_model_f64(robot: &Robot, options: &ModelOptions) -> Result<Model<f64>, 
 }
 
 /// A [`ModelError`] of building or converting the model, located at the element it names.
-fn model_build_error(robot: &Robot, e: ModelError, scalar: &str) -> LoadError {
+fn model_build_error(robot: &Robot, e: ModelError, scalar: &'static str) -> LoadError {
     let joint_named = |name: &str| robot.joints.iter().position(|j| j.name == name);
     let joint = match &e {
         ModelError::LoopNeverCloses { group, .. }
         | ModelError::DependentMismatch { group, .. }
         | ModelError::SingularDependentChoice { group, .. } => {
-            return LoadError::new(group_location(robot, group), e.to_string());
+            return LoadError::at(group_location(robot, group), e.into());
         }
         ModelError::EmptyConstraint { constraint } => {
-            return LoadError::new(constraint_location(robot, constraint), e.to_string());
+            return LoadError::at(constraint_location(robot, constraint), e.into());
         }
         ModelError::ConstantDoesNotFit { element, .. } => {
             let location = match element {
@@ -281,10 +285,10 @@ fn model_build_error(robot: &Robot, e: ModelError, scalar: &str) -> LoadError {
                 ModelElement::Constraint(name) => constraint_location(robot, name),
                 ModelElement::Gravity => Location::new(&robot.source, None, "gravity"),
             };
-            return LoadError::new(location, e.to_string());
+            return LoadError::at(location, e.into());
         }
         ModelError::InertiaOverflow { body, .. } => {
-            return LoadError::new(link_location(robot, body), e.to_string());
+            return LoadError::at(link_location(robot, body), e.into());
         }
         ModelError::NoInertiaAboutAxis { joint, .. }
         | ModelError::FloatingInGroup { joint }
@@ -292,20 +296,14 @@ fn model_build_error(robot: &Robot, e: ModelError, scalar: &str) -> LoadError {
         | ModelError::FloatingNotRoot { joint }
         | ModelError::ParentNotYetAdded { joint, .. } => joint_named(joint),
     };
-    let message = match e {
+    let kind = match e {
+        // The runtime's message speaks of bodies; the file's reader knows links and what to change.
         ModelError::NoInertiaAboutAxis { d, .. } => {
-            let precision = if scalar == f64::NAME {
-                String::new()
-            } else {
-                format!(" at the precision of {scalar}")
-            };
-            format!(
-                "the links this joint moves have no inertia about its axis beyond rounding{precision} (D = {d:e}), so its acceleration is undetermined; give the child link an <inertial> or make the joint fixed"
-            )
+            LoadErrorKind::UndeterminedAcceleration { d, scalar }
         }
-        other => other.to_string(),
+        other => other.into(),
     };
-    LoadError::new(joint_location(robot, joint), message)
+    LoadError::at(joint_location(robot, joint), kind)
 }
 
 /// Where link `name` is written.
@@ -359,9 +357,9 @@ fn add_constraints(
         let (pb, ppose) = link_frames[l.predecessor.link];
         let (sb, spose) = link_frames[l.successor.link];
         if pb == sb {
-            return Err(LoadError::new(
+            return Err(LoadError::at(
                 Location::new(path_of, l.line, format!("loop \"{}\"", l.name)),
-                "both frames are on the same rigid body (the links are joined by fixed joints): the loop constrains nothing or can never close",
+                LoadErrorKind::LoopWithinOneBody,
             ));
         }
         let kind = match l.kind {
@@ -401,9 +399,9 @@ fn add_constraints(
             terms.push((b, -1.0));
         }
         if terms.is_empty() {
-            return Err(LoadError::new(
+            return Err(LoadError::at(
                 Location::new(path_of, c.line, format!("coupling \"{}\"", c.name)),
-                "no moving joint lies between the two links: the coupling relates nothing",
+                LoadErrorKind::CouplingRelatesNothing,
             ));
         }
         builder.add_constraint(Constraint {
@@ -417,9 +415,9 @@ fn add_constraints(
         }
         let loc = |line| Location::new(path_of, line, format!("joint \"{}\" <mimic>", joint.name));
         let Some(body) = joint_body[j] else {
-            return Err(LoadError::new(
+            return Err(LoadError::at(
                 loc(joint.line),
-                "a fixed joint cannot mimic another joint",
+                LoadErrorKind::FixedJointMimics,
             ));
         };
         let mut terms = vec![(body, 1.0)];
@@ -431,13 +429,15 @@ fn add_constraints(
                 .position(|d| d.name == m.joint)
                 .expect("checked at parse time");
             let Some(db) = joint_body[driver] else {
-                return Err(LoadError::new(
+                return Err(LoadError::at(
                     loc(m.line),
-                    format!("the driving joint \"{}\" is fixed", m.joint),
+                    LoadErrorKind::FixedDriver {
+                        joint: m.joint.clone(),
+                    },
                 ));
             };
             if db == body {
-                return Err(LoadError::new(loc(m.line), "a joint cannot mimic itself"));
+                return Err(LoadError::at(loc(m.line), LoadErrorKind::MimicSelf));
             }
             terms.push((db, -m.multiplier));
             offset -= m.offset;
@@ -469,5 +469,68 @@ fn joint_location(robot: &Robot, joint: Option<usize>) -> Location {
             )
         }
         None => Location::new(&robot.source, None, format!("joint \"{ROOT_JOINT}\"")),
+    }
+}
+
+#[cfg(test)]
+mod kind_tests {
+    use super::*;
+    use crate::{generate_tokens, load, Algorithm, GenerateOptions, LoadErrorKind};
+    use std::path::PathBuf;
+
+    fn fixture(name: &str) -> PathBuf {
+        PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+            .join("../tests/data")
+            .join(name)
+    }
+
+    fn model_error(name: &str, options: &ModelOptions) -> LoadError {
+        let loaded = load(&fixture(name)).unwrap();
+        build_model::<f64>(&loaded.robot, options).unwrap_err()
+    }
+
+    #[test]
+    fn model_errors_carry_their_kind() {
+        let e = model_error("bad/floating_not_root.urdf", &ModelOptions::default());
+        assert_eq!(e.kind, LoadErrorKind::FloatingNotAtRoot);
+        assert_eq!(e.location.element, "joint \"joint2\"");
+
+        // The runtime's error itself, not its text, and the source of the LoadError.
+        let e = model_error("bad/loop_never_meets.urdf", &ModelOptions::default());
+        match &e.kind {
+            LoadErrorKind::Model(ModelError::LoopNeverCloses { group, gap }) => {
+                assert_eq!(group.constraints, ["loop1"]);
+                assert!(*gap > 1.0, "{gap}");
+            }
+            other => panic!("{other:?}"),
+        }
+        let source = std::error::Error::source(&e).expect("the runtime's error is the source");
+        assert!(source.to_string().contains("never meet"), "{source}");
+
+        let e = model_error("bad/massless_leaf.urdf", &ModelOptions::default());
+        assert!(
+            matches!(
+                e.kind,
+                LoadErrorKind::UndeterminedAcceleration { d, scalar: "f64" } if d == 0.0
+            ),
+            "{e:?}"
+        );
+    }
+
+    #[test]
+    fn generation_errors_carry_their_kind() {
+        let loaded = load(&fixture("unit_slider.urdf")).unwrap();
+        let options =
+            GenerateOptions::default().with_requested(Some(vec![Algorithm::Complete]), &[]);
+        let e = generate_tokens(&loaded, &options).unwrap_err();
+        assert_eq!(
+            e.kind,
+            LoadErrorKind::NeedsConstraints {
+                function: Algorithm::Complete
+            }
+        );
+        assert!(e.to_string().ends_with(
+            "`complete` exists only for a model with loops, couplings or mimic joints; this one is a tree"
+        ));
     }
 }

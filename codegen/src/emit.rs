@@ -146,10 +146,20 @@ pub const TOKEN_BYTES_PER_OPERATION: f64 = 3600.0;
 pub enum EmitError {
     /// An output of `function` folded, at generation time, to a non-finite constant.
     #[error("`{function}`: an output folded to the non-finite constant {value}")]
-    NonFiniteOutput { function: String, value: f64 },
+    NonFiniteOutput {
+        /// The generated function.
+        function: String,
+        /// The constant.
+        value: f64,
+    },
     /// An intermediate value of `function` folded to a non-finite constant.
     #[error("`{function}`: a constant folded to {value}")]
-    NonFiniteConstant { function: String, value: f64 },
+    NonFiniteConstant {
+        /// The generated function.
+        function: String,
+        /// The constant.
+        value: f64,
+    },
 }
 
 /// Emits `pub fn name(args…, outputs…)` for one scalar module; `helpers` is the path of the helper module.

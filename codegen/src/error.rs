@@ -1,7 +1,15 @@
 //! Errors and warnings of model loading, each pointing at the file, the element and the line.
+//!
+//! Every problem is a variant with its data ([`LoadErrorKind`], [`WarningKind`]); the message is made
+//! from the data by `thiserror`, so a caller can match on what went wrong and read the names and numbers
+//! instead of parsing text.
 
+use crate::algorithm::Algorithm;
+use crate::bounded_read::ReadError;
+use embedyn_runtime::{DynamicsError, ModelError};
 use std::fmt;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 /// Where in a model file something is: the file, the element (`joint "knee"`) and its line.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -58,22 +66,142 @@ impl fmt::Display for Location {
 
 /// A model that cannot be loaded, or code that cannot be generated or written from it. The message names
 /// the file, the element and, where possible, the line.
-#[derive(Clone, Debug, PartialEq, Eq)]
+///
+/// The URDF reader does not stop at the first problem of an element (a missing attribute, a number that
+/// is not one, an unknown joint type, …): it reads on and reports every such problem of the file at once,
+/// so that a file with five mistakes takes one round of fixing, not five. The first problem is this
+/// error's `location` and `kind`, the others are in [`also`](Self::also). They stay inside the one
+/// `LoadError` (rather than a list type of their own) so that `Result<_, LoadError>` remains the API of
+/// every function that loads or generates, and a caller that looks only at the first problem keeps
+/// working unchanged.
+#[derive(Clone, Debug, PartialEq)]
 pub struct LoadError {
-    /// Where in the model file.
-    pub location: Location,
+    /// Where in the model file. Boxed so that a `Result<_, LoadError>` stays small (clippy's
+    /// `result_large_err`) while the kind holds the runtime's errors inline, where they can be matched.
+    pub location: Box<Location>,
     /// What is wrong.
     pub kind: LoadErrorKind,
+    /// Further problems found in the same pass over the file, in the order they were found (each with an
+    /// empty `also`). Empty for a problem that ends the reading (malformed XML, elements nested too
+    /// deep) and for problems found after reading (building the model, generating code).
+    pub also: Vec<LoadError>,
+}
+
+/// The most problems [`LoadError`]'s message lists one by one; the rest are counted.
+pub const MAX_LISTED_ERRORS: usize = 20;
+
+/// An error of another library inside a [`LoadErrorKind`], which is `Clone` and `PartialEq` (tests
+/// compare kinds) while I/O and parser errors are neither: shared rather than copied, and equal when their
+/// messages are.
+#[derive(Debug)]
+pub struct Shared<E>(pub Arc<E>);
+
+impl<E> Shared<E> {
+    /// The error held.
+    pub fn get(&self) -> &E {
+        &self.0
+    }
+}
+
+impl<E> Clone for Shared<E> {
+    fn clone(&self) -> Self {
+        Shared(Arc::clone(&self.0))
+    }
+}
+
+impl<E: fmt::Display> PartialEq for Shared<E> {
+    fn eq(&self, other: &Self) -> bool {
+        Arc::ptr_eq(&self.0, &other.0) || self.0.to_string() == other.0.to_string()
+    }
+}
+
+impl<E> From<E> for Shared<E> {
+    fn from(error: E) -> Self {
+        Shared(Arc::new(error))
+    }
+}
+
+impl<E: fmt::Display> fmt::Display for Shared<E> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        self.0.fmt(f)
+    }
+}
+
+impl<E: std::error::Error> std::error::Error for Shared<E> {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        self.0.source()
+    }
+}
+
+/// Which element's axis a [`LoadErrorKind::ZeroAxis`] is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum AxisOf {
+    /// A `<joint>`'s.
+    Joint,
+    /// A URDF+ `<loop>`'s.
+    Loop,
+}
+
+impl fmt::Display for AxisOf {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            AxisOf::Joint => "joint",
+            AxisOf::Loop => "loop",
+        })
+    }
+}
+
+/// The kinds of constraint a name can belong to, as [`LoadErrorKind::ConstraintNameTaken`] names them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ConstraintElement {
+    /// A URDF+ `<loop>`.
+    Loop,
+    /// A URDF+ `<coupling>`.
+    Coupling,
+    /// A joint's `<mimic>` (the constraint takes the joint's name).
+    Mimic,
+}
+
+impl fmt::Display for ConstraintElement {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            ConstraintElement::Loop => "loop",
+            ConstraintElement::Coupling => "coupling",
+            ConstraintElement::Mimic => "the <mimic> of joint",
+        })
+    }
+}
+
+/// How a traced algorithm disagrees with its descriptor ([`LoadErrorKind::DescriptorMismatch`]).
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum DescriptorMismatch {
+    /// It returns or writes other outputs than described.
+    #[error("the outputs are not those described")]
+    Outputs,
+    /// An output has another number of values than its described shape.
+    #[error("`{output}` has {values} values, described {rows}×{cols}")]
+    OutputLength {
+        /// The output's name.
+        output: &'static str,
+        /// The values traced.
+        values: usize,
+        /// The described rows.
+        rows: usize,
+        /// The described columns.
+        cols: usize,
+    },
 }
 
 /// What went wrong, with its data; displayed as the message after the location.
-#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum LoadErrorKind {
+    // Reading the file.
     /// The model file cannot be read.
-    #[error("cannot read the model file: {problem}")]
+    #[error("cannot read the model file: {error}")]
     Unreadable {
-        /// What is wrong with it.
-        problem: String,
+        /// Why.
+        #[source]
+        error: ReadError,
     },
     /// Elements nested deeper than `limit`, refused before parsing.
     #[error("elements are nested more than {limit} deep here; a URDF needs a handful of levels, so this is not a model file (refused before parsing, which would exhaust the stack)")]
@@ -82,11 +210,17 @@ pub enum LoadErrorKind {
         limit: usize,
     },
     /// The text is not well-formed XML.
-    #[error("malformed XML: {problem}")]
+    #[error("malformed XML: {error}")]
     MalformedXml {
-        /// What is wrong with it.
-        problem: String,
+        /// The XML parser's error.
+        #[source]
+        error: roxmltree::Error,
     },
+    /// The document's root element is not `<robot>`.
+    #[error("the root element must be <robot>")]
+    RootNotRobot,
+
+    // One element.
     /// A required attribute is absent.
     #[error("missing attribute `{attribute}`")]
     MissingAttribute {
@@ -115,11 +249,106 @@ pub enum LoadErrorKind {
         /// Its text.
         text: String,
     },
+    /// An attribute that must be three numbers (`xyz`, `rpy`) has another count of words.
+    #[error("`{attribute}=\"{text}\"` must be three numbers")]
+    NotThreeNumbers {
+        /// The attribute.
+        attribute: String,
+        /// Its text.
+        text: String,
+    },
+    /// One of an attribute's three numbers is not a number.
+    #[error("`{attribute}=\"{text}\"`: \"{entry}\" is not a number")]
+    EntryNotANumber {
+        /// The attribute.
+        attribute: String,
+        /// Its text.
+        text: String,
+        /// The word that is not a number.
+        entry: String,
+    },
+    /// One of an attribute's three numbers is infinite or NaN.
+    #[error("`{attribute}=\"{text}\"` contains a number that is not finite")]
+    EntryNotFinite {
+        /// The attribute.
+        attribute: String,
+        /// Its text.
+        text: String,
+    },
+    /// An attribute that must be `true` or `false` is neither.
+    #[error("attribute `{attribute}` must be \"true\" or \"false\", not \"{text}\"")]
+    NotABoolean {
+        /// The attribute.
+        attribute: String,
+        /// Its text.
+        text: String,
+    },
+    /// A `<mass>` below zero.
+    #[error("negative mass {mass}")]
+    NegativeMass {
+        /// The mass given.
+        mass: f64,
+    },
+    /// A `<joint type="planar">`, which embedyn does not support.
+    #[error("joint type \"planar\" is not supported (model it as two prismatic joints and a revolute joint)")]
+    PlanarJoint,
+    /// A joint type URDF does not have.
+    #[error("unknown joint type \"{joint_type}\" (expected revolute, continuous, prismatic, fixed or floating)")]
+    UnknownJointType {
+        /// The type given.
+        joint_type: String,
+    },
+    /// A `<loop type="planar">`, which embedyn does not support.
+    #[error("loop type \"planar\" is not supported")]
+    PlanarLoop,
+    /// A loop type URDF+ does not have.
+    #[error("unknown loop type \"{loop_type}\" (expected revolute, continuous, prismatic, spherical or fixed)")]
+    UnknownLoopType {
+        /// The type given.
+        loop_type: String,
+    },
+    /// A `<parent>`, `<child>`, `<predecessor>` or `<successor>` names a link the file does not define.
+    #[error("names link \"{link}\", which does not exist")]
+    UnknownLink {
+        /// The name given.
+        link: String,
+    },
+    /// A joint or loop that moves along or about its axis has a zero axis.
+    #[error("the {of} axis is zero")]
+    ZeroAxis {
+        /// Whose axis.
+        of: AxisOf,
+    },
+
+    // The file as a whole.
     /// A second `<link>` or `<joint>` (`what`) of a name already used.
     #[error("a {what} of this name is already defined")]
     DuplicateName {
         /// `link` or `joint`.
         what: &'static str,
+    },
+    /// A link is the child of a second joint.
+    #[error("link \"{link}\" is already the child of joint \"{joint}\"; a link has at most one parent (close loops with URDF+ <loop>)")]
+    TwoParents {
+        /// The link.
+        link: String,
+        /// The joint it is already the child of.
+        joint: String,
+    },
+    /// A joint whose parent is its child.
+    #[error("parent and child are the same link")]
+    SelfParent,
+    /// A loop or coupling between a link and itself.
+    #[error("predecessor and successor are the same link")]
+    SameEnds,
+    /// A `<robot>` without links.
+    #[error("the model has no <link>")]
+    NoLinks,
+    /// More than one link is no joint's child.
+    #[error("the model has {} root links ({}); a URDF tree has exactly one", .roots.len(), .roots.join(", "))]
+    SeveralRoots {
+        /// The root links, in file order.
+        roots: Vec<String>,
     },
     /// Every link is some joint's child.
     #[error("the joints form a cycle: every link is some joint's child, so there is no root link")]
@@ -132,32 +361,199 @@ pub enum LoadErrorKind {
         /// The root link.
         root: String,
     },
-    /// Any other problem of the model (an unknown link, a cycle, a duplicate name, …), described.
+    /// A `<mimic>` names a joint the file does not define.
+    #[error("<mimic> names joint \"{joint}\", which does not exist")]
+    UnknownMimicTarget {
+        /// The name given.
+        joint: String,
+    },
+    /// A loop or coupling named like another constraint.
+    #[error("{other} \"{name}\"{} already has this name; loops, couplings and mimic joints are constraints that messages and `info` name, so each needs its own name", at_line(*.other_line))]
+    ConstraintNameTaken {
+        /// The name.
+        name: String,
+        /// What the constraint of that name is.
+        other: ConstraintElement,
+        /// Where it is written.
+        other_line: Option<u32>,
+    },
+
+    // Building the model.
+    /// `--floating` for a file that has a floating joint already.
+    #[error("--floating makes the root free, but the file already has a floating joint")]
+    AlreadyFloating,
+    /// `--floating` for a file that has a joint named like the one it adds.
+    #[error("--floating adds the root's joint \"{}\", but the file already has a joint of that name; rename it", crate::assemble::ROOT_JOINT)]
+    RootJointNameTaken,
+    /// A floating joint below the root.
+    #[error("a floating joint must connect the root (a link fixed to the world) to the rest of the tree")]
+    FloatingNotAtRoot,
+    /// A link's inertia about its body frame is not finite in f64.
+    #[error("the link's inertia about its body frame overflows f64 (mass {mass:e} kg, centre of mass {com_distance:e} m from the frame, rotational inertia up to {largest_moment:e} kg·m²): the numbers are too large to combine")]
+    InertiaOverflow {
+        /// The link's mass (kg).
+        mass: f64,
+        /// Its centre of mass's distance from the body frame (m).
+        com_distance: f64,
+        /// The largest entry of its rotational inertia (kg·m²).
+        largest_moment: f64,
+    },
+    /// Adding a link's inertia to the body it is fixed to overflows f64.
+    #[error("adding this link's inertia to the body it is fixed to (link \"{body_link}\") overflows f64: the numbers are too large to combine")]
+    MergedInertiaOverflow {
+        /// The body's own link.
+        body_link: String,
+    },
+    /// Both frames of a loop are on one rigid body.
+    #[error("both frames are on the same rigid body (the links are joined by fixed joints): the loop constrains nothing or can never close")]
+    LoopWithinOneBody,
+    /// No moving joint lies between a coupling's links.
+    #[error("no moving joint lies between the two links: the coupling relates nothing")]
+    CouplingRelatesNothing,
+    /// A `<mimic>` on a fixed joint that is still a constraint (on a fixed joint it is ignored with a warning).
+    #[error("a fixed joint cannot mimic another joint")]
+    FixedJointMimics,
+    /// A `<mimic>` whose driving joint is fixed.
+    #[error("the driving joint \"{joint}\" is fixed")]
+    FixedDriver {
+        /// The driving joint.
+        joint: String,
+    },
+    /// A joint that mimics itself (or a joint on its own body).
+    #[error("a joint cannot mimic itself")]
+    MimicSelf,
+    /// The subtree a joint moves has no inertia about its axis, in the scalar type `scalar`.
+    #[error("the links this joint moves have no inertia about its axis beyond rounding{} (D = {d:e}), so its acceleration is undetermined; give the child link an <inertial> or make the joint fixed", precision_of(.scalar))]
+    UndeterminedAcceleration {
+        /// The articulated inertia about the axis.
+        d: f64,
+        /// The scalar type (`"f64"`, `"f32"`).
+        scalar: &'static str,
+    },
+    /// The runtime refused the model (a loop that never closes, a constant that does not fit, …).
     #[error("{0}")]
-    Model(String),
+    Model(#[from] ModelError),
     /// A constant of the model does not fit f32 when f32 functions are generated.
     #[error("{inner} (generated f32 code cannot hold it; generate the f64 functions only)")]
     NotForF32 {
         /// What does not fit.
         inner: Box<LoadErrorKind>,
     },
-    /// Code cannot be generated from the model (too large to compile, a constant that is not a number).
+
+    // Generating code.
+    /// A function that exists only for models with constraints, asked for a tree.
+    #[error("`{}` exists only for a model with loops, couplings or mimic joints; this one is a tree", .function.name())]
+    NeedsConstraints {
+        /// The function.
+        function: Algorithm,
+    },
+    /// A constant folded from the model's numbers is beyond f32's range.
+    #[error("`{}`: the constant {constant:e}, folded from the model's numbers, is beyond the range of the scalar type f32 (largest {:e}); generated f32 code cannot hold it, generate the f64 functions only", .function.name(), f32::MAX)]
+    ConstantBeyondF32 {
+        /// The function.
+        function: Algorithm,
+        /// The constant.
+        constant: f64,
+    },
+    /// The generated code would need more memory to compile than allowed.
     #[error("{0}")]
-    Generate(String),
-    /// A generated file cannot be written.
+    TooLargeToCompile(Box<crate::size::TooLargeToCompile>),
+    /// Tracing an algorithm on the model failed.
+    #[error("tracing {}: {error}", .function.name())]
+    Trace {
+        /// The algorithm.
+        function: Algorithm,
+        /// Its error.
+        #[source]
+        error: DynamicsError,
+    },
+    /// A traced algorithm disagrees with its descriptor (a bug of embedyn).
+    #[error("tracing {}: {problem} (the algorithm's descriptor and its implementation disagree; a bug)", .function.name())]
+    DescriptorMismatch {
+        /// The algorithm.
+        function: Algorithm,
+        /// How.
+        problem: DescriptorMismatch,
+    },
+    /// A value the generated code would write as a literal is not a number.
     #[error("{0}")]
-    Write(String),
+    Emit(#[from] crate::emit::EmitError),
+    /// Generated code is not Rust tokens (a bug of embedyn).
+    #[error("generated code does not tokenize: {error}")]
+    Tokenize {
+        /// The lexer's error.
+        #[source]
+        error: Shared<syn::Error>,
+    },
+    /// Generated code does not parse as a Rust file (a bug of embedyn).
+    #[error("{0}")]
+    Unparsable(#[from] crate::generate::UnparsableCode),
+    /// A generated `Cargo.toml` cannot be written as TOML.
+    #[cfg(feature = "standalone")]
+    #[error("{0}")]
+    Manifest(#[from] crate::standalone::ManifestError),
+    /// A model path that cannot be passed to cargo's build-script protocol.
+    #[error("a model path with a line break cannot be given to cargo (cargo:rerun-if-changed)")]
+    PathWithLineBreak,
+
+    // Writing files.
+    /// A generated file cannot be written to `path`.
+    #[error("cannot write {}: {error}", .path.display())]
+    CannotWriteTo {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        #[source]
+        error: Shared<std::io::Error>,
+    },
+    /// A file or folder cannot be written (the location names it).
+    #[error("cannot write: {error}")]
+    CannotWrite {
+        /// Why.
+        #[source]
+        error: Shared<std::io::Error>,
+    },
+}
+
+/// ` at line 7`, or nothing when the line is unknown.
+fn at_line(line: Option<u32>) -> String {
+    line.map_or(String::new(), |l| format!(" at line {l}"))
+}
+
+/// ` at the precision of f32`, or nothing for f64 (where rounding is the reader's assumption).
+fn precision_of(scalar: &str) -> String {
+    if scalar == <f64 as embedyn_runtime::Real>::NAME {
+        String::new()
+    } else {
+        format!(" at the precision of {scalar}")
+    }
 }
 
 impl LoadError {
-    /// A problem of the model, described by `message`.
-    pub fn new(location: Location, message: impl Into<String>) -> Self {
-        LoadError::at(location, LoadErrorKind::Model(message.into()))
-    }
-
     /// An error at `location` of `kind`.
     pub fn at(location: Location, kind: LoadErrorKind) -> Self {
-        LoadError { location, kind }
+        LoadError {
+            location: Box::new(location),
+            kind,
+            also: Vec::new(),
+        }
+    }
+
+    /// This error's first problem and those in [`also`](Self::also), in the order found.
+    pub fn problems(&self) -> impl Iterator<Item = &LoadError> {
+        std::iter::once(self).chain(&self.also)
+    }
+
+    /// The errors of one pass as one `LoadError`: the first, holding the others; `None` when there are
+    /// none.
+    pub(crate) fn collected(errors: Vec<LoadError>) -> Option<LoadError> {
+        let mut errors = errors.into_iter().flat_map(|mut e| {
+            let also = std::mem::take(&mut e.also);
+            std::iter::once(e).chain(also)
+        });
+        let mut first = errors.next()?;
+        first.also = errors.collect();
+        Some(first)
     }
 }
 
@@ -168,29 +564,99 @@ impl fmt::Display for LoadError {
             "{}: {}",
             self.location,
             Printable(&self.kind.to_string())
-        )
+        )?;
+        // The first line is the message a single problem has always had; each further problem is a line
+        // of its own, in the same form, so that editors and `grep` find every `file:line:`.
+        let listed = self.also.len().min(MAX_LISTED_ERRORS - 1);
+        for e in &self.also[..listed] {
+            write!(f, "\n{}: {}", e.location, Printable(&e.kind.to_string()))?;
+        }
+        if self.also.len() > listed {
+            write!(f, "\nand {} more errors", self.also.len() - listed)?;
+        }
+        Ok(())
     }
 }
 
-impl std::error::Error for LoadError {}
+impl std::error::Error for LoadError {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        std::error::Error::source(&self.kind)
+    }
+}
 
 /// Unusual but valid data (a massless body with rotational inertia, an inertia violating the triangle
 /// inequality): the model loads and the warning is reported.
-#[derive(Clone, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Warning {
-    /// Where in the model file.
+    /// Where in the model file (the first element, when the same warning is folded for several).
     pub location: Location,
     /// What is unusual.
-    pub message: String,
+    pub kind: WarningKind,
+    /// The other elements with the same warning (talos_reduced's twelve `<mimic>` leftovers on fixed
+    /// joints): one warning names them all, since a screen of identical lines hides what differs.
+    pub same_for: Vec<String>,
+}
+
+/// What is unusual, with its data; displayed as the warning's message after the location.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum WarningKind {
+    /// An inertia tensor with a negative eigenvalue (beyond rounding).
+    #[error("the inertia tensor is not positive semi-definite (ixx={ixx}, iyy={iyy}, izz={izz}, ixy={ixy}, ixz={ixz}, iyz={iyz}; smallest eigenvalue {smallest_eigenvalue:.3e}): no rigid body has it; loaded as given")]
+    InertiaNotPositive {
+        /// `ixx` as given.
+        ixx: f64,
+        /// `iyy` as given.
+        iyy: f64,
+        /// `izz` as given.
+        izz: f64,
+        /// `ixy` as given.
+        ixy: f64,
+        /// `ixz` as given.
+        ixz: f64,
+        /// `iyz` as given.
+        iyz: f64,
+        /// The tensor's smallest eigenvalue.
+        smallest_eigenvalue: f64,
+    },
+    /// Principal moments that violate the triangle inequality.
+    #[error("the principal moments of inertia violate the triangle inequality (no rigid body has them); loaded as given")]
+    TriangleInequality,
+    /// Zero mass with rotational inertia.
+    #[error("zero mass with a non-zero rotational inertia (a massless rotor); loaded as given")]
+    MasslessRotor,
+    /// A `<mimic>` on a fixed joint, ignored.
+    #[error("<mimic> on a fixed joint has nothing to drive; ignored")]
+    MimicOnFixedJoint,
+    /// Joint damping or friction, which the dynamics does not model.
+    #[error("<dynamics damping/friction> of {} joint(s) ({}) ignored: embedyn computes the dynamics of ideal joints (as Pinocchio's algorithms do); add the losses to tau", .joints.len(), listed(.joints.iter().map(|j| format!("\"{j}\""))))]
+    JointDynamicsIgnored {
+        /// The joints with non-zero damping or friction, in file order.
+        joints: Vec<String>,
+    },
+    /// A motor's armature, not supported yet.
+    #[error("armature (a motor's reflected rotor inertia) is not supported yet and is ignored: the dynamics computed are those without it")]
+    ArmatureIgnored,
+}
+
+/// The most names a warning lists one by one; the rest are counted.
+const LISTED_NAMES: usize = 5;
+
+/// `a, b, c, d, e and 3 more`.
+fn listed(names: impl ExactSizeIterator<Item = String>) -> String {
+    let count = names.len();
+    let mut list = names.take(LISTED_NAMES).collect::<Vec<_>>().join(", ");
+    if count > LISTED_NAMES {
+        list += &format!(" and {} more", count - LISTED_NAMES);
+    }
+    list
 }
 
 impl fmt::Display for Warning {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(
-            f,
-            "warning: {}: {}",
-            self.location,
-            Printable(&self.message)
-        )
+        let mut message = self.kind.to_string();
+        if !self.same_for.is_empty() {
+            message += &format!(" (the same for {})", listed(self.same_for.iter().cloned()));
+        }
+        write!(f, "warning: {}: {}", self.location, Printable(&message))
     }
 }

@@ -7,6 +7,7 @@
 pub use crate::algorithm::Algorithm;
 use crate::algorithm::{Dims, Shape, WhenGenerated};
 use crate::emit::{function, Arg, Code, Emitted, Output};
+use crate::error::{DescriptorMismatch, Shared};
 use crate::names::{code_span, shown};
 use crate::size;
 use crate::trace::{input, record, snap, Sym};
@@ -107,11 +108,6 @@ fn snapped(model: &Model<f64>) -> Model<f64> {
     m
 }
 
-/// Code that cannot be generated, for the reason `message`.
-fn gen_error(loaded: &Loaded, message: impl Into<String>) -> LoadError {
-    located_at_robot(loaded, LoadErrorKind::Generate(message.into()))
-}
-
 /// An error about the whole robot, at its source file.
 fn located_at_robot(loaded: &Loaded, kind: LoadErrorKind) -> LoadError {
     LoadError::at(
@@ -140,13 +136,11 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
     let model64 = loaded.model::<f64>(&options.model)?;
     if options.f32 {
         // The f32 functions fold the same constants as f32 literals: each must fit f32.
-        crate::assemble::convert_model::<f32>(&loaded.robot, &model64).map_err(|e| {
-            LoadError::at(
-                e.location,
-                LoadErrorKind::NotForF32 {
-                    inner: Box::new(e.kind),
-                },
-            )
+        crate::assemble::convert_model::<f32>(&loaded.robot, &model64).map_err(|e| LoadError {
+            kind: LoadErrorKind::NotForF32 {
+                inner: Box::new(e.kind),
+            },
+            ..e
         })?;
     }
     if let Some(a) = options
@@ -154,12 +148,9 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
         .iter()
         .find(|a| a.needs_constraints() && !model64.has_constraints())
     {
-        return Err(gen_error(
+        return Err(located_at_robot(
             loaded,
-            format!(
-                "`{}` exists only for a model with loops, couplings or mimic joints; this one is a tree",
-                a.name()
-            ),
+            LoadErrorKind::NeedsConstraints { function: *a },
         ));
     }
     let model: Model<Sym> = snapped(&model64).cast();
@@ -178,14 +169,12 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
             let function = generate_algorithm(loaded, &model, algo, &options.helpers)?;
             // Constants are folded in f64; the f32 module writes them as f32 literals.
             if options.f32 && function.largest_constant > f64::from(f32::MAX) {
-                return Err(gen_error(
+                return Err(located_at_robot(
                     loaded,
-                    format!(
-                        "`{}`: the constant {:e}, folded from the model's numbers, is beyond the range of the scalar type f32 (largest {:e}); generated f32 code cannot hold it, generate the f64 functions only",
-                        algo.name(),
-                        function.largest_constant,
-                        f32::MAX
-                    ),
+                    LoadErrorKind::ConstantBeyondF32 {
+                        function: algo,
+                        constant: function.largest_constant,
+                    },
                 ));
             }
             sizes[k] = size::FunctionSize {
@@ -258,7 +247,7 @@ fn check_size_before_tracing(
     loaded: &Loaded,
     model: &Model<f64>,
     algorithms: &[Algorithm],
-    scalars: &[&str],
+    scalars: &[&'static str],
     options: &GenerateOptions,
 ) -> Result<Vec<size::FunctionSize>, LoadError> {
     let predicted: Vec<size::FunctionSize> = algorithms
@@ -314,9 +303,9 @@ pub fn generate_tokens(
         .into_iter()
         .map(|f| match f.code {
             Code::Tokens(t) => Ok(t),
-            Code::Text(text) => text
-                .parse::<TokenStream>()
-                .map_err(|e| gen_error(loaded, format!("generated code does not tokenize: {e}"))),
+            // Lexed by syn, whose error (unlike proc_macro2's) may cross threads with the LoadError.
+            Code::Text(text) => syn::parse_str::<TokenStream>(&text)
+                .map_err(|e| located_at_robot(loaded, LoadErrorKind::Tokenize { error: e.into() })),
         })
         .collect::<Result<Vec<_>, _>>()?;
     let modules = generated
@@ -335,7 +324,7 @@ pub fn generate_tokens(
 /// (pretty-printing millions of tokens would cost more time and memory than generating them).
 pub fn generate_source(loaded: &Loaded, options: &GenerateOptions) -> Result<String, LoadError> {
     let generated = generate_items(loaded, options)?;
-    let fail = |e: String| gen_error(loaded, e);
+    let fail = |e: UnparsableCode| located_at_robot(loaded, e.into());
     let mut text = format_tokens(&generated.header).map_err(fail)?;
     // Each function formatted on its own inside a module, so that it is indented (and its lines
     // broken) exactly as inside the scalar module.
@@ -438,8 +427,14 @@ fn generate_algorithm(
             None => value,
         }
     };
-    let fail = |e: embedyn_runtime::DynamicsError| {
-        gen_error(loaded, format!("tracing {}: {e}", algo.name()))
+    let fail = |error: embedyn_runtime::DynamicsError| {
+        located_at_robot(
+            loaded,
+            LoadErrorKind::Trace {
+                function: algo,
+                error,
+            },
+        )
     };
     let (traced, tape) = record(|| {
         let mut ws = Workspace::new(model);
@@ -459,16 +454,19 @@ fn generate_algorithm(
         model.bodies.iter().map(|b| b.name.as_str()),
     );
     // The descriptor and the traced algorithm must agree on what the function returns and writes.
-    let mismatch = |what: String| {
-        gen_error(
+    let mismatch = |problem: DescriptorMismatch| {
+        located_at_robot(
             loaded,
-            format!("tracing {}: {what} (the algorithm's descriptor and its implementation disagree; a bug)", algo.name()),
+            LoadErrorKind::DescriptorMismatch {
+                function: algo,
+                problem,
+            },
         )
     };
     if traced.returned.is_some() != spec.returns_value(constrained)
         || traced.outputs.len() != spec.outputs.len()
     {
-        return Err(mismatch("the outputs are not those described".into()));
+        return Err(mismatch(DescriptorMismatch::Outputs));
     }
     let mut outputs = Vec::with_capacity(spec.outputs.len() + 1);
     for (o, values) in spec.outputs.iter().zip(traced.outputs) {
@@ -477,11 +475,12 @@ fn generate_algorithm(
             Shape::Matrix(rows, cols) => (rows.len(&dims), cols.len(&dims)),
         };
         if values.len() != rows * cols {
-            return Err(mismatch(format!(
-                "`{}` has {} values, described {rows}×{cols}",
-                o.name,
-                values.len()
-            )));
+            return Err(mismatch(DescriptorMismatch::OutputLength {
+                output: o.name,
+                values: values.len(),
+                rows,
+                cols,
+            }));
         }
         outputs.push(match o.shape {
             Shape::Vector(_) => Output::Vector {
@@ -515,14 +514,14 @@ fn generate_algorithm(
         helpers,
         &owners,
     )
-    .map_err(|e| gen_error(loaded, e.to_string()))?;
+    .map_err(|e| located_at_robot(loaded, e.into()))?;
     if let Some(wrapper) = spec.wrapper {
         let wrapper = wrapper();
         emitted.code = match emitted.code {
             Code::Tokens(t) => Code::Tokens(quote! { #t #wrapper }),
             Code::Text(text) => {
-                let formatted =
-                    format_tokens(&quote!(mod m { #wrapper })).map_err(|e| gen_error(loaded, e))?;
+                let formatted = format_tokens(&quote!(mod m { #wrapper }))
+                    .map_err(|e| located_at_robot(loaded, e.into()))?;
                 Code::Text(text + module_body(&formatted))
             }
         };
@@ -530,10 +529,14 @@ fn generate_algorithm(
     Ok(emitted)
 }
 
+/// Generated items that are not a Rust file (a bug of the generator): `syn`'s error.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error("generated code does not parse: {0}")]
+pub struct UnparsableCode(#[source] pub Shared<syn::Error>);
+
 /// Formats generated items as a source file with `prettyplease`.
-pub fn format_tokens(tokens: &TokenStream) -> Result<String, String> {
-    let file: syn::File =
-        syn::parse2(tokens.clone()).map_err(|e| format!("generated code does not parse: {e}"))?;
+pub fn format_tokens(tokens: &TokenStream) -> Result<String, UnparsableCode> {
+    let file: syn::File = syn::parse2(tokens.clone()).map_err(|e| UnparsableCode(e.into()))?;
     Ok(prettyplease::unparse(&file))
 }
 
@@ -555,9 +558,9 @@ pub fn generate_file(
     // directive of its own.
     let shown_path = model_path.display().to_string();
     if shown_path.contains(['\n', '\r']) {
-        return Err(LoadError::new(
+        return Err(LoadError::at(
             Location::new(model_path, None, ""),
-            "a model path with a line break cannot be given to cargo (cargo:rerun-if-changed)",
+            LoadErrorKind::PathWithLineBreak,
         ));
     }
     println!("cargo:rerun-if-changed={shown_path}");
@@ -566,7 +569,10 @@ pub fn generate_file(
     std::fs::write(out, text).map_err(|e| {
         located_at_robot(
             &loaded,
-            LoadErrorKind::Write(format!("cannot write {}: {e}", out.display())),
+            LoadErrorKind::CannotWriteTo {
+                path: out.to_path_buf(),
+                error: e.into(),
+            },
         )
     })
 }

@@ -31,13 +31,19 @@ mod urdf;
 mod value_names;
 mod xml_text;
 
+pub use algorithm::UnknownAlgorithm;
 pub use assemble::{build_model, inertial_about_link, ModelOptions, ROOT_JOINT};
-pub use error::{LoadError, LoadErrorKind, Location, Warning};
+pub use bounded_read::ReadError;
+pub use emit::EmitError;
+pub use error::{
+    AxisOf, ConstraintElement, DescriptorMismatch, LoadError, LoadErrorKind, Location, Shared,
+    Warning, WarningKind, MAX_LISTED_ERRORS,
+};
 pub use generate::{
     format_tokens, generate_file, generate_source, generate_tokens, generation_model, Algorithm,
-    GenerateOptions, GENERATOR_VERSION,
+    GenerateOptions, UnparsableCode, GENERATOR_VERSION,
 };
-pub use size::DEFAULT_COMPILE_MEMORY_MB;
+pub use size::{FunctionSize, TooLargeToCompile, DEFAULT_COMPILE_MEMORY_MB};
 pub use urdf::{load_urdf, parse_urdf, Loaded};
 
 use embedyn_runtime::{Model, Real};

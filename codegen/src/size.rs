@@ -42,12 +42,15 @@ const PREDICTED_BYTES_PER_OPERATION: f64 = 2600.0;
 const SOURCE_BYTES_PER_OPERATION: f64 = 21.0;
 
 /// One function's size: exact once traced, else predicted from the model.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FunctionSize {
+    /// The function.
     pub algorithm: Algorithm,
+    /// Its operations.
     pub operations: usize,
     /// rustc's estimated memory for the function in one scalar module, bytes.
     pub compile_bytes: f64,
+    /// Whether it was traced (else predicted).
     pub traced: bool,
 }
 
@@ -94,7 +97,7 @@ pub fn check(
     loaded: &Loaded,
     decisive: &[FunctionSize],
     all: &[FunctionSize],
-    scalars: &[&str],
+    scalars: &[&'static str],
     limit_mb: Option<u64>,
     slack: f64,
 ) -> Result<(), LoadError> {
@@ -111,7 +114,12 @@ pub fn check(
             None,
             format!("robot \"{}\"", loaded.robot.name),
         ),
-        LoadErrorKind::Generate(refusal(all, scalars, memory, limit)),
+        LoadErrorKind::TooLargeToCompile(Box::new(TooLargeToCompile {
+            functions: all.to_vec(),
+            scalars: scalars.to_vec(),
+            memory_mb: memory,
+            limit_mb: limit,
+        })),
     ))
 }
 
@@ -135,6 +143,21 @@ fn memory_text(mb: f64) -> String {
     } else {
         format!("{:.1} GB", mb / 1024.0)
     }
+}
+
+/// Generated code refused as too large to compile within the memory limit: the sizes that decided it
+/// and what shrinks it, as the message says.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error("{}", refusal(.functions, .scalars, *.memory_mb, *.limit_mb))]
+pub struct TooLargeToCompile {
+    /// Every function asked for, traced or predicted.
+    pub functions: Vec<FunctionSize>,
+    /// The scalar modules asked for (`"f64"`, `"f32"`).
+    pub scalars: Vec<&'static str>,
+    /// rustc's estimated memory for all of it (MB).
+    pub memory_mb: f64,
+    /// The limit (MB).
+    pub limit_mb: u64,
 }
 
 fn refusal(functions: &[FunctionSize], scalars: &[&str], memory: f64, limit: u64) -> String {

@@ -4,14 +4,17 @@
 //! `<mimic>` children (a differential).
 
 use crate::bounded_read::read_model_file;
-use crate::error::{LoadError, LoadErrorKind, Location, Warning};
+use crate::error::{
+    AxisOf, ConstraintElement, LoadError, LoadErrorKind, Location, Warning, WarningKind,
+};
 use crate::ir::{
     Coupling, Inertial, Joint, JointKind, Link, Loop, LoopFrame, LoopKind, Mimic, Origin, Robot,
 };
 use crate::xml_text::{nesting_too_deep, LineIndex, MAX_NESTING};
 use embedyn_runtime::nalgebra::Matrix3;
 use roxmltree::{Document, Node};
-use std::collections::HashMap;
+use std::cell::RefCell;
+use std::collections::{HashMap, HashSet};
 use std::path::Path;
 
 /// A parsed model and the warnings its data raised.
@@ -23,46 +26,38 @@ pub struct Loaded {
     pub warnings: Vec<Warning>,
 }
 
-/// Warnings of one message at several elements (talos_reduced's twelve `<mimic>` leftovers on fixed
+/// Warnings of one kind at several elements (talos_reduced's twelve `<mimic>` leftovers on fixed
 /// joints) become one, at the first, naming the others: a screen of identical lines hides what differs.
 fn fold_repeated_warnings(warnings: &mut Vec<Warning>) {
-    const LISTED: usize = 5;
-    let mut folded: Vec<(Warning, Vec<String>)> = Vec::new();
+    let mut folded: Vec<Warning> = Vec::new();
     for w in warnings.drain(..) {
-        match folded
-            .iter_mut()
-            .find(|(first, _)| first.message == w.message)
-        {
-            Some((_, others)) => others.push(w.location.element),
-            None => folded.push((w, Vec::new())),
+        match folded.iter_mut().find(|first| first.kind == w.kind) {
+            Some(first) => first.same_for.push(w.location.element),
+            None => folded.push(w),
         }
     }
-    for (mut w, others) in folded {
-        if !others.is_empty() {
-            let mut list = others[..others.len().min(LISTED)].join(", ");
-            if others.len() > LISTED {
-                list += &format!(" and {} more", others.len() - LISTED);
-            }
-            w.message += &format!(" (the same for {list})");
-        }
-        warnings.push(w);
-    }
+    *warnings = folded;
 }
 
 /// Reads and checks a URDF file.
 pub fn load_urdf(path: &Path) -> Result<Loaded, LoadError> {
-    let text = read_model_file(path).map_err(|e| {
+    let text = read_model_file(path).map_err(|error| {
         LoadError::at(
             Location::new(path, None, ""),
-            LoadErrorKind::Unreadable {
-                problem: e.to_string(),
-            },
+            LoadErrorKind::Unreadable { error },
         )
     })?;
     parse_urdf(&text, path)
 }
 
 /// Parses URDF text; `path` is used in messages only.
+///
+/// A problem of an element (a missing attribute, a number that is not one, an unknown joint type or
+/// link, a zero axis, …) does not end the reading: every such problem of the file is reported in one
+/// [`LoadError`] (the first as the error, the others in [`LoadError::also`]). What makes the rest
+/// meaningless ends it at once: malformed XML, nesting too deep, a root element that is not `<robot>`,
+/// and the tree's own shape (no link, several roots, a cycle), which is judged only once every link and
+/// joint was read without a problem.
 pub fn parse_urdf(text: &str, path: &Path) -> Result<Loaded, LoadError> {
     let lines = LineIndex::new(text);
     if let Some(deep) = nesting_too_deep(text, MAX_NESTING) {
@@ -71,13 +66,11 @@ pub fn parse_urdf(text: &str, path: &Path) -> Result<Loaded, LoadError> {
             LoadErrorKind::NestedTooDeep { limit: MAX_NESTING },
         ));
     }
-    let doc = Document::parse(text).map_err(|e| {
-        let pos = e.pos();
+    let doc = Document::parse(text).map_err(|error| {
+        let pos = error.pos();
         LoadError::at(
             Location::new(path, Some(pos.row), "XML"),
-            LoadErrorKind::MalformedXml {
-                problem: e.to_string(),
-            },
+            LoadErrorKind::MalformedXml { error },
         )
     })?;
     let mut p = Parser {
@@ -85,6 +78,7 @@ pub fn parse_urdf(text: &str, path: &Path) -> Result<Loaded, LoadError> {
         lines,
         path,
         warnings: Vec::new(),
+        errors: RefCell::new(Vec::new()),
     };
     let robot = p.robot()?;
     Ok(Loaded {
@@ -93,11 +87,23 @@ pub fn parse_urdf(text: &str, path: &Path) -> Result<Loaded, LoadError> {
     })
 }
 
+/// The problem of an element has been recorded in [`Parser::errors`]; what depends on the element is
+/// skipped (a joint with an unknown type is not added to the tree), the reading goes on.
+#[derive(Debug)]
+struct Reported;
+
+/// What an element's reader returns: the element, or [`Reported`].
+type Parsed<T> = Result<T, Reported>;
+
 struct Parser<'a, 'input> {
     doc: &'a Document<'input>,
     lines: LineIndex,
     path: &'a Path,
     warnings: Vec<Warning>,
+    /// The problems found so far, in file order (serde_derive's `Ctxt`: errors collected where they are
+    /// found, through `&self`, and turned into one `LoadError` once the pass is over). A `RefCell`, so
+    /// that the readers, which borrow the parser immutably (and the closures inside them), can record.
+    errors: RefCell<Vec<LoadError>>,
 }
 
 impl<'a, 'input> Parser<'a, 'input> {
@@ -109,28 +115,35 @@ impl<'a, 'input> Parser<'a, 'input> {
         Location::new(self.path, self.line(node), element)
     }
 
-    fn err<T>(
-        &self,
-        node: Node,
-        element: impl Into<String>,
-        msg: impl Into<String>,
-    ) -> Result<T, LoadError> {
-        self.fail(node, element, LoadErrorKind::Model(msg.into()))
+    /// Records a problem at `location`; the reading goes on.
+    fn record(&self, location: Location, kind: LoadErrorKind) {
+        self.errors.borrow_mut().push(LoadError::at(location, kind));
     }
 
-    fn fail<T>(
-        &self,
-        node: Node,
-        element: impl Into<String>,
-        kind: LoadErrorKind,
-    ) -> Result<T, LoadError> {
-        Err(LoadError::at(self.loc(node, element), kind))
+    /// Records a problem of `element` at `node`, and returns that the element is [`Reported`].
+    fn fail<T>(&self, node: Node, element: impl Into<String>, kind: LoadErrorKind) -> Parsed<T> {
+        self.record(self.loc(node, element), kind);
+        Err(Reported)
     }
 
-    fn warn(&mut self, node: Node, element: impl Into<String>, msg: impl Into<String>) {
+    /// Whether a problem has been recorded.
+    fn has_errors(&self) -> bool {
+        !self.errors.borrow().is_empty()
+    }
+
+    /// The problems recorded, as one error; `Ok` when there are none.
+    fn finish(&self) -> Result<(), LoadError> {
+        match LoadError::collected(self.errors.take()) {
+            Some(e) => Err(e),
+            None => Ok(()),
+        }
+    }
+
+    fn warn(&mut self, node: Node, element: impl Into<String>, kind: WarningKind) {
         let w = Warning {
             location: self.loc(node, element),
-            message: msg.into(),
+            kind,
+            same_for: Vec::new(),
         };
         self.warnings.push(w);
     }
@@ -138,115 +151,83 @@ impl<'a, 'input> Parser<'a, 'input> {
     fn robot(&mut self) -> Result<Robot, LoadError> {
         let root = self.doc.root_element();
         if root.tag_name().name() != "robot" {
-            return self.err(
-                root,
-                format!("<{}>", root.tag_name().name()),
-                "the root element must be <robot>",
-            );
+            return Err(LoadError::at(
+                self.loc(root, format!("<{}>", root.tag_name().name())),
+                LoadErrorKind::RootNotRobot,
+            ));
         }
         let name = root.attribute("name").unwrap_or("robot").to_string();
         let mut links = Vec::new();
         let mut link_index: HashMap<String, usize> = HashMap::new();
         for node in root.children().filter(|n| n.has_tag_name("link")) {
-            let link = self.link(node)?;
-            if link_index.insert(link.name.clone(), links.len()).is_some() {
-                return self.fail(
-                    node,
-                    format!("link \"{}\"", link.name),
+            let Ok(link) = self.link(node) else { continue };
+            if link_index.contains_key(&link.name) {
+                self.record(
+                    self.loc(node, format!("link \"{}\"", link.name)),
                     LoadErrorKind::DuplicateName { what: "link" },
                 );
+                continue;
             }
+            link_index.insert(link.name.clone(), links.len());
             links.push(link);
         }
         let mut joints: Vec<Joint> = Vec::new();
-        let mut joint_names: HashMap<String, usize> = HashMap::new();
+        let mut joint_names: HashSet<String> = HashSet::new();
         let mut parent_joint: Vec<Option<usize>> = vec![None; links.len()];
         for node in root.children().filter(|n| n.has_tag_name("joint")) {
-            let joint = self.joint(node, &link_index)?;
+            let Ok(joint) = self.joint(node, &link_index) else {
+                continue;
+            };
             let what = format!("joint \"{}\"", joint.name);
-            if joint_names
-                .insert(joint.name.clone(), joints.len())
-                .is_some()
-            {
-                return self.fail(node, what, LoadErrorKind::DuplicateName { what: "joint" });
+            if !joint_names.insert(joint.name.clone()) {
+                self.record(
+                    self.loc(node, what),
+                    LoadErrorKind::DuplicateName { what: "joint" },
+                );
+                continue;
             }
             if let Some(other) = parent_joint[joint.child] {
-                return self.err(
-                    node,
-                    what,
-                    format!(
-                        "link \"{}\" is already the child of joint \"{}\"; a link has at most one parent (close loops with URDF+ <loop>)",
-                        links[joint.child].name, joints[other].name
-                    ),
-                );
+                let kind = LoadErrorKind::TwoParents {
+                    link: links[joint.child].name.clone(),
+                    joint: joints[other].name.clone(),
+                };
+                self.record(self.loc(node, what), kind);
+                continue;
             }
             if joint.parent == joint.child {
-                return self.err(node, what, "parent and child are the same link");
+                self.record(self.loc(node, what), LoadErrorKind::SelfParent);
+                continue;
             }
             parent_joint[joint.child] = Some(joints.len());
             joints.push(joint);
         }
-        if links.is_empty() {
-            return self.err(root, format!("robot \"{name}\""), "the model has no <link>");
+        // The tree's shape is judged only from a complete tree: with a joint left out (its type unknown,
+        // say) its child would be another root, which is no news to the reader. Its problem is, and so
+        // are those of the loops and mimics below.
+        let mut root_link = 0;
+        if !self.has_errors() {
+            root_link = self.tree_root(root, &name, &links, &joints, &parent_joint)?;
         }
-        // Exactly one root; every link reachable from it (otherwise the joints form a cycle).
-        let roots: Vec<usize> = (0..links.len())
-            .filter(|&l| parent_joint[l].is_none())
+        // Mimic targets must exist (a joint the reader left out counts as existing: its own problem
+        // is reported).
+        let written_joints: HashSet<&str> = root
+            .children()
+            .filter(|n| n.has_tag_name("joint"))
+            .filter_map(|n| n.attribute("name"))
             .collect();
-        let root_link = match roots.as_slice() {
-            [r] => *r,
-            [] => {
-                let j = &joints[0];
-                return Err(LoadError::at(
-                    Location::new(self.path, j.line, format!("joint \"{}\"", j.name)),
-                    LoadErrorKind::NoRootLink,
-                ));
-            }
-            [_, second, ..] => {
-                let names: Vec<&str> = roots.iter().map(|&r| links[r].name.as_str()).collect();
-                let l = &links[*second];
-                return Err(LoadError::new(
-                    Location::new(self.path, l.line, format!("link \"{}\"", l.name)),
-                    format!(
-                        "the model has {} root links ({}); a URDF tree has exactly one",
-                        roots.len(),
-                        names.join(", ")
-                    ),
-                ));
-            }
-        };
-        let mut children: Vec<Vec<usize>> = vec![Vec::new(); links.len()];
-        for (j, joint) in joints.iter().enumerate() {
-            children[joint.parent].push(j);
-        }
-        let mut seen = vec![false; links.len()];
-        let mut stack = vec![root_link];
-        while let Some(l) = stack.pop() {
-            seen[l] = true;
-            stack.extend(children[l].iter().map(|&j| joints[j].child));
-        }
-        if let Some(l) = seen.iter().position(|s| !s) {
-            let j = &joints[parent_joint[l].unwrap()];
-            return Err(LoadError::at(
-                Location::new(self.path, j.line, format!("joint \"{}\"", j.name)),
-                LoadErrorKind::Cycle {
-                    link: links[l].name.clone(),
-                    root: links[root_link].name.clone(),
-                },
-            ));
-        }
-        // Mimic targets must exist.
         for joint in &joints {
             for m in &joint.mimics {
-                if !joint_names.contains_key(&m.joint) {
-                    return Err(LoadError::new(
+                if !written_joints.contains(m.joint.as_str()) {
+                    self.record(
                         Location::new(
                             self.path,
                             m.line,
                             format!("joint \"{}\" <mimic>", joint.name),
                         ),
-                        format!("<mimic> names joint \"{}\", which does not exist", m.joint),
-                    ));
+                        LoadErrorKind::UnknownMimicTarget {
+                            joint: m.joint.clone(),
+                        },
+                    );
                 }
             }
         }
@@ -254,38 +235,44 @@ impl<'a, 'input> Parser<'a, 'input> {
         let mut couplings = Vec::new();
         // Every constraint has a name that messages and `info` use to point at it: a loop's or a
         // coupling's own, a mimic joint's is its joint's. The names must tell them apart.
-        let mut constraint_names: HashMap<String, (&str, Option<u32>)> = joints
+        let mut constraint_names: HashMap<String, (ConstraintElement, Option<u32>)> = joints
             .iter()
             .filter(|j| !j.mimics.is_empty())
-            .map(|j| (j.name.clone(), ("the <mimic> of joint", j.line)))
+            .map(|j| (j.name.clone(), (ConstraintElement::Mimic, j.line)))
             .collect();
         for node in root
             .children()
             .filter(|n| n.has_tag_name("loop") || n.has_tag_name("coupling"))
         {
             let (tag, name, line) = if node.has_tag_name("loop") {
-                let l = self.loop_element(node, &link_index)?;
-                let named = ("loop", l.name.clone(), l.line);
+                let Ok(l) = self.loop_element(node, &link_index) else {
+                    continue;
+                };
+                let named = (ConstraintElement::Loop, l.name.clone(), l.line);
                 loops.push(l);
                 named
             } else {
-                let c = self.coupling(node, &link_index)?;
-                let named = ("coupling", c.name.clone(), c.line);
+                let Ok(c) = self.coupling(node, &link_index) else {
+                    continue;
+                };
+                let named = (ConstraintElement::Coupling, c.name.clone(), c.line);
                 couplings.push(c);
                 named
             };
-            if let Some((other, other_line)) = constraint_names.get(&name) {
-                let at = other_line.map_or(String::new(), |l| format!(" at line {l}"));
-                return self.err(
-                    node,
-                    format!("{tag} \"{name}\""),
-                    format!(
-                        "{other} \"{name}\"{at} already has this name; loops, couplings and mimic joints are constraints that messages and `info` name, so each needs its own name"
-                    ),
+            if let Some(&(other, other_line)) = constraint_names.get(&name) {
+                self.record(
+                    self.loc(node, format!("{tag} \"{name}\"")),
+                    LoadErrorKind::ConstraintNameTaken {
+                        name: name.clone(),
+                        other,
+                        other_line,
+                    },
                 );
+                continue;
             }
             constraint_names.insert(name, (tag, line));
         }
+        self.finish()?;
         self.warn_ignored_joint_dynamics(root);
         self.warn_ignored_armature(root);
         fold_repeated_warnings(&mut self.warnings);
@@ -300,7 +287,70 @@ impl<'a, 'input> Parser<'a, 'input> {
         })
     }
 
-    fn link(&mut self, node: Node) -> Result<Link, LoadError> {
+    /// The root link of a tree read without problems: exactly one link is no joint's child, and every
+    /// link is reachable from it (otherwise the joints form a cycle). A problem here ends the reading.
+    fn tree_root(
+        &self,
+        robot: Node,
+        name: &str,
+        links: &[Link],
+        joints: &[Joint],
+        parent_joint: &[Option<usize>],
+    ) -> Result<usize, LoadError> {
+        if links.is_empty() {
+            return Err(LoadError::at(
+                self.loc(robot, format!("robot \"{name}\"")),
+                LoadErrorKind::NoLinks,
+            ));
+        }
+        let roots: Vec<usize> = (0..links.len())
+            .filter(|&l| parent_joint[l].is_none())
+            .collect();
+        let root_link = match roots.as_slice() {
+            [r] => *r,
+            [] => {
+                let j = &joints[0];
+                return Err(LoadError::at(
+                    Location::new(self.path, j.line, format!("joint \"{}\"", j.name)),
+                    LoadErrorKind::NoRootLink,
+                ));
+            }
+            [_, second, ..] => {
+                let l = &links[*second];
+                return Err(LoadError::at(
+                    Location::new(self.path, l.line, format!("link \"{}\"", l.name)),
+                    LoadErrorKind::SeveralRoots {
+                        roots: roots.iter().map(|&r| links[r].name.clone()).collect(),
+                    },
+                ));
+            }
+        };
+        let mut children: Vec<Vec<usize>> = vec![Vec::new(); links.len()];
+        for (j, joint) in joints.iter().enumerate() {
+            children[joint.parent].push(j);
+        }
+        let mut seen = vec![false; links.len()];
+        let mut stack = vec![root_link];
+        while let Some(l) = stack.pop() {
+            seen[l] = true;
+            stack.extend(children[l].iter().map(|&j| joints[j].child));
+        }
+        if let Some(l) = seen.iter().position(|s| !s) {
+            let j = &joints[parent_joint[l].expect("a link other than the root has a parent")];
+            return Err(LoadError::at(
+                Location::new(self.path, j.line, format!("joint \"{}\"", j.name)),
+                LoadErrorKind::Cycle {
+                    link: links[l].name.clone(),
+                    root: links[root_link].name.clone(),
+                },
+            ));
+        }
+        Ok(root_link)
+    }
+
+    /// A `<link>`. A problem of its `<inertial>` is recorded, and the link is still defined (without
+    /// inertia), so that the joints naming it are read as they would be.
+    fn link(&mut self, node: Node) -> Parsed<Link> {
         let Some(name) = node.attribute("name") else {
             return self.fail(
                 node,
@@ -313,7 +363,7 @@ impl<'a, 'input> Parser<'a, 'input> {
         let what = format!("link \"{name}\"");
         let inertial = match node.children().find(|n| n.has_tag_name("inertial")) {
             None => None,
-            Some(inode) => Some(self.inertial(inode, &what)?),
+            Some(inode) => self.inertial(inode, &what).ok(),
         };
         Ok(Link {
             name: name.to_string(),
@@ -322,24 +372,25 @@ impl<'a, 'input> Parser<'a, 'input> {
         })
     }
 
-    fn inertial(&mut self, node: Node, link: &str) -> Result<Inertial, LoadError> {
+    fn inertial(&mut self, node: Node, link: &str) -> Parsed<Inertial> {
         let what = format!("{link} <inertial>");
-        let origin = self.origin(node, &what)?;
-        let Some(mnode) = node.children().find(|n| n.has_tag_name("mass")) else {
-            return self.fail(
+        let origin = self.origin(node, &what);
+        let mass = match node.children().find(|n| n.has_tag_name("mass")) {
+            None => self.fail(
                 node,
-                what,
+                what.clone(),
                 LoadErrorKind::MissingElement { tag: "mass".into() },
-            );
+            ),
+            Some(mnode) => {
+                let mw = format!("{what} <mass>");
+                match self.number(mnode, "value", None, &mw) {
+                    Ok(mass) if mass < 0.0 => {
+                        self.fail(mnode, mw, LoadErrorKind::NegativeMass { mass })
+                    }
+                    mass => mass.map(|m| (m, mnode)),
+                }
+            }
         };
-        let mass = self.number(mnode, "value", None, &format!("{what} <mass>"))?;
-        if mass < 0.0 {
-            return self.err(
-                mnode,
-                format!("{what} <mass>"),
-                format!("negative mass {mass}"),
-            );
-        }
         let Some(inode) = node.children().find(|n| n.has_tag_name("inertia")) else {
             return self.fail(
                 node,
@@ -350,13 +401,18 @@ impl<'a, 'input> Parser<'a, 'input> {
             );
         };
         let iw = format!("{what} <inertia>");
-        let mut inertia = [0.0; 6];
+        let mut inertia = Ok([0.0; 6]);
         for (k, a) in ["ixx", "ixy", "ixz", "iyy", "iyz", "izz"]
             .iter()
             .enumerate()
         {
-            inertia[k] = self.number(inode, a, None, &iw)?;
+            match (self.number(inode, a, None, &iw), &mut inertia) {
+                (Ok(x), Ok(inertia)) => inertia[k] = x,
+                (Ok(_), Err(_)) => {}
+                (Err(e), _) => inertia = Err(e),
+            }
         }
+        let (origin, (mass, mnode), inertia) = (origin?, mass?, inertia?);
         let [ixx, ixy, ixz, iyy, iyz, izz] = inertia;
         let m = Matrix3::new(ixx, ixy, ixz, ixy, iyy, iyz, ixz, iyz, izz);
         let scale = inertia_rounding_scale(&m, mass, &origin);
@@ -364,25 +420,26 @@ impl<'a, 'input> Parser<'a, 'input> {
             self.warn(
                 inode,
                 iw.clone(),
-                format!(
-                    "the inertia tensor is not positive semi-definite (ixx={ixx}, iyy={iyy}, izz={izz}, ixy={ixy}, ixz={ixz}, iyz={iyz}; smallest eigenvalue {:.3e}): no rigid body has it; loaded as given",
-                    min_eigenvalue(&m)
-                ),
+                WarningKind::InertiaNotPositive {
+                    ixx,
+                    iyy,
+                    izz,
+                    ixy,
+                    ixz,
+                    iyz,
+                    smallest_eigenvalue: min_eigenvalue(&m),
+                },
             );
         } else {
             // The principal moments of a physical body satisfy the triangle inequality, equivalently
             // ½ tr(I) 1 − I (the body's second moment of mass) is positive semi-definite.
             let second_moment = Matrix3::identity() * (0.5 * m.trace()) - m;
             if below_rounding(min_eigenvalue(&second_moment), scale) {
-                self.warn(inode, iw.clone(), "the principal moments of inertia violate the triangle inequality (no rigid body has them); loaded as given");
+                self.warn(inode, iw.clone(), WarningKind::TriangleInequality);
             }
         }
         if mass == 0.0 && m.iter().any(|&x| x != 0.0) {
-            self.warn(
-                mnode,
-                iw,
-                "zero mass with a non-zero rotational inertia (a massless rotor); loaded as given",
-            );
+            self.warn(mnode, iw, WarningKind::MasslessRotor);
         }
         Ok(Inertial {
             origin,
@@ -391,7 +448,8 @@ impl<'a, 'input> Parser<'a, 'input> {
         })
     }
 
-    fn joint(&mut self, node: Node, links: &HashMap<String, usize>) -> Result<Joint, LoadError> {
+    /// A `<joint>`: every attribute and child is read, so that each of its problems is recorded.
+    fn joint(&mut self, node: Node, links: &HashMap<String, usize>) -> Parsed<Joint> {
         let Some(name) = node.attribute("name") else {
             return self.fail(
                 node,
@@ -403,20 +461,28 @@ impl<'a, 'input> Parser<'a, 'input> {
         };
         let what = format!("joint \"{name}\"");
         let kind = match node.attribute("type") {
-            Some("revolute") => JointKind::Revolute,
-            Some("continuous") => JointKind::Continuous,
-            Some("prismatic") => JointKind::Prismatic,
-            Some("fixed") => JointKind::Fixed,
-            Some("floating") => JointKind::Floating,
-            Some("planar") => {
-                return self.err(node, what, "joint type \"planar\" is not supported (model it as two prismatic joints and a revolute joint)")
-            }
-            Some(t) => {
-                return self.err(node, what, format!("unknown joint type \"{t}\" (expected revolute, continuous, prismatic, fixed or floating)"))
-            }
-            None => return self.fail(node, what, LoadErrorKind::MissingAttribute { attribute: "type".into() }),
+            Some("revolute") => Ok(JointKind::Revolute),
+            Some("continuous") => Ok(JointKind::Continuous),
+            Some("prismatic") => Ok(JointKind::Prismatic),
+            Some("fixed") => Ok(JointKind::Fixed),
+            Some("floating") => Ok(JointKind::Floating),
+            Some("planar") => self.fail(node, what.clone(), LoadErrorKind::PlanarJoint),
+            Some(t) => self.fail(
+                node,
+                what.clone(),
+                LoadErrorKind::UnknownJointType {
+                    joint_type: t.into(),
+                },
+            ),
+            None => self.fail(
+                node,
+                what.clone(),
+                LoadErrorKind::MissingAttribute {
+                    attribute: "type".into(),
+                },
+            ),
         };
-        let link_of = |tag: &str| -> Result<usize, LoadError> {
+        let link_of = |tag: &str| -> Parsed<usize> {
             let Some(n) = node.children().find(|n| n.has_tag_name(tag)) else {
                 return self.fail(
                     node,
@@ -435,81 +501,87 @@ impl<'a, 'input> Parser<'a, 'input> {
             };
             match links.get(l) {
                 Some(&i) => Ok(i),
-                None => self.err(
+                None => self.fail(
                     n,
                     format!("{what} <{tag}>"),
-                    format!("names link \"{l}\", which does not exist"),
+                    LoadErrorKind::UnknownLink { link: l.into() },
                 ),
             }
         };
-        let parent = link_of("parent")?;
-        let child = link_of("child")?;
-        let origin = self.origin(node, &what)?;
-        let axis = match node.children().find(|n| n.has_tag_name("axis")) {
-            None => [1.0, 0.0, 0.0],
-            Some(a) => self.vec3(a, "xyz", Some([1.0, 0.0, 0.0]), &format!("{what} <axis>"))?,
+        let parent = link_of("parent");
+        let child = link_of("child");
+        let origin = self.origin(node, &what);
+        let axis_node = node.children().find(|n| n.has_tag_name("axis"));
+        let mut axis = match axis_node {
+            None => Ok([1.0, 0.0, 0.0]),
+            Some(a) => self.vec3(a, "xyz", Some([1.0, 0.0, 0.0]), &format!("{what} <axis>")),
         };
-        if matches!(
-            kind,
-            JointKind::Revolute | JointKind::Continuous | JointKind::Prismatic
-        ) && axis.iter().all(|&x| x == 0.0)
-        {
-            let a = node
-                .children()
-                .find(|n| n.has_tag_name("axis"))
-                .unwrap_or(node);
-            return self.err(a, format!("{what} <axis>"), "the joint axis is zero");
+        if let (Ok(kind), Ok(xyz)) = (&kind, &axis) {
+            if matches!(
+                kind,
+                JointKind::Revolute | JointKind::Continuous | JointKind::Prismatic
+            ) && xyz.iter().all(|&x| x == 0.0)
+            {
+                axis = self.fail(
+                    axis_node.unwrap_or(node),
+                    format!("{what} <axis>"),
+                    LoadErrorKind::ZeroAxis { of: AxisOf::Joint },
+                );
+            }
         }
-        let mut mimics = Vec::new();
+        let mut mimics = Ok(Vec::new());
         for m in node.children().filter(|n| n.has_tag_name("mimic")) {
             let mw = format!("{what} <mimic>");
-            let Some(target) = m.attribute("joint") else {
-                return self.fail(
+            let target = match m.attribute("joint") {
+                Some(target) => Ok(target),
+                None => self.fail(
                     m,
-                    mw,
+                    mw.clone(),
                     LoadErrorKind::MissingAttribute {
                         attribute: "joint".into(),
                     },
-                );
+                ),
             };
-            mimics.push(Mimic {
-                joint: target.to_string(),
-                multiplier: self.number(m, "multiplier", Some(1.0), &mw)?,
-                offset: self.number(m, "offset", Some(0.0), &mw)?,
-                line: self.line(m),
-            });
+            let multiplier = self.number(m, "multiplier", Some(1.0), &mw);
+            let offset = self.number(m, "offset", Some(0.0), &mw);
+            match (target, multiplier, offset, &mut mimics) {
+                (Ok(target), Ok(multiplier), Ok(offset), Ok(mimics)) => mimics.push(Mimic {
+                    joint: target.to_string(),
+                    multiplier,
+                    offset,
+                    line: self.line(m),
+                }),
+                _ => mimics = Err(Reported),
+            }
         }
-        if kind == JointKind::Fixed && !mimics.is_empty() {
+        if matches!(kind, Ok(JointKind::Fixed)) && mimics.as_ref().is_ok_and(|m| !m.is_empty()) {
             // A fixed joint has no coordinate to drive (talos_reduced.urdf has such gripper leftovers):
             // Pinocchio ignores these too.
-            self.warn(
-                node,
-                what.clone(),
-                "<mimic> on a fixed joint has nothing to drive; ignored",
-            );
-            mimics.clear();
+            self.warn(node, what.clone(), WarningKind::MimicOnFixedJoint);
+            mimics = Ok(Vec::new());
         }
         let independent = match node.attribute("independent") {
-            None => None,
-            Some("true") => Some(true),
-            Some("false") => Some(false),
-            Some(x) => {
-                return self.err(
-                    node,
-                    what,
-                    format!("attribute `independent` must be \"true\" or \"false\", not \"{x}\""),
-                )
-            }
+            None => Ok(None),
+            Some("true") => Ok(Some(true)),
+            Some("false") => Ok(Some(false)),
+            Some(x) => self.fail(
+                node,
+                what,
+                LoadErrorKind::NotABoolean {
+                    attribute: "independent".into(),
+                    text: x.into(),
+                },
+            ),
         };
         Ok(Joint {
             name: name.to_string(),
-            kind,
-            parent,
-            child,
-            origin,
-            axis,
-            mimics,
-            independent,
+            kind: kind?,
+            parent: parent?,
+            child: child?,
+            origin: origin?,
+            axis: axis?,
+            mimics: mimics?,
+            independent: independent?,
             line: self.line(node),
         })
     }
@@ -521,7 +593,7 @@ impl<'a, 'input> Parser<'a, 'input> {
         tag: &str,
         what: &str,
         links: &HashMap<String, usize>,
-    ) -> Result<(usize, Node<'a, 'input>), LoadError> {
+    ) -> Parsed<(usize, Node<'a, 'input>)> {
         let Some(n) = node.children().find(|n| n.has_tag_name(tag)) else {
             return self.fail(
                 node,
@@ -540,17 +612,17 @@ impl<'a, 'input> Parser<'a, 'input> {
         };
         match links.get(l) {
             Some(&i) => Ok((i, n)),
-            None => self.err(
+            None => self.fail(
                 n,
                 format!("{what} <{tag}>"),
-                format!("names link \"{l}\", which does not exist"),
+                LoadErrorKind::UnknownLink { link: l.into() },
             ),
         }
     }
 
     /// `<loop name>` or `<coupling name>`: required, as GRBDA's reader requires it (it refuses an
     /// unnamed constraint), so that every message can point at the element.
-    fn constraint_name(&self, node: Node, tag: &str) -> Result<String, LoadError> {
+    fn constraint_name(&self, node: Node, tag: &str) -> Parsed<String> {
         match node.attribute("name") {
             Some(name) => Ok(name.to_string()),
             None => self.fail(
@@ -580,25 +652,17 @@ impl<'a, 'input> Parser<'a, 'input> {
             });
             if let Some(dynamics) = lossy {
                 first.get_or_insert((name, dynamics));
-                names.push(name);
+                names.push(name.to_string());
             }
         }
-        let Some(first) = first else { return };
-        const LISTED: usize = 5;
-        let mut list = names[..names.len().min(LISTED)]
-            .iter()
-            .map(|n| format!("\"{n}\""))
-            .collect::<Vec<_>>()
-            .join(", ");
-        if names.len() > LISTED {
-            list += &format!(" and {} more", names.len() - LISTED);
-        }
-        let message = format!(
-            "<dynamics damping/friction> of {} joint(s) ({list}) ignored: embedyn computes the dynamics of ideal joints (as Pinocchio's algorithms do); add the losses to tau",
-            names.len()
+        let Some((joint, dynamics)) = first else {
+            return;
+        };
+        self.warn(
+            dynamics,
+            format!("joint \"{joint}\" <dynamics>"),
+            WarningKind::JointDynamicsIgnored { joints: names },
         );
-        let (joint, dynamics) = first;
-        self.warn(dynamics, format!("joint \"{joint}\" <dynamics>"), message);
     }
 
     /// A motor's armature (`<dynamics armature>`, or a transmission's `<drake:rotor_inertia>`) is not
@@ -615,102 +679,115 @@ impl<'a, 'input> Parser<'a, 'input> {
             .min_by_key(|d| d.range().start);
         if let Some(node) = armature {
             let what = format!("<{}>", node.tag_name().name());
-            self.warn(
-                node,
-                what,
-                "armature (a motor's reflected rotor inertia) is not supported yet and is ignored: the dynamics computed are those without it",
-            );
+            self.warn(node, what, WarningKind::ArmatureIgnored);
         }
     }
 
-    fn loop_element(&self, node: Node, links: &HashMap<String, usize>) -> Result<Loop, LoadError> {
+    fn loop_element(&self, node: Node, links: &HashMap<String, usize>) -> Parsed<Loop> {
         let name = self.constraint_name(node, "loop")?;
         let what = format!("loop \"{name}\"");
         let kind = match node.attribute("type") {
-            Some("revolute") | Some("continuous") => LoopKind::Revolute,
-            Some("prismatic") => LoopKind::Prismatic,
-            Some("spherical") => LoopKind::Spherical,
-            Some("fixed") => LoopKind::Fixed,
-            Some("planar") => return self.err(node, what, "loop type \"planar\" is not supported"),
-            Some(t) => return self.err(node, what, format!("unknown loop type \"{t}\" (expected revolute, continuous, prismatic, spherical or fixed)")),
-            None => return self.fail(node, what, LoadErrorKind::MissingAttribute { attribute: "type".into() }),
+            Some("revolute") | Some("continuous") => Ok(LoopKind::Revolute),
+            Some("prismatic") => Ok(LoopKind::Prismatic),
+            Some("spherical") => Ok(LoopKind::Spherical),
+            Some("fixed") => Ok(LoopKind::Fixed),
+            Some("planar") => self.fail(node, what.clone(), LoadErrorKind::PlanarLoop),
+            Some(t) => self.fail(
+                node,
+                what.clone(),
+                LoadErrorKind::UnknownLoopType {
+                    loop_type: t.into(),
+                },
+            ),
+            None => self.fail(
+                node,
+                what.clone(),
+                LoadErrorKind::MissingAttribute {
+                    attribute: "type".into(),
+                },
+            ),
         };
-        let (pl, pn) = self.named_link(node, "predecessor", &what, links)?;
-        let (sl, sn) = self.named_link(node, "successor", &what, links)?;
-        let predecessor = LoopFrame {
-            link: pl,
-            origin: self.origin(pn, &format!("{what} <predecessor>"))?,
+        let predecessor = self.named_link(node, "predecessor", &what, links);
+        let successor = self.named_link(node, "successor", &what, links);
+        let frame = |end: &Parsed<(usize, Node)>, tag: &str| -> Parsed<LoopFrame> {
+            let &(link, n) = end.as_ref().map_err(|_| Reported)?;
+            Ok(LoopFrame {
+                link,
+                origin: self.origin(n, &format!("{what} <{tag}>"))?,
+            })
         };
-        let successor = LoopFrame {
-            link: sl,
-            origin: self.origin(sn, &format!("{what} <successor>"))?,
-        };
+        let (predecessor_frame, successor_frame) = (
+            frame(&predecessor, "predecessor"),
+            frame(&successor, "successor"),
+        );
         let axis = match node.children().find(|n| n.has_tag_name("axis")) {
-            None => [1.0, 0.0, 0.0],
+            None => Ok([1.0, 0.0, 0.0]),
             Some(a) => {
-                let axis = self.vec3(a, "xyz", Some([1.0, 0.0, 0.0]), &format!("{what} <axis>"))?;
-                if matches!(kind, LoopKind::Revolute | LoopKind::Prismatic)
-                    && axis.iter().all(|&x| x == 0.0)
-                {
-                    return self.err(a, format!("{what} <axis>"), "the loop axis is zero");
+                let aw = format!("{what} <axis>");
+                match self.vec3(a, "xyz", Some([1.0, 0.0, 0.0]), &aw) {
+                    Ok(axis)
+                        if matches!(kind, Ok(LoopKind::Revolute | LoopKind::Prismatic))
+                            && axis.iter().all(|&x| x == 0.0) =>
+                    {
+                        self.fail(a, aw, LoadErrorKind::ZeroAxis { of: AxisOf::Loop })
+                    }
+                    axis => axis,
                 }
-                axis
             }
         };
-        if pl == sl {
-            return self.err(node, what, "predecessor and successor are the same link");
+        if let (Ok((pl, _)), Ok((sl, _))) = (&predecessor, &successor) {
+            if pl == sl {
+                return self.fail(node, what, LoadErrorKind::SameEnds);
+            }
         }
         Ok(Loop {
             name,
-            kind,
-            predecessor,
-            successor,
-            axis,
+            kind: kind?,
+            predecessor: predecessor_frame?,
+            successor: successor_frame?,
+            axis: axis?,
             line: self.line(node),
         })
     }
 
-    fn coupling(&self, node: Node, links: &HashMap<String, usize>) -> Result<Coupling, LoadError> {
+    fn coupling(&self, node: Node, links: &HashMap<String, usize>) -> Parsed<Coupling> {
         let name = self.constraint_name(node, "coupling")?;
         let what = format!("coupling \"{name}\"");
-        let (predecessor, _) = self.named_link(node, "predecessor", &what, links)?;
-        let (successor, _) = self.named_link(node, "successor", &what, links)?;
+        let predecessor = self.named_link(node, "predecessor", &what, links);
+        let successor = self.named_link(node, "successor", &what, links);
         let ratio = match node.children().find(|n| n.has_tag_name("ratio")) {
-            None => 1.0,
-            Some(r) => self.number(r, "value", Some(1.0), &format!("{what} <ratio>"))?,
+            None => Ok(1.0),
+            Some(r) => self.number(r, "value", Some(1.0), &format!("{what} <ratio>")),
         };
+        let ((predecessor, _), (successor, _)) = (predecessor?, successor?);
         if predecessor == successor {
-            return self.err(node, what, "predecessor and successor are the same link");
+            return self.fail(node, what, LoadErrorKind::SameEnds);
         }
         Ok(Coupling {
             name,
             predecessor,
             successor,
-            ratio,
+            ratio: ratio?,
             line: self.line(node),
         })
     }
 
-    fn origin(&self, parent: Node, what: &str) -> Result<Origin, LoadError> {
+    fn origin(&self, parent: Node, what: &str) -> Parsed<Origin> {
         match parent.children().find(|n| n.has_tag_name("origin")) {
             None => Ok(Origin::default()),
             Some(o) => {
                 let w = format!("{what} <origin>");
+                let xyz = self.vec3(o, "xyz", Some([0.0; 3]), &w);
+                let rpy = self.vec3(o, "rpy", Some([0.0; 3]), &w);
                 Ok(Origin {
-                    xyz: self.vec3(o, "xyz", Some([0.0; 3]), &w)?,
-                    rpy: self.vec3(o, "rpy", Some([0.0; 3]), &w)?,
+                    xyz: xyz?,
+                    rpy: rpy?,
                 })
             }
         }
     }
 
-    fn number(
-        &self,
-        node: Node,
-        attr: &str,
-        default: Option<f64>,
-        what: &str,
-    ) -> Result<f64, LoadError> {
+    fn number(&self, node: Node, attr: &str, default: Option<f64>, what: &str) -> Parsed<f64> {
         match node.attribute(attr) {
             None => match default {
                 Some(d) => Ok(d),
@@ -750,7 +827,7 @@ impl<'a, 'input> Parser<'a, 'input> {
         attr: &str,
         default: Option<[f64; 3]>,
         what: &str,
-    ) -> Result<[f64; 3], LoadError> {
+    ) -> Parsed<[f64; 3]> {
         let Some(s) = node.attribute(attr) else {
             return match default {
                 Some(d) => Ok(d),
@@ -765,10 +842,13 @@ impl<'a, 'input> Parser<'a, 'input> {
         };
         let parts: Vec<&str> = s.split_whitespace().collect();
         if parts.len() != 3 {
-            return self.err(
+            return self.fail(
                 node,
                 what,
-                format!("`{attr}=\"{s}\"` must be three numbers"),
+                LoadErrorKind::NotThreeNumbers {
+                    attribute: attr.into(),
+                    text: s.into(),
+                },
             );
         }
         let mut out = [0.0; 3];
@@ -776,17 +856,24 @@ impl<'a, 'input> Parser<'a, 'input> {
             out[k] = match p.parse::<f64>() {
                 Ok(x) if x.is_finite() => x,
                 Ok(_) => {
-                    return self.err(
+                    return self.fail(
                         node,
                         what,
-                        format!("`{attr}=\"{s}\"` contains a number that is not finite"),
+                        LoadErrorKind::EntryNotFinite {
+                            attribute: attr.into(),
+                            text: s.into(),
+                        },
                     )
                 }
                 Err(_) => {
-                    return self.err(
+                    return self.fail(
                         node,
                         what,
-                        format!("`{attr}=\"{s}\"`: \"{p}\" is not a number"),
+                        LoadErrorKind::EntryNotANumber {
+                            attribute: attr.into(),
+                            text: s.into(),
+                            entry: (*p).into(),
+                        },
                     )
                 }
             };
@@ -827,6 +914,7 @@ fn min_eigenvalue(m: &Matrix3<f64>) -> f64 {
 #[cfg(test)]
 mod kind_tests {
     use super::*;
+    use crate::error::MAX_LISTED_ERRORS;
 
     fn error_of(text: &str) -> LoadError {
         match parse_urdf(text, Path::new("m.urdf")) {
@@ -872,5 +960,163 @@ mod kind_tests {
         let e = error_of("<robot");
         assert!(matches!(e.kind, LoadErrorKind::MalformedXml { .. }), "{e}");
         assert!(e.to_string().contains(": XML: malformed XML: "), "{e}");
+    }
+
+    /// The file `m.urdf` with `body` inside `<robot>`, the first line being line 2.
+    fn robot_of(body: &str) -> String {
+        format!("<robot name=\"r\">\n{body}\n</robot>")
+    }
+
+    const INERTIA: &str = r#"<inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/>"#;
+
+    #[test]
+    fn problems_of_several_elements_are_reported_together() {
+        let text = robot_of(&format!(
+            r#"<link name="a"/>
+<link name="b"><inertial><mass value="-1"/>{INERTIA}</inertial></link>
+<joint name="j1" type="hinge"><parent link="a"/><child link="b"/></joint>
+<joint name="j2" type="fixed"><parent link="a"/><child link="c"/></joint>"#
+        ));
+        let e = error_of(&text);
+        let found: Vec<(Option<u32>, &LoadErrorKind)> =
+            e.problems().map(|p| (p.location.line, &p.kind)).collect();
+        assert_eq!(
+            found,
+            [
+                (Some(3), &LoadErrorKind::NegativeMass { mass: -1.0 }),
+                (
+                    Some(4),
+                    &LoadErrorKind::UnknownJointType {
+                        joint_type: "hinge".into()
+                    }
+                ),
+                (Some(5), &LoadErrorKind::UnknownLink { link: "c".into() }),
+            ],
+            "{e}"
+        );
+        // The first line is the message of the first problem alone; each other is a line of its own.
+        let message = e.to_string();
+        let lines: Vec<&str> = message.lines().collect();
+        assert_eq!(lines.len(), 3, "{message}");
+        assert_eq!(
+            lines[0],
+            "m.urdf:3: link \"b\" <inertial> <mass>: negative mass -1"
+        );
+        assert!(lines[1].starts_with("m.urdf:4: joint \"j1\": unknown joint type \"hinge\""));
+        assert_eq!(
+            lines[2],
+            "m.urdf:5: joint \"j2\" <child>: names link \"c\", which does not exist"
+        );
+    }
+
+    #[test]
+    fn every_problem_of_one_element_is_reported() {
+        let text = robot_of(
+            r#"<link name="a"/><link name="b"/>
+<joint name="j" type="revolute"><parent link="a"/><child link="b"/><origin xyz="1 2" rpy="0 x 0"/></joint>"#,
+        );
+        let e = error_of(&text);
+        let kinds: Vec<&LoadErrorKind> = e.problems().map(|p| &p.kind).collect();
+        assert_eq!(
+            kinds,
+            [
+                &LoadErrorKind::NotThreeNumbers {
+                    attribute: "xyz".into(),
+                    text: "1 2".into()
+                },
+                &LoadErrorKind::EntryNotANumber {
+                    attribute: "rpy".into(),
+                    text: "0 x 0".into(),
+                    entry: "x".into()
+                },
+            ],
+            "{e}"
+        );
+        // An axis is judged zero only when the joint's type is known and its axis read.
+        let text = robot_of(
+            r#"<link name="a"/><link name="b"/>
+<joint name="j" type="revolute"><parent link="a"/><child link="b"/><axis xyz="0 0 0"/></joint>"#,
+        );
+        let e = error_of(&text);
+        assert_eq!(e.kind, LoadErrorKind::ZeroAxis { of: AxisOf::Joint });
+        assert!(e.also.is_empty(), "{e}");
+    }
+
+    #[test]
+    fn a_joint_left_out_raises_no_problems_of_the_tree() {
+        // Without `j1` (its type unknown), `b` would be a second root and `j2`'s mimic would name a
+        // joint that is not there: neither is news, so only `j1`'s own problem is reported.
+        let text = robot_of(
+            r#"<link name="a"/><link name="b"/><link name="c"/>
+<joint name="j1" type="hinge"><parent link="a"/><child link="b"/></joint>
+<joint name="j2" type="revolute"><parent link="a"/><child link="c"/><mimic joint="j1"/></joint>"#,
+        );
+        let e = error_of(&text);
+        assert_eq!(
+            e.kind,
+            LoadErrorKind::UnknownJointType {
+                joint_type: "hinge".into()
+            }
+        );
+        assert!(e.also.is_empty(), "{e}");
+    }
+
+    #[test]
+    fn a_problem_that_ends_the_reading_is_reported_alone() {
+        let e = error_of("<robot name=\"r\">\n<link name=\"a\"><mass value=\"x\"/>\n</robot");
+        assert!(matches!(e.kind, LoadErrorKind::MalformedXml { .. }), "{e}");
+        assert!(e.also.is_empty());
+        // The tree's shape is judged once its elements are read without problems: two roots.
+        let e = error_of(&robot_of(r#"<link name="a"/><link name="b"/>"#));
+        assert_eq!(
+            e.kind,
+            LoadErrorKind::SeveralRoots {
+                roots: vec!["a".into(), "b".into()]
+            }
+        );
+        assert!(e.also.is_empty());
+    }
+
+    #[test]
+    fn a_long_list_of_problems_is_cut_short() {
+        let links: Vec<String> = (0..25)
+            .map(|k| format!(r#"<link name="l{k}"><inertial><mass value="-{k}.5"/>{INERTIA}</inertial></link>"#))
+            .collect();
+        let e = error_of(&robot_of(&links.join("\n")));
+        assert_eq!(e.problems().count(), 25);
+        let message = e.to_string();
+        let lines: Vec<&str> = message.lines().collect();
+        assert_eq!(lines.len(), MAX_LISTED_ERRORS + 1, "{message}");
+        assert!(lines[MAX_LISTED_ERRORS - 1].starts_with("m.urdf:21: link \"l19\""));
+        assert_eq!(lines[MAX_LISTED_ERRORS], "and 5 more errors");
+    }
+
+    #[test]
+    fn warnings_carry_their_kind_and_fold_repeats() {
+        let joint = |k: u32| {
+            format!(
+                r#"<joint name="g{k}" type="fixed"><parent link="a"/><child link="b{k}"/><mimic joint="j"/></joint>"#
+            )
+        };
+        let text = robot_of(&format!(
+            r#"<link name="a"/><link name="b0"/><link name="b1"/><link name="b2"/><link name="c"/>
+<joint name="j" type="revolute"><parent link="a"/><child link="c"/></joint>
+{}
+{}
+{}"#,
+            joint(0),
+            joint(1),
+            joint(2)
+        ));
+        let loaded = parse_urdf(&text, Path::new("m.urdf")).unwrap();
+        assert_eq!(loaded.warnings.len(), 1);
+        let w = &loaded.warnings[0];
+        assert_eq!(w.kind, WarningKind::MimicOnFixedJoint);
+        assert_eq!(w.location.line, Some(4));
+        assert_eq!(w.same_for, ["joint \"g1\"", "joint \"g2\""]);
+        assert_eq!(
+            w.to_string(),
+            "warning: m.urdf:4: joint \"g0\": <mimic> on a fixed joint has nothing to drive; ignored (the same for joint \"g1\", joint \"g2\")"
+        );
     }
 }

@@ -109,13 +109,29 @@ pub fn robot(input: TokenStream) -> TokenStream {
     let args = syn::parse_macro_input!(input as Args);
     match expand(&args) {
         Ok(ts) => ts.into(),
-        Err(msg) => syn::Error::new(args.path.span(), msg)
+        Err(e) => syn::Error::new(args.path.span(), e)
             .to_compile_error()
             .into(),
     }
 }
 
-fn expand(args: &Args) -> Result<proc_macro2::TokenStream, String> {
+/// Why `robot!` cannot expand: a compile error at the model path.
+#[derive(Debug, thiserror::Error)]
+enum ExpandError {
+    /// The model file cannot be read.
+    #[error("embedyn: cannot read the model file `{given}`: {error}")]
+    Unreadable {
+        /// The path as the user wrote it.
+        given: String,
+        #[source]
+        error: embedyn_codegen::ReadError,
+    },
+    /// The model cannot be loaded or its code generated.
+    #[error("embedyn: {0}")]
+    Load(#[from] embedyn_codegen::LoadError),
+}
+
+fn expand(args: &Args) -> Result<proc_macro2::TokenStream, ExpandError> {
     let given = args.path.value();
     // Relative paths resolve against `EMBEDYN_MODEL_DIR` when set (build systems that compile outside the
     // crate's folder, UI tests), else against the calling crate's manifest folder.
@@ -123,11 +139,14 @@ fn expand(args: &Args) -> Result<proc_macro2::TokenStream, String> {
         .or_else(|_| std::env::var("CARGO_MANIFEST_DIR"))
         .unwrap_or_else(|_| ".".into());
     let full = std::path::Path::new(&base).join(&given);
-    let text = embedyn_codegen::bounded_read::read_model_file(&full)
-        .map_err(|e| format!("embedyn: cannot read the model file `{given}`: {e}"))?;
+    let text = embedyn_codegen::bounded_read::read_model_file(&full).map_err(|error| {
+        ExpandError::Unreadable {
+            given: given.clone(),
+            error,
+        }
+    })?;
     // Messages name the file as the user wrote it, not the absolute path.
-    let loaded =
-        embedyn_codegen::parse_urdf(&text, given.as_ref()).map_err(|e| format!("embedyn: {e}"))?;
+    let loaded = embedyn_codegen::parse_urdf(&text, given.as_ref())?;
     let krate = args
         .krate
         .clone()
@@ -144,8 +163,7 @@ fn expand(args: &Args) -> Result<proc_macro2::TokenStream, String> {
         ..Default::default()
     }
     .with_requested(args.only.clone(), &args.requested);
-    let items =
-        embedyn_codegen::generate_tokens(&loaded, &options).map_err(|e| format!("embedyn: {e}"))?;
+    let items = embedyn_codegen::generate_tokens(&loaded, &options)?;
     let abs = full
         .canonicalize()
         .unwrap_or(full)
