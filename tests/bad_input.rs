@@ -1,7 +1,7 @@
 //! Every bad input of docs/model-format.md gives an error naming the file, the element and the line; nothing
 //! panics. Unusual-but-valid data loads with a warning. Fixtures: tests/data/bad/README.md.
 
-mod common;
+use crate::common;
 
 use common::repo_path;
 use embedyn::{load, ModelOptions};

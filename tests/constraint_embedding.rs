@@ -3,7 +3,7 @@
 //! equations at acceleration level, RNEA of the result, the reduced mass matrix, and the constraint
 //! Jacobian and J̇v against finite differences of the position constraint.
 
-mod common;
+use crate::common;
 
 use common::{load_model, Rng};
 use embedyn::constraints::{self, complete_configuration, complete_velocity, constraint_violation};

@@ -2,7 +2,7 @@
 //! ABA against CRBA + Cholesky, RNEA of ABA's result, M symmetric positive definite, M times the
 //! operator inverse of Eq. 6 equal to I. All to 1e-10 relative (docs/conventions.md's definition).
 
-mod common;
+use crate::common;
 
 use common::{load_model, Rng};
 use embedyn::linalg::{cholesky_in_place, solve_spd};

@@ -3,7 +3,7 @@
 //! The instantaneous check uses a central difference along (q + s q̇, v + s qdd); that straight path
 //! shares the trajectory's first derivative, which is all dE/dt needs.
 
-mod common;
+use crate::common;
 
 use common::{load_model, Rng};
 use embedyn::{aba, forward_kinematics, kinetic_energy, potential_energy, Model, Workspace};

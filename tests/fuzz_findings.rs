@@ -1,7 +1,7 @@
 //! Regressions found by fuzzing (fuzz/README.md), each pinning the fix of its root cause. The fuzz corpus
 //! itself is replayed by tests/fuzz_corpus.rs.
 
-mod common;
+use crate::common;
 
 use common::repo_path;
 use embedyn::codegen::{format_tokens, generate_tokens, parse_urdf, Algorithm, GenerateOptions};

@@ -1,7 +1,7 @@
 //! Generated code (through the `robot!` macro) against the interpreted solver, on bundled and public
 //! models: f64 to 1e-12 relative, f32 to 1e-4 of the f64 answer. The interpreted solver is the oracle.
 
-mod common;
+use crate::common;
 
 use common::{load_model, Rng};
 use embedyn::{

@@ -2,7 +2,7 @@
 //! scratch tuple, single-use values nested into expressions, results written by the part that computes
 //! them) against the interpreted solver: f64 to 1e-12 relative, f32 to 1e-4 of the f64 answer.
 
-mod common;
+use crate::common;
 
 use common::{load_model, Rng};
 use embedyn::{

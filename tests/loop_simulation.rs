@@ -3,7 +3,7 @@
 //! when the step halves), and a parallelogram four-bar approaching its toggle: accurate 1e-3 rad away,
 //! an error quoting cond(Y1) at the toggle, never NaN.
 
-mod common;
+use crate::common;
 
 use common::{load_model, Rng};
 use embedyn::constraints::{complete_configuration, complete_velocity, constraint_violation};

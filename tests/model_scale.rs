@@ -3,7 +3,7 @@
 //! the structure of a model (redundant equations, independent coordinates) is decided once, in f64, for
 //! every scalar; a constant that does not fit the scalar is an error naming it, not another model.
 
-mod common;
+use crate::common;
 
 use common::{cast, load_model, repo_path, to_f64, Rng};
 use embedyn::codegen::{generate_tokens, GenerateOptions};

@@ -2,7 +2,7 @@
 //! (tests/data/pinocchio/README.md): ABA, RNEA, non-linear effects and the mass matrix, to 1e-9 relative;
 //! the world pose of every link frame, interpreted and generated, to 1e-12 m / 1e-12.
 
-mod common;
+use crate::common;
 
 use common::{load_model, repo_path};
 use embedyn::{aba, crba, forward_kinematics, link_poses, relative_error, rnea, Workspace};

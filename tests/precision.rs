@@ -3,7 +3,7 @@
 //! from the file in f64 and converted to each scalar (its constants rounded once); f32 also rounds the
 //! inputs, as firmware would.
 
-mod common;
+use crate::common;
 
 use common::{cast, load_model, to_f64, Rng};
 use embedyn::{aba, crba, relative_error, rnea, DoubleDouble, Model, Real, Workspace};

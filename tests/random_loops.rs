@@ -7,7 +7,7 @@
 //! them at q = 0), and states are sampled near it by completion, so most cases are regular; the test
 //! counts them and requires that they are the majority, so it cannot pass by refusing everything.
 
-mod common;
+use crate::common;
 
 use common::{random_tree, Rng};
 use embedyn::constraints::{

@@ -3,7 +3,7 @@
 //! the operator inverse of Eq. 6. The tolerance scales with cond(M), the factor a backward-stable solve
 //! is allowed: tol = max(1e-10, 1e-14 · nv · cond(M)). It is fixed here, before any case ran.
 
-mod common;
+use crate::common;
 
 use common::{chain, condition_number, random_tree, Rng};
 use embedyn::linalg::solve_spd;

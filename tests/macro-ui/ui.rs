@@ -1,11 +1,11 @@
 //! Compile-time errors of `embedyn::robot!` point at the macro call and name the model element. The
-//! fixtures live in tests/data/bad; `EMBEDYN_MODEL_DIR` points the macro there, because under trybuild
+//! models live in the facade's tests/data/bad; `EMBEDYN_MODEL_DIR` points the macro there, because under trybuild
 //! `CARGO_MANIFEST_DIR` is trybuild's own project.
 
 #[test]
 fn robot_macro_errors() {
-    let bad = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data");
+    let bad = concat!(env!("CARGO_MANIFEST_DIR"), "/../data");
     std::env::set_var("EMBEDYN_MODEL_DIR", bad);
     let t = trybuild::TestCases::new();
-    t.compile_fail("tests/ui/*.rs");
+    t.compile_fail("ui/*.rs");
 }

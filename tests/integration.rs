@@ -1,0 +1,26 @@
+//! The facade's integration tests, as one test binary.
+//!
+//! Each file beside this one is a module of it rather than a binary of its own: every test binary links
+//! the whole of embedyn and instantiates its generic solver for its scalars again, so fifteen binaries
+//! cost fifteen links and fifteen copies of the same optimized code, and `cargo test` runs binaries one
+//! after another where the tests of one binary run in parallel. Three stay apart, for reasons of their own:
+//! `no_allocation` (its counting global allocator must see no other test's allocations), `hostile_names`
+//! (`#![deny(warnings)]` over the whole crate the macro expands into) and `ui` (trybuild compiles crates
+//! of its own). `autotests = false` in Cargo.toml lists the binaries.
+
+mod common;
+
+mod bad_input;
+mod constraint_embedding;
+mod dynamics_oracles;
+mod energy;
+mod fuzz_corpus;
+mod fuzz_findings;
+mod generated;
+mod generated_chain;
+mod loop_simulation;
+mod model_scale;
+mod pinocchio_reference;
+mod precision;
+mod random_loops;
+mod random_trees;
