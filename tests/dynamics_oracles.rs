@@ -11,7 +11,7 @@ use embedyn::{aba, crba, mass_matrix_inverse, relative_error, rnea, Model, Works
 
 const TOL: f64 = 1e-10;
 
-const MODELS: [(&str, bool); 5] = [
+pub const MODELS: [(&str, bool); 5] = [
     ("models/arm7.urdf", false),
     ("models/humanoid34.urdf", false),
     ("models/quadruped.urdf", false),
@@ -21,7 +21,7 @@ const MODELS: [(&str, bool); 5] = [
     ("tests/data/scenes/two_free_bodies.urdf", false),
 ];
 
-fn check_model(model: &Model<f64>, seed: u64, samples: usize) {
+pub fn check_model(model: &Model<f64>, seed: u64, samples: usize) {
     let mut rng = Rng::new(seed);
     let mut ws = Workspace::new(model);
     let nv = model.nv();

@@ -10,6 +10,7 @@
 
 mod common;
 
+mod armature;
 mod bad_input;
 mod constraint_embedding;
 mod dynamics_oracles;

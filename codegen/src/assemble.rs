@@ -294,7 +294,9 @@ fn model_build_error(robot: &Robot, e: ModelError, scalar: &'static str) -> Load
         | ModelError::FloatingInGroup { joint }
         | ModelError::BadAxis { joint }
         | ModelError::FloatingNotRoot { joint }
+        | ModelError::BadArmature { joint, .. }
         | ModelError::ParentNotYetAdded { joint, .. } => joint_named(joint),
+        ModelError::UnknownBody { .. } => None,
     };
     let kind = match e {
         // The runtime's message speaks of bodies; the file's reader knows links and what to change.

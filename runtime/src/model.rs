@@ -73,9 +73,21 @@ pub struct Joint<T: Real> {
     pub q_index: usize,
     /// Index of this joint's first entry in `v`, `tau` and `qdd`.
     pub v_index: usize,
+    /// Armature (kg·m² for a revolute joint, kg for a prismatic one): inertia felt only along the joint's
+    /// own coordinates, added to each of its diagonal entries of `M(q)` — a geared motor's rotor inertia
+    /// times the gear ratio squared, as Pinocchio's `model.armature`. Zero by default; finite and ≥ 0
+    /// ([`ModelBuilder::set_armature`] checks it).
+    pub armature: T,
 }
 
 impl<T: Real> Joint<T> {
+    /// Whether the joint has armature, known when the model is built (a constant in traced code too):
+    /// where it has none, the algorithms take the steps of a plain joint and generated code is unchanged.
+    #[inline(always)]
+    pub fn has_armature(&self) -> bool {
+        self.armature.value().is_none_or(|a| a != 0.0)
+    }
+
     /// Length of this joint's part of `q`.
     pub fn nq(&self) -> usize {
         self.joint_type.nq()
@@ -201,6 +213,20 @@ pub enum ModelError {
     BadAxis {
         /// The joint.
         joint: String,
+    },
+    /// [`ModelBuilder::set_armature`] names a body that was not added.
+    #[error("body {body} was not added, so its joint has no armature to set")]
+    UnknownBody {
+        /// The body's index.
+        body: usize,
+    },
+    /// A joint's armature is negative or not finite.
+    #[error("joint `{joint}`: armature {armature:e} must be a finite number ≥ 0")]
+    BadArmature {
+        /// The joint.
+        joint: String,
+        /// The armature given.
+        armature: f64,
     },
     /// A floating joint has a parent body.
     #[error("joint `{joint}`: a floating joint must connect a body to the world")]
@@ -438,6 +464,7 @@ impl<T: Real> Model<T> {
                     placement: j.placement.cast(),
                     q_index: j.q_index,
                     v_index: j.v_index,
+                    armature: c(j.armature),
                 })
                 .collect(),
             bodies: self
@@ -573,6 +600,7 @@ impl<T: Real> ModelBuilder<T> {
             placement,
             q_index: self.nq,
             v_index: self.nv,
+            armature: T::zero(),
         });
         self.nq += joint_type.nq();
         self.nv += joint_type.nv();
@@ -583,6 +611,22 @@ impl<T: Real> ModelBuilder<T> {
             inertia,
         });
         Ok(self.bodies.len() - 1)
+    }
+
+    /// Sets the armature of body `body`'s joint (see [`Joint::armature`]): finite and not negative.
+    pub fn set_armature(&mut self, body: usize, armature: T) -> Result<(), ModelError> {
+        let Some(joint) = self.joints.get_mut(body) else {
+            return Err(ModelError::UnknownBody { body });
+        };
+        let a = armature.to_f64();
+        if !(a.is_finite() && a >= 0.0) {
+            return Err(ModelError::BadArmature {
+                joint: joint.name.clone(),
+                armature: a,
+            });
+        }
+        joint.armature = armature;
+        Ok(())
     }
 
     /// Adds a loop, coupling or mimic relation. Body and joint indices are those returned by

@@ -158,6 +158,10 @@ pub(crate) fn factor_joint<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, i: 
         for c in 0..=r {
             d[(r, c)] = h.dot(&ws.u[v0 + c]);
         }
+        if joint.has_armature() {
+            // The rotor's inertia along the joint: D = H P H* + armature.
+            d[(r, r)] += joint.armature;
+        }
     }
     ws.d_pivot[i] = cholesky_in_place(&mut d).named(&joint.name, "d", "");
     if n == 1 {
@@ -233,8 +237,9 @@ pub(crate) fn backward_step<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, i:
     let mut z_plus = ws.force[i] + p_plus.mul_motion(&ws.coriolis[i]) + g_eps;
     // P⁺ H* = 0 and H 𝔷⁺ = 𝒯 exactly (τ̄ removes the joint's own direction). For an axis along a
     // coordinate axis that makes a row and column of P⁺ zero: set them exactly, which removes
-    // rounding noise and, in generated code, every product with them.
-    if let Some((angular, k)) = joint.coordinate_axis() {
+    // rounding noise and, in generated code, every product with them. (Not with armature: the
+    // rotor takes part of 𝒯, and P⁺ H* = U D⁻¹ armature.)
+    if let Some((angular, k)) = joint.coordinate_axis().filter(|_| !joint.has_armature()) {
         p_plus.clear_direction(angular, k);
         let sign = joint.axis[k];
         let tau_i = tau[v0] * sign;

@@ -58,7 +58,10 @@ pub fn crba<'w, T: Real>(
             let mut f = composite.mul_motion(&joint.subspace_column(k));
             // The joint's own block, mirrored so that M is exactly symmetric.
             for r in k..joint.nv() {
-                let val = joint.subspace_column(r).dot(&f);
+                let mut val = joint.subspace_column(r).dot(&f);
+                if r == k && joint.has_armature() {
+                    val += joint.armature;
+                }
                 m[(joint.v_index + r, col)] = val;
                 m[(col, joint.v_index + r)] = val;
             }

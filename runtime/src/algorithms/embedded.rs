@@ -148,7 +148,12 @@ fn group_backward<T: Real>(
     for k in 0..ni {
         let mut eps = T::zero();
         for (m, &b) in g.bodies.iter().enumerate() {
-            eps += gw.x[(m, k)] * tau[model.joints[b].v_index];
+            let joint = &model.joints[b];
+            eps += gw.x[(m, k)] * tau[joint.v_index];
+            if joint.has_armature() {
+                // The members' rotors: θ̈_G = X_G θ̈_R + κ_G, so Xᵀ armature κ is known force.
+                eps -= gw.x[(m, k)] * joint.armature * gw.kappa[m];
+            }
         }
         let mut usum = Force::zero();
         for m in 0..g.bodies.len() {
@@ -163,8 +168,13 @@ fn group_backward<T: Real>(
     for k in 0..ni {
         for l in k..ni {
             let mut d = T::zero();
-            for m in 0..g.bodies.len() {
+            for (m, &b) in g.bodies.iter().enumerate() {
                 d += gw.jac[m * ni + k].dot(&gw.u[m * ni + l]);
+                let joint = &model.joints[b];
+                if joint.has_armature() {
+                    // D_G += X_Gᵀ armature X_G.
+                    d += gw.x[(m, k)] * joint.armature * gw.x[(m, l)];
+                }
             }
             gw.d[(k, l)] = d;
             gw.d[(l, k)] = d;

@@ -70,11 +70,11 @@ pub fn rnea_with_gravity<'w, T: Real>(
         let f = ws.force[i].named(&model.bodies[i].name, "f");
         let n = joint.nv();
         for k in 0..n {
-            ws.tau[joint.v_index + k] =
-                joint
-                    .subspace_column(k)
-                    .dot(&f)
-                    .named(&joint.name, per_coordinate(&TAU, n, k), "");
+            let mut tau = joint.subspace_column(k).dot(&f);
+            if joint.has_armature() {
+                tau += joint.armature * qdd[joint.v_index + k];
+            }
+            ws.tau[joint.v_index + k] = tau.named(&joint.name, per_coordinate(&TAU, n, k), "");
         }
         if let Some(p) = joint.parent {
             let fp = ws.parent_placement[i].act_force(&f);
