@@ -361,3 +361,123 @@ fn four_bar_cut_at_terminal_and_internal_joints_agree() {
     eprintln!("four-bar internal (Eq. 44) vs terminal (Eq. 43) cut: {worst:.1e}");
     assert!(worst <= 1e-9, "the two cuts disagree by {worst:e}");
 }
+
+/// Every public function taking a state checks it as `aba` does (trial 9): a short `v` made
+/// `complete_velocity` index out of bounds, a long one and NaN entries were accepted (and the NaN written
+/// into the dependent entries); a model without loops skipped the checks of `constraint_violation` and
+/// position completion altogether.
+#[test]
+fn completion_and_constraint_functions_check_their_inputs_as_aba_does() {
+    use embedyn::constraints::{completion_step, y1_condition};
+    use embedyn::{reduced_mass_matrix, DynamicsError};
+    for path in ["models/loops/four_bar_internal.urdf", "models/arm7.urdf"] {
+        let model = load_model(path, false);
+        let mut ws = Workspace::new(&model);
+        let (nq, nv) = (model.nq(), model.nv());
+        let q = model.neutral_configuration();
+        let v = vec![0.1; nv];
+        let wrong = |name: &'static str, got: usize, expected: usize| DynamicsError::WrongLength {
+            name,
+            got,
+            expected,
+        };
+        let not_finite = |name: &'static str, index: usize| DynamicsError::NonFiniteInput {
+            name,
+            index,
+            value: f64::INFINITY,
+        };
+        let mut inf_v = v.clone();
+        inf_v[nv - 1] = f64::INFINITY;
+        let mut inf_q = q.clone();
+        inf_q[nq - 1] = f64::INFINITY;
+        // (The reference: what `aba` answers.)
+        let tau = vec![0.0; nv];
+        assert_eq!(
+            aba(&model, &mut ws, &q, &v[1..], &tau).unwrap_err(),
+            wrong("v", nv - 1, nv)
+        );
+        for bad_v in [&v[1..], &[v.clone(), vec![0.0]].concat()[..], &inf_v] {
+            let expected = if bad_v.len() == nv {
+                not_finite("v", nv - 1)
+            } else {
+                wrong("v", bad_v.len(), nv)
+            };
+            let mut out = bad_v.to_vec();
+            let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                complete_velocity(&model, &mut ws, &q, &mut out)
+            }))
+            .unwrap_or_else(|_| {
+                panic!(
+                    "{path}: complete_velocity panicked on v of length {}",
+                    bad_v.len()
+                )
+            });
+            assert_eq!(result.unwrap_err(), expected, "{path}: complete_velocity");
+            assert_eq!(out.len(), bad_v.len());
+            assert_eq!(
+                constraint_violation(&model, &mut ws, &q, bad_v).unwrap_err(),
+                expected,
+                "{path}: constraint_violation"
+            );
+            assert_eq!(
+                kkt_forward_dynamics(&model, &mut ws, &q, bad_v, &tau).unwrap_err(),
+                expected,
+                "{path}: kkt_forward_dynamics"
+            );
+        }
+        for (bad_q, expected) in [
+            (&q[1..], wrong("q", nq - 1, nq)),
+            (&inf_q[..], not_finite("q", nq - 1)),
+        ] {
+            let mut out = bad_q.to_vec();
+            assert_eq!(
+                complete_configuration(&model, &mut ws, &mut out).unwrap_err(),
+                expected,
+                "{path}: complete_configuration"
+            );
+            assert_eq!(
+                completion_step(&model, &mut ws, &mut out).unwrap_err(),
+                expected,
+                "{path}: completion_step"
+            );
+            let mut v2 = v.clone();
+            assert_eq!(
+                complete_velocity(&model, &mut ws, bad_q, &mut v2).unwrap_err(),
+                expected,
+                "{path}: complete_velocity"
+            );
+            assert_eq!(
+                constraint_violation(&model, &mut ws, bad_q, &v).unwrap_err(),
+                expected,
+                "{path}: constraint_violation"
+            );
+            assert_eq!(
+                embedding_map(&model, &mut ws, bad_q).unwrap_err(),
+                expected,
+                "{path}: embedding_map"
+            );
+            assert_eq!(
+                reduced_mass_matrix(&model, &mut ws, bad_q).unwrap_err(),
+                expected,
+                "{path}: reduced_mass_matrix"
+            );
+            // q is checked before tau, as in aba.
+            assert_eq!(
+                kkt_forward_dynamics(&model, &mut ws, bad_q, &v, &tau[1..]).unwrap_err(),
+                expected,
+                "{path}: kkt_forward_dynamics"
+            );
+            if !model.groups.is_empty() {
+                assert_eq!(
+                    y1_condition(&model, &mut ws, bad_q, 0).unwrap_err(),
+                    expected,
+                    "{path}: y1_condition"
+                );
+            }
+        }
+        // The good state still answers.
+        let mut v2 = v.clone();
+        complete_velocity(&model, &mut ws, &q, &mut v2).unwrap();
+        constraint_violation(&model, &mut ws, &q, &v2).unwrap();
+    }
+}

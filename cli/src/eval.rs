@@ -124,7 +124,6 @@ fn eval_generated(
         max_compile_memory_mb: Some(max_compile_memory_mb),
         ..Default::default()
     };
-    let binary = super::runner::build_runner(loaded, &gen_options)?;
     let (nq, nv) = (model.nq(), model.nv());
     let mut rows = Vec::with_capacity(samples.len());
     let zero = vec![0.0; nv];
@@ -132,15 +131,34 @@ fn eval_generated(
         let mut row = samples.vector(i, "q")?.to_vec();
         check_quaternions(model, &row, i)?;
         let (a, b) = match algo {
-            Algo::Aba => (samples.vector(i, "v")?, samples.vector(i, "tau")?),
-            Algo::Rnea => (samples.vector(i, "v")?, samples.vector(i, "qdd")?),
-            Algo::Crba => (&zero[..], &zero[..]),
+            Algo::Aba => (
+                ("v", "tau"),
+                (samples.vector(i, "v")?, samples.vector(i, "tau")?),
+            ),
+            Algo::Rnea => (
+                ("v", "qdd"),
+                (samples.vector(i, "v")?, samples.vector(i, "qdd")?),
+            ),
+            Algo::Crba => (("v", "tau"), (&zero[..], &zero[..])),
             other => return Err(not_evaluated(other)),
         };
+        let ((name_a, name_b), (a, b)) = (a, b);
+        // Finite in f64 but not in the scalar (1e308 as f32): refused as the interpreted engine refuses
+        // it, naming the entry, rather than reported later as whatever the generated code makes of inf.
+        match scalar {
+            Scalar::F64 => {}
+            Scalar::F32 => {
+                for (name, x) in [("q", &row[..]), (name_a, a), (name_b, b)] {
+                    fits::<f32>(name, x, i)?;
+                }
+            }
+        }
         row.extend_from_slice(a);
         row.extend_from_slice(b);
         rows.push(row);
     }
+    // (Built once every sample is known to be evaluable.)
+    let binary = super::runner::build_runner(loaded, &gen_options)?;
     let name = algo.name();
     let scalar_name = match scalar {
         Scalar::F64 => "f64",
@@ -241,6 +259,25 @@ fn project<T: Real>(
     Ok((0..x.ncols())
         .map(|c| (0..tau.len()).map(|r| x[(r, c)].to_f64() * tau[r]).sum())
         .collect())
+}
+
+/// Every entry of `x` is finite once converted to `T` (what the interpreted engine's input check finds
+/// after [`cast`]), else the same error.
+fn fits<T: Real>(name: &'static str, x: &[f64], sample: usize) -> Result<(), CliError> {
+    for (index, &value) in x.iter().enumerate() {
+        let converted = T::from_f64(value).to_f64();
+        if !converted.is_finite() {
+            return Err(CliError::Dynamics {
+                sample,
+                error: DynamicsError::NonFiniteInput {
+                    name,
+                    index,
+                    value: converted,
+                },
+            });
+        }
+    }
+    Ok(())
 }
 
 /// v indices of the independent joints, in joint order.

@@ -312,7 +312,7 @@ pub enum StateProblem {
         residual: f64,
     },
     /// A free joint's quaternion is zero (or not finite), so `complete` cannot normalize it.
-    #[error("field `q`[{start}..{end}]: the quaternion of joint `{}` is {values:?}; it must be a non-zero quaternion [qx qy qz qw] (it is normalized)", .joint.escape_debug())]
+    #[error("field `q`[{start}..{end}]: the quaternion of joint `{}` is {values:?}; it must be a non-zero quaternion [qx qy qz qw] (it is normalized)", embedyn_codegen::shortened(.joint).escape_debug())]
     ZeroQuaternion {
         /// The joint.
         joint: String,
@@ -324,7 +324,7 @@ pub enum StateProblem {
         values: Vec<f64>,
     },
     /// A free joint's quaternion is not of unit norm.
-    #[error("field `q`[{start}..{end}]: the quaternion of joint `{joint}` has norm {norm}; it must be a unit quaternion [qx qy qz qw]")]
+    #[error("field `q`[{start}..{end}]: the quaternion of joint `{}` has norm {norm}; it must be a unit quaternion [qx qy qz qw]", embedyn_codegen::shortened(.joint))]
     NotUnitQuaternion {
         /// The joint.
         joint: String,
@@ -575,11 +575,22 @@ fn options(floating: bool) -> ModelOptions {
     }
 }
 
-/// Loads the model and prints its warnings to stderr.
+/// The most warnings printed one by one; the rest are counted, as errors are
+/// ([`embedyn_codegen::MAX_LISTED_ERRORS`]).
+pub const MAX_PRINTED_WARNINGS: usize = 20;
+
+/// Loads the model and prints its warnings to stderr (at most [`MAX_PRINTED_WARNINGS`], then how many
+/// more).
 fn load_reporting(path: &Path) -> Result<Loaded, CliError> {
     let loaded = load(path)?;
-    for w in &loaded.warnings {
+    for w in loaded.warnings.iter().take(MAX_PRINTED_WARNINGS) {
         output::note(&w.to_string());
+    }
+    if loaded.warnings.len() > MAX_PRINTED_WARNINGS {
+        output::note(&format!(
+            "and {} more warnings",
+            loaded.warnings.len() - MAX_PRINTED_WARNINGS
+        ));
     }
     Ok(loaded)
 }

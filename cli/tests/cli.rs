@@ -445,6 +445,41 @@ fn complete_then_eval_a_loop_model() {
     );
 }
 
+/// Trial 9: an input finite in f64 but not in f32 (q = 1e308) was reported by the generated f32 engine as
+/// whatever its code made of inf ("a loop is at or too near a singular configuration" on a loop model);
+/// the interpreted engine names the entry. Both now say the same, and nothing is compiled for it.
+#[test]
+fn an_input_beyond_f32_is_named_by_both_engines_alike() {
+    let cache = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("cache-beyond-f32");
+    let _ = std::fs::remove_dir_all(&cache);
+    let model = repo("models/arm7.urdf");
+    for (field, entry, expected) in [
+        ("q", 0, "sample 1: `q`[0] is not a finite number (inf)"),
+        ("v", 3, "sample 1: `v`[3] is not a finite number (-inf)"),
+        ("tau", 6, "sample 1: `tau`[6] is not a finite number (inf)"),
+    ] {
+        let good = json!({"q": vec![0.0; 7], "v": vec![0.0; 7], "tau": vec![0.0; 7]});
+        let mut bad = good.clone();
+        bad[field][entry] = json!(if field == "v" { -1e308 } else { 1e308 });
+        let input = json!({ "samples": [good, bad] }).to_string();
+        for engine in ["interpreted", "generated"] {
+            let (ok, _, err) = embedyn_with_env(
+                &[
+                    "eval", &model, "--algo", "aba", "--engine", engine, "--scalar", "f32",
+                ],
+                &input,
+                &[("EMBEDYN_CACHE_DIR", cache.clone())],
+            );
+            assert!(
+                !ok && err.trim_end().ends_with(&format!("\nerror: {expected}")),
+                "{engine}: {err}"
+            );
+        }
+    }
+    let built = std::fs::read_dir(&cache).map_or(0, |d| d.count());
+    assert_eq!(built, 0, "nothing is compiled for an input that is refused");
+}
+
 /// Runs `embedyn args` with a cache folder inside the target directory.
 /// `--engine generated` checks the whole input before it compiles anything: a wrong length in the last
 /// field of the last sample is reported at once, and the cache stays empty (it once compiled first).

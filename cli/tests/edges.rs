@@ -578,3 +578,49 @@ fn json_numbers_round_trip_exactly() {
     }
     embedyn(&["eval", &model, "--algo", "aba"], &states.to_string()).json();
 }
+
+/// Trial 9: the command line's own messages (not the loader's) printed names raw: a joint name with
+/// U+202E reversed the rest of the line, and a name of megabytes became megabytes of stderr. Every line
+/// on stderr goes through the loader's escaping and is cut at a bounded length.
+#[test]
+fn the_command_lines_own_messages_escape_and_shorten_names() {
+    let dir = tmp("own-messages");
+    std::fs::create_dir_all(&dir).unwrap();
+    let long = "n".repeat(100_000);
+    for (file, name, shown) in [
+        (
+            "rlo.urdf",
+            "f&#x202E;x&#x2028;y",
+            "f\\u{202e}x\\u{2028}y".to_string(),
+        ),
+        (
+            "long.urdf",
+            long.as_str(),
+            format!("{}… (100000 bytes)", &long[..80]),
+        ),
+    ] {
+        let model = dir.join(file);
+        std::fs::write(
+            &model,
+            format!(
+                r#"<robot name="r"><link name="world"/><link name="b"><inertial><mass value="1"/><inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial></link>
+<joint name="{name}" type="floating"><parent link="world"/><child link="b"/></joint></robot>"#
+            ),
+        )
+        .unwrap();
+        let zeros = [0.0; 6];
+        let input = json!({"samples": [{"q": [0, 0, 0, 0, 0, 0, 2], "v": zeros, "tau": zeros}]});
+        let run = embedyn(
+            &["eval", model.to_str().unwrap(), "--algo", "aba"],
+            &input.to_string(),
+        );
+        let e = run.clean_failure();
+        assert!(
+            e.contains("unit quaternion") && e.contains(&shown),
+            "{}",
+            &e[..e.len().min(300)]
+        );
+        assert!(!e.contains('\u{202E}') && !e.contains('\u{2028}'), "{e:?}");
+        assert!(e.len() < 5000, "{} bytes of stderr", e.len());
+    }
+}

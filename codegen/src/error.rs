@@ -24,24 +24,93 @@ pub struct Location {
 
 impl Location {
     /// A location in `file` at `line` (1-based, when known) naming `element`.
+    ///
+    /// A name in `element` longer than [`MAX_SHOWN_CHARS`] is kept shortened (see [`shortened`]): the
+    /// element is for messages, and a problem must not copy a name of megabytes (one joint's name in
+    /// each of its two thousand `<mimic>` problems).
     pub fn new(file: &Path, line: Option<u32>, element: impl Into<String>) -> Self {
+        let mut element = element.into();
+        shorten_element(&mut element);
         Location {
             file: file.to_path_buf(),
             line,
-            element: element.into(),
+            element,
         }
     }
 }
 
+/// The most characters of a name or a value that messages show; a longer one is cut (see
+/// [`shortened`]), so that a name of 20 MB does not become 20 MB of message.
+pub const MAX_SHOWN_CHARS: usize = 80;
+
+/// `text`, or its first [`MAX_SHOWN_CHARS`] characters and `… (N bytes)` when it is longer (by more
+/// than the 32 characters that note could take, so that a shortened text is never shortened again): what
+/// messages show of a name or a value from a model file.
+pub fn shortened(text: &str) -> std::borrow::Cow<'_, str> {
+    if text.char_indices().nth(MAX_SHOWN_CHARS + 32).is_none() {
+        return std::borrow::Cow::Borrowed(text);
+    }
+    match text.char_indices().nth(MAX_SHOWN_CHARS) {
+        None => std::borrow::Cow::Borrowed(text),
+        Some((end, _)) => {
+            std::borrow::Cow::Owned(format!("{}… ({} bytes)", &text[..end], text.len()))
+        }
+    }
+}
+
+/// Shortens `text` in place where [`shortened`] would.
+pub(crate) fn shorten(text: &mut String) {
+    if let std::borrow::Cow::Owned(short) = shortened(text) {
+        *text = short;
+    }
+}
+
+/// Shortens each quoted name of an element (`joint "…" <mimic>`), and the whole where it is still long
+/// (a name made of quotes).
+fn shorten_element(element: &mut String) {
+    // (Fast path: a short element has no long name.)
+    if element.len() <= MAX_SHOWN_CHARS + 32 {
+        return;
+    }
+    let parts: Vec<std::borrow::Cow<'_, str>> = element.split('"').map(shortened).collect();
+    let mut short = parts.join("\"");
+    if short.chars().count() > 4 * MAX_SHOWN_CHARS {
+        shorten(&mut short);
+    }
+    *element = short;
+}
+
 /// Text for a terminal: control characters (from a file name, or a name written with `&#10;` or `&#27;`
 /// in the XML) shown as escapes, so that a message cannot move the cursor, recolour or clear the screen
-/// of whoever reads it, nor forge a line of its own.
-pub(crate) struct Printable<'a>(pub &'a str);
+/// of whoever reads it, nor forge a line of its own; and so are the invisible Unicode format characters
+/// that reorder or hide text (bidirectional overrides and isolates, zero-width characters, the line and
+/// paragraph separators; see [`is_hidden_format`]), so that what a message shows is what it says.
+pub struct Printable<'a>(pub &'a str);
+
+/// Unicode format characters that reorder, join or hide text, or break a line, without being control
+/// characters: U+00AD, U+061C, U+180E, U+200B–U+200F, U+2028, U+2029, U+202A–U+202E, U+2060–U+2064,
+/// U+2066–U+206F, U+FEFF, U+FFF9–U+FFFB.
+pub fn is_hidden_format(c: char) -> bool {
+    matches!(
+        c,
+        '\u{00AD}'
+            | '\u{061C}'
+            | '\u{180E}'
+            | '\u{200B}'..='\u{200F}'
+            | '\u{2028}'
+            | '\u{2029}'
+            | '\u{202A}'..='\u{202E}'
+            | '\u{2060}'..='\u{2064}'
+            | '\u{2066}'..='\u{206F}'
+            | '\u{FEFF}'
+            | '\u{FFF9}'..='\u{FFFB}'
+    )
+}
 
 impl fmt::Display for Printable<'_> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         for c in self.0.chars() {
-            if c.is_control() {
+            if c.is_control() || is_hidden_format(c) {
                 write!(f, "{}", c.escape_default())?;
             } else {
                 write!(f, "{c}")?;
@@ -85,10 +154,18 @@ pub struct LoadError {
     /// empty `also`). Empty for a problem that ends the reading (malformed XML, elements nested too
     /// deep) and for problems found after reading (building the model, generating code).
     pub also: Vec<LoadError>,
+    /// Further problems of the same pass that were counted but not kept: a pass keeps at most
+    /// [`MAX_KEPT_ERRORS`] (the earliest in the file), so that a file of a million mistakes costs no more
+    /// memory than its text. The message counts them with the unlisted ones of `also`.
+    pub omitted: usize,
 }
 
 /// The most problems [`LoadError`]'s message lists one by one; the rest are counted.
 pub const MAX_LISTED_ERRORS: usize = 20;
+
+/// The most problems one pass over a file keeps in a [`LoadError`] (the first and [`LoadError::also`]);
+/// the rest are counted in [`LoadError::omitted`].
+pub const MAX_KEPT_ERRORS: usize = 100;
 
 /// An error of another library inside a [`LoadErrorKind`], which is `Clone` and `PartialEq` (tests
 /// compare kinds) while I/O and parser errors are neither: shared rather than copied, and equal when their
@@ -345,7 +422,7 @@ pub enum LoadErrorKind {
     #[error("the model has no <link>")]
     NoLinks,
     /// More than one link is no joint's child.
-    #[error("the model has {} root links ({}); a URDF tree has exactly one", .roots.len(), .roots.join(", "))]
+    #[error("the model has {} root links ({}); a URDF tree has exactly one", .roots.len(), listed_up_to(.roots.iter().cloned(), MAX_LISTED_ERRORS))]
     SeveralRoots {
         /// The root links, in file order.
         roots: Vec<String>,
@@ -531,29 +608,83 @@ fn precision_of(scalar: &str) -> String {
 
 impl LoadError {
     /// An error at `location` of `kind`.
-    pub fn at(location: Location, kind: LoadErrorKind) -> Self {
+    ///
+    /// Names and texts in `kind` longer than [`MAX_SHOWN_CHARS`] are kept shortened ([`shortened`]), as
+    /// [`Location::new`] keeps the element's.
+    pub fn at(location: Location, mut kind: LoadErrorKind) -> Self {
+        kind.shorten_texts();
         LoadError {
             location: Box::new(location),
             kind,
             also: Vec::new(),
+            omitted: 0,
         }
     }
 
-    /// This error's first problem and those in [`also`](Self::also), in the order found.
+    /// This error's first problem and those in [`also`](Self::also), in file order.
     pub fn problems(&self) -> impl Iterator<Item = &LoadError> {
         std::iter::once(self).chain(&self.also)
     }
 
     /// The errors of one pass as one `LoadError`: the first, holding the others; `None` when there are
-    /// none.
-    pub(crate) fn collected(errors: Vec<LoadError>) -> Option<LoadError> {
+    /// none. `omitted` more were counted and not kept.
+    pub(crate) fn collected(errors: Vec<LoadError>, omitted: usize) -> Option<LoadError> {
+        let mut omitted = omitted;
         let mut errors = errors.into_iter().flat_map(|mut e| {
             let also = std::mem::take(&mut e.also);
+            omitted += std::mem::take(&mut e.omitted);
             std::iter::once(e).chain(also)
         });
         let mut first = errors.next()?;
         first.also = errors.collect();
+        first.omitted = omitted;
         Some(first)
+    }
+}
+
+impl LoadErrorKind {
+    /// Shortens every name and text from the model file ([`shorten`]).
+    fn shorten_texts(&mut self) {
+        use LoadErrorKind as K;
+        match self {
+            K::MissingAttribute { attribute: a }
+            | K::MissingElement { tag: a }
+            | K::UnknownJointType { joint_type: a }
+            | K::UnknownLoopType { loop_type: a }
+            | K::UnknownLink { link: a }
+            | K::UnknownMimicTarget { joint: a }
+            | K::FixedDriver { joint: a }
+            | K::ConstraintNameTaken { name: a, .. }
+            | K::MergedInertiaOverflow { body_link: a } => shorten(a),
+            K::NotANumber { attribute, text }
+            | K::NotFinite { attribute, text }
+            | K::NotThreeNumbers { attribute, text }
+            | K::EntryNotFinite { attribute, text }
+            | K::NotABoolean { attribute, text } => {
+                shorten(attribute);
+                shorten(text);
+            }
+            K::EntryNotANumber {
+                attribute,
+                text,
+                entry,
+            } => {
+                shorten(attribute);
+                shorten(text);
+                shorten(entry);
+            }
+            K::TwoParents { link, joint } => {
+                shorten(link);
+                shorten(joint);
+            }
+            K::Cycle { link, root } => {
+                shorten(link);
+                shorten(root);
+            }
+            K::SeveralRoots { roots } => roots.iter_mut().for_each(shorten),
+            K::NotForF32 { inner } => inner.shorten_texts(),
+            _ => {}
+        }
     }
 }
 
@@ -571,8 +702,9 @@ impl fmt::Display for LoadError {
         for e in &self.also[..listed] {
             write!(f, "\n{}: {}", e.location, Printable(&e.kind.to_string()))?;
         }
-        if self.also.len() > listed {
-            write!(f, "\nand {} more errors", self.also.len() - listed)?;
+        let more = self.also.len() - listed + self.omitted;
+        if more > 0 {
+            write!(f, "\nand {more} more errors")?;
         }
         Ok(())
     }
@@ -593,7 +725,9 @@ pub struct Warning {
     /// What is unusual.
     pub kind: WarningKind,
     /// The other elements with the same warning (talos_reduced's twelve `<mimic>` leftovers on fixed
-    /// joints): one warning names them all, since a screen of identical lines hides what differs.
+    /// joints), or with a warning of the same kind that differs only in its numbers (an inertia that is
+    /// not positive): one warning names them all, since a screen of near-identical lines hides what
+    /// differs.
     pub same_for: Vec<String>,
 }
 
@@ -638,15 +772,51 @@ pub enum WarningKind {
     ArmatureIgnored,
 }
 
+/// What [`WarningKind::fold_key`] folds by: warnings of equal keys are reported as one.
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+pub(crate) enum WarningFoldKey {
+    /// A kind whose warnings fold whatever their numbers (a tensor that is not positive, at any
+    /// values): its discriminant.
+    Kind(std::mem::Discriminant<WarningKind>),
+    /// A kind whose warnings fold only when equal: its message.
+    Message(String),
+}
+
+impl WarningKind {
+    /// What warnings fold by: kinds that differ only in their numbers fold into one line (the numbers
+    /// are the first element's, an example), kinds with names fold only when equal.
+    pub(crate) fn fold_key(&self) -> WarningFoldKey {
+        match self {
+            WarningKind::JointDynamicsIgnored { .. } => WarningFoldKey::Message(self.to_string()),
+            _ => WarningFoldKey::Kind(std::mem::discriminant(self)),
+        }
+    }
+
+    /// Whether warnings of this kind fold whatever their numbers (their message then says "also for"
+    /// rather than "the same for").
+    fn has_numbers(&self) -> bool {
+        matches!(self, WarningKind::InertiaNotPositive { .. })
+    }
+}
+
 /// The most names a warning lists one by one; the rest are counted.
 const LISTED_NAMES: usize = 5;
 
 /// `a, b, c, d, e and 3 more`.
 fn listed(names: impl ExactSizeIterator<Item = String>) -> String {
+    listed_up_to(names, LISTED_NAMES)
+}
+
+/// The first `most` of `names`, then how many more.
+fn listed_up_to(names: impl ExactSizeIterator<Item = String>, most: usize) -> String {
     let count = names.len();
-    let mut list = names.take(LISTED_NAMES).collect::<Vec<_>>().join(", ");
-    if count > LISTED_NAMES {
-        list += &format!(" and {} more", count - LISTED_NAMES);
+    let mut list = names
+        .take(most)
+        .map(|n| shortened(&n).into_owned())
+        .collect::<Vec<_>>()
+        .join(", ");
+    if count > most {
+        list += &format!(" and {} more", count - most);
     }
     list
 }
@@ -655,7 +825,12 @@ impl fmt::Display for Warning {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let mut message = self.kind.to_string();
         if !self.same_for.is_empty() {
-            message += &format!(" (the same for {})", listed(self.same_for.iter().cloned()));
+            let names = listed(self.same_for.iter().cloned());
+            if self.kind.has_numbers() {
+                message += &format!(" (also for {names}, with numbers of their own)");
+            } else {
+                message += &format!(" (the same for {names})");
+            }
         }
         write!(f, "warning: {}: {}", self.location, Printable(&message))
     }

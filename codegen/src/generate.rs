@@ -544,10 +544,16 @@ pub fn format_tokens(tokens: &TokenStream) -> Result<String, UnparsableCode> {
 /// `include!(concat!(env!("OUT_DIR"), "/robot.rs"))` inside a module). Prints the `cargo:rerun-if-changed`
 /// line for the model file.
 ///
+/// Add `embedyn-codegen` under `[build-dependencies]` (or `embedyn`, and call
+/// `embedyn::codegen::generate_file`). Report an error with `panic!("{e}")`: its `Display` lists every
+/// problem of the model file with its file:line, where `.unwrap()` would print the `Debug` form.
+///
 /// ```no_run
 /// // in build.rs's main():
 /// let out = std::path::Path::new(&std::env::var("OUT_DIR").unwrap()).join("arm.rs");
-/// embedyn_codegen::generate_file("models/arm7.urdf".as_ref(), &Default::default(), &out).unwrap();
+/// if let Err(e) = embedyn_codegen::generate_file("models/arm7.urdf".as_ref(), &Default::default(), &out) {
+///     panic!("{e}");
+/// }
 /// ```
 pub fn generate_file(
     model_path: &std::path::Path,

@@ -36,8 +36,9 @@ pub use assemble::{build_model, inertial_about_link, ModelOptions, ROOT_JOINT};
 pub use bounded_read::ReadError;
 pub use emit::EmitError;
 pub use error::{
-    AxisOf, ConstraintElement, DescriptorMismatch, LoadError, LoadErrorKind, Location, Shared,
-    Warning, WarningKind, MAX_LISTED_ERRORS,
+    is_hidden_format, shortened, AxisOf, ConstraintElement, DescriptorMismatch, LoadError,
+    LoadErrorKind, Location, Printable, Shared, Warning, WarningKind, MAX_KEPT_ERRORS,
+    MAX_LISTED_ERRORS, MAX_SHOWN_CHARS,
 };
 pub use generate::{
     format_tokens, generate_file, generate_source, generate_tokens, generation_model, Algorithm,

@@ -5,7 +5,8 @@
 
 use crate::bounded_read::read_model_file;
 use crate::error::{
-    AxisOf, ConstraintElement, LoadError, LoadErrorKind, Location, Warning, WarningKind,
+    shortened, AxisOf, ConstraintElement, LoadError, LoadErrorKind, Location, Warning,
+    WarningFoldKey, WarningKind, MAX_KEPT_ERRORS,
 };
 use crate::ir::{
     Coupling, Inertial, Joint, JointKind, Link, Loop, LoopFrame, LoopKind, Mimic, Origin, Robot,
@@ -13,7 +14,7 @@ use crate::ir::{
 use crate::xml_text::{nesting_too_deep, LineIndex, MAX_NESTING};
 use embedyn_runtime::nalgebra::Matrix3;
 use roxmltree::{Document, Node};
-use std::cell::RefCell;
+use std::cell::{Cell, RefCell};
 use std::collections::{HashMap, HashSet};
 use std::path::Path;
 
@@ -27,13 +28,20 @@ pub struct Loaded {
 }
 
 /// Warnings of one kind at several elements (talos_reduced's twelve `<mimic>` leftovers on fixed
-/// joints) become one, at the first, naming the others: a screen of identical lines hides what differs.
+/// joints, a CAD export's hundred inertias that are not positive) become one, at the first, naming the
+/// others: a screen of near-identical lines hides what differs. Warnings that differ only in their
+/// numbers fold too ([`WarningKind::fold_key`]): one line says the kind of problem and where, the first
+/// element's numbers show an example. Linear: a hash map from the kind's key to its folded warning.
 fn fold_repeated_warnings(warnings: &mut Vec<Warning>) {
     let mut folded: Vec<Warning> = Vec::new();
+    let mut first_of: HashMap<WarningFoldKey, usize> = HashMap::new();
     for w in warnings.drain(..) {
-        match folded.iter_mut().find(|first| first.kind == w.kind) {
-            Some(first) => first.same_for.push(w.location.element),
-            None => folded.push(w),
+        match first_of.get(&w.kind.fold_key()) {
+            Some(&i) => folded[i].same_for.push(w.location.element),
+            None => {
+                first_of.insert(w.kind.fold_key(), folded.len());
+                folded.push(w);
+            }
         }
     }
     *warnings = folded;
@@ -79,6 +87,7 @@ pub fn parse_urdf(text: &str, path: &Path) -> Result<Loaded, LoadError> {
         path,
         warnings: Vec::new(),
         errors: RefCell::new(Vec::new()),
+        omitted: Cell::new(0),
     };
     let robot = p.robot()?;
     Ok(Loaded {
@@ -100,10 +109,23 @@ struct Parser<'a, 'input> {
     lines: LineIndex,
     path: &'a Path,
     warnings: Vec<Warning>,
-    /// The problems found so far, in file order (serde_derive's `Ctxt`: errors collected where they are
-    /// found, through `&self`, and turned into one `LoadError` once the pass is over). A `RefCell`, so
-    /// that the readers, which borrow the parser immutably (and the closures inside them), can record.
+    /// The problems found so far, in the order found (serde_derive's `Ctxt`: errors collected where they
+    /// are found, through `&self`, and turned into one `LoadError`, in line order, once the pass is over).
+    /// A `RefCell`, so that the readers, which borrow the parser immutably (and the closures inside them),
+    /// can record. At most 2 × [`MAX_KEPT_ERRORS`]: past that the earliest in the file are kept and the
+    /// rest counted in `omitted`, so that the memory stays bounded by the file's.
     errors: RefCell<Vec<LoadError>>,
+    /// Problems found and not kept.
+    omitted: Cell<usize>,
+}
+
+/// Sorts problems by line (stably: the problems of one line stay in the order found), those without a
+/// line last, and keeps the first `keep`; returns how many it dropped.
+fn earliest_problems(errors: &mut Vec<LoadError>, keep: usize) -> usize {
+    errors.sort_by_key(|e| e.location.line.unwrap_or(u32::MAX));
+    let dropped = errors.len().saturating_sub(keep);
+    errors.truncate(keep);
+    dropped
 }
 
 impl<'a, 'input> Parser<'a, 'input> {
@@ -117,7 +139,12 @@ impl<'a, 'input> Parser<'a, 'input> {
 
     /// Records a problem at `location`; the reading goes on.
     fn record(&self, location: Location, kind: LoadErrorKind) {
-        self.errors.borrow_mut().push(LoadError::at(location, kind));
+        let mut errors = self.errors.borrow_mut();
+        errors.push(LoadError::at(location, kind));
+        if errors.len() >= 2 * MAX_KEPT_ERRORS {
+            let dropped = earliest_problems(&mut errors, MAX_KEPT_ERRORS);
+            self.omitted.set(self.omitted.get() + dropped);
+        }
     }
 
     /// Records a problem of `element` at `node`, and returns that the element is [`Reported`].
@@ -131,9 +158,12 @@ impl<'a, 'input> Parser<'a, 'input> {
         !self.errors.borrow().is_empty()
     }
 
-    /// The problems recorded, as one error; `Ok` when there are none.
+    /// The problems recorded, as one error, in line order (the reader's passes go links, joints, mimics,
+    /// loops, but the first problem reported is the earliest in the file); `Ok` when there are none.
     fn finish(&self) -> Result<(), LoadError> {
-        match LoadError::collected(self.errors.take()) {
+        let mut errors = self.errors.take();
+        let omitted = self.omitted.take() + earliest_problems(&mut errors, MAX_KEPT_ERRORS);
+        match LoadError::collected(errors, omitted) {
             Some(e) => Err(e),
             None => Ok(()),
         }
@@ -216,14 +246,12 @@ impl<'a, 'input> Parser<'a, 'input> {
             .filter_map(|n| n.attribute("name"))
             .collect();
         for joint in &joints {
+            // (Shortened once per joint, not once per <mimic>: a joint's name may be megabytes long.)
+            let element = format!("joint \"{}\" <mimic>", shortened(&joint.name));
             for m in &joint.mimics {
                 if !written_joints.contains(m.joint.as_str()) {
                     self.record(
-                        Location::new(
-                            self.path,
-                            m.line,
-                            format!("joint \"{}\" <mimic>", joint.name),
-                        ),
+                        Location::new(self.path, m.line, element.clone()),
                         LoadErrorKind::UnknownMimicTarget {
                             joint: m.joint.clone(),
                         },
@@ -914,7 +942,7 @@ fn min_eigenvalue(m: &Matrix3<f64>) -> f64 {
 #[cfg(test)]
 mod kind_tests {
     use super::*;
-    use crate::error::MAX_LISTED_ERRORS;
+    use crate::error::{MAX_LISTED_ERRORS, MAX_SHOWN_CHARS};
 
     fn error_of(text: &str) -> LoadError {
         match parse_urdf(text, Path::new("m.urdf")) {
@@ -1117,6 +1145,166 @@ mod kind_tests {
         assert_eq!(
             w.to_string(),
             "warning: m.urdf:4: joint \"g0\": <mimic> on a fixed joint has nothing to drive; ignored (the same for joint \"g1\", joint \"g2\")"
+        );
+    }
+
+    /// The bytes a problem holds (its element and its kind's message, which shows every text it keeps).
+    fn held_bytes(e: &LoadError) -> usize {
+        e.problems()
+            .map(|p| p.location.element.len() + p.kind.to_string().len())
+            .sum()
+    }
+
+    /// Trial 9: one joint of a 1 MB name with 2000 bad `<mimic>` children peaked at 3.9 GB (the name
+    /// copied into every problem). The problems kept are bounded in count and in size, the others are
+    /// counted, and the message is bounded too.
+    #[test]
+    fn many_problems_of_a_long_name_cost_memory_bounded_by_the_file() {
+        let name = "n".repeat(100_000);
+        let mimics = r#"<mimic joint="ghost"/>"#.repeat(500);
+        let text = robot_of(&format!(
+            r#"<link name="a"/><link name="b"/>
+<joint name="{name}" type="revolute"><parent link="a"/><child link="b"/>{mimics}</joint>"#
+        ));
+        let e = error_of(&text);
+        assert_eq!(e.problems().count(), MAX_KEPT_ERRORS);
+        assert_eq!(e.omitted, 500 - MAX_KEPT_ERRORS);
+        assert!(held_bytes(&e) < text.len(), "{} bytes held", held_bytes(&e));
+        let message = e.to_string();
+        assert!(message.len() < 20_000, "{} bytes of message", message.len());
+        assert!(
+            message.ends_with(&format!("\nand {} more errors", 500 - MAX_LISTED_ERRORS)),
+            "{}",
+            &message[message.len() - 200..]
+        );
+        assert!(
+            message.contains(&format!(
+                "joint \"{}… (100000 bytes)\" <mimic>",
+                &name[..80]
+            )),
+            "{}",
+            &message[..300]
+        );
+    }
+
+    /// A name or a value of megabytes is shown by its first characters and its length.
+    #[test]
+    fn long_names_and_values_are_shortened_in_messages() {
+        let long = "x".repeat(1_000_000);
+        let e = error_of(&robot_of(&format!(
+            r#"<link name="a"><inertial><mass value="{long}"/>{INERTIA}</inertial></link>"#
+        )));
+        let message = e.to_string();
+        assert!(message.len() < 400, "{}", message.len());
+        assert!(
+            message.ends_with(&format!(
+                "`value=\"{}… (1000000 bytes)\"` is not a number",
+                &long[..80]
+            )),
+            "{message}"
+        );
+        let e = error_of(&robot_of(&format!(
+            r#"<link name="a"/><joint name="j" type="fixed"><parent link="a"/><child link="{long}"/></joint>"#
+        )));
+        assert!(e.to_string().len() < 400, "{}", e.to_string().len());
+        // Names of up to MAX_SHOWN_CHARS characters are shown whole (and kept whole).
+        let ok = "é".repeat(MAX_SHOWN_CHARS);
+        let e = error_of(&robot_of(&format!(
+            r#"<link name="a"/><joint name="j" type="fixed"><parent link="a"/><child link="{ok}"/></joint>"#
+        )));
+        assert_eq!(e.kind, LoadErrorKind::UnknownLink { link: ok.clone() });
+    }
+
+    /// Trial 9 (order.urdf): the reader's passes (links, joints, mimics, loops) listed lines 6, 2, 8, 7.
+    /// Problems are reported in line order, the first the earliest in the file.
+    #[test]
+    fn problems_are_reported_in_line_order() {
+        let text = format!(
+            r#"<robot name="order">
+  <joint name="j1" type="revolutee">
+    <parent link="base"/><child link="l1"/>
+  </joint>
+  <link name="base"/>
+  <link name="l1"><inertial><mass value="-1"/>{INERTIA}</inertial></link>
+  <loop name="c" type="revolute"><predecessor link="nope"/><successor link="l1"/></loop>
+  <joint name="j2" type="revolute"><parent link="l1"/><child link="l2"/><mimic joint="ghost"/></joint>
+  <link name="l2"/>
+</robot>"#
+        );
+        let e = error_of(&text);
+        let lines: Vec<Option<u32>> = e.problems().map(|p| p.location.line).collect();
+        assert_eq!(lines, [Some(2), Some(6), Some(7), Some(8)], "{e}");
+    }
+
+    /// Past the problems kept, the earliest in the file are the ones kept.
+    #[test]
+    fn the_earliest_problems_are_kept() {
+        // Joint problems (read second) on early lines, link problems (read first) on later ones.
+        let joints: String = (0..150)
+            .map(|k| format!("<joint name=\"j{k}\" type=\"hinge\"><parent link=\"a\"/><child link=\"a\"/></joint>\n"))
+            .collect();
+        let links: String = (0..150)
+            .map(|k| format!("<link name=\"l{k}\"><inertial><mass value=\"-1\"/>{INERTIA}</inertial></link>\n"))
+            .collect();
+        let e = error_of(&robot_of(&format!("<link name=\"a\"/>\n{joints}{links}")));
+        let lines: Vec<u32> = e.problems().map(|p| p.location.line.unwrap()).collect();
+        assert_eq!(lines, (3..3 + MAX_KEPT_ERRORS as u32).collect::<Vec<_>>());
+        assert_eq!(e.omitted, 300 - MAX_KEPT_ERRORS);
+    }
+
+    /// Trial 9: U+202E and the other invisible format characters were printed raw, so a name could
+    /// reorder the rest of its line on a terminal. They are escaped as control characters are.
+    #[test]
+    fn format_characters_that_reorder_or_hide_text_are_escaped() {
+        for c in [
+            '\u{AD}', '\u{61C}', '\u{180E}', '\u{200B}', '\u{200F}', '\u{2028}', '\u{2029}',
+            '\u{202A}', '\u{202E}', '\u{2060}', '\u{2064}', '\u{2066}', '\u{206F}', '\u{FEFF}',
+            '\u{FFF9}', '\u{FFFB}',
+        ] {
+            let e = error_of(&robot_of(&format!(
+                r#"<link name="a"/><joint name="j" type="fixed"><parent link="a"/><child link="b{c}c"/></joint>"#
+            )));
+            let message = e.to_string();
+            assert!(!message.contains(c), "U+{:04X}: {message:?}", c as u32);
+            assert!(
+                message.contains(&format!("b\\u{{{:x}}}c", c as u32)),
+                "U+{:04X}: {message:?}",
+                c as u32
+            );
+        }
+        // Ordinary non-ASCII text is shown as it is.
+        let e = error_of(&robot_of(
+            r#"<link name="a"/><joint name="j" type="fixed"><parent link="a"/><child link="Gelenk-ä-関節"/></joint>"#,
+        ));
+        assert!(e.to_string().contains("\"Gelenk-ä-関節\""), "{e}");
+    }
+
+    /// Trial 9: 80k warnings took 18 s to fold (a linear search per warning, and inertias with other
+    /// numbers never folded). Warnings that differ only in their numbers fold into one line.
+    #[test]
+    fn warnings_that_differ_only_in_their_numbers_fold() {
+        let links: String = (0..2000)
+            .map(|k| {
+                format!(
+                    r#"<link name="l{k}"><inertial><mass value="1"/><inertia ixx="1" iyy="1" izz="1" ixy="{}" ixz="0" iyz="0"/></inertial></link>
+"#,
+                    2 + k
+                )
+            })
+            .collect();
+        let joints: String = (0..2000)
+            .map(|k| format!(r#"<joint name="j{k}" type="fixed"><parent link="a"/><child link="l{k}"/></joint>"#))
+            .collect();
+        let text = robot_of(&format!("<link name=\"a\"/>\n{links}{joints}"));
+        let loaded = parse_urdf(&text, Path::new("m.urdf")).unwrap();
+        assert_eq!(loaded.warnings.len(), 1, "{:?}", &loaded.warnings[..2]);
+        let w = &loaded.warnings[0];
+        assert!(matches!(w.kind, WarningKind::InertiaNotPositive { ixy, .. } if ixy == 2.0));
+        assert_eq!(w.same_for.len(), 1999);
+        assert_eq!(w.same_for[0], "link \"l1\" <inertial> <inertia>");
+        assert!(
+            w.to_string().ends_with("(also for link \"l1\" <inertial> <inertia>, link \"l2\" <inertial> <inertia>, link \"l3\" <inertial> <inertia>, link \"l4\" <inertial> <inertia>, link \"l5\" <inertial> <inertia> and 1994 more, with numbers of their own)"),
+            "{w}"
         );
     }
 }

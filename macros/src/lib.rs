@@ -119,10 +119,14 @@ pub fn robot(input: TokenStream) -> TokenStream {
 #[derive(Debug, thiserror::Error)]
 enum ExpandError {
     /// The model file cannot be read.
-    #[error("embedyn: cannot read the model file `{given}`: {error}")]
+    #[error("embedyn: cannot read the model file `{given}`{}: {error}", looked_in(.given, .full, .base))]
     Unreadable {
         /// The path as the user wrote it.
         given: String,
+        /// The path read.
+        full: std::path::PathBuf,
+        /// What a relative path is relative to.
+        base: Base,
         #[source]
         error: embedyn_codegen::ReadError,
     },
@@ -131,17 +135,54 @@ enum ExpandError {
     Load(#[from] embedyn_codegen::LoadError),
 }
 
+/// What a relative model path is relative to (named when the file cannot be read, so that a user who
+/// wrote `models/arm7.urdf` sees which folder it was looked for in).
+#[derive(Debug, Clone, Copy)]
+enum Base {
+    /// `$EMBEDYN_MODEL_DIR`.
+    ModelDir,
+    /// The calling crate's manifest folder (`$CARGO_MANIFEST_DIR`).
+    ManifestDir,
+    /// The current folder (neither variable set).
+    Current,
+}
+
+/// ` (looked for `/abs/models/arm7.urdf`: relative paths are from the crate's manifest folder)`, or
+/// nothing for an absolute path.
+fn looked_in(given: &str, full: &std::path::Path, base: &Base) -> String {
+    if std::path::Path::new(given).is_absolute() {
+        return String::new();
+    }
+    let from = match base {
+        Base::ModelDir => "EMBEDYN_MODEL_DIR, which is set",
+        Base::ManifestDir => "the calling crate's manifest folder, or EMBEDYN_MODEL_DIR when set",
+        Base::Current => {
+            "the current folder (neither CARGO_MANIFEST_DIR nor EMBEDYN_MODEL_DIR is set)"
+        }
+    };
+    format!(
+        " (looked for `{}`: relative paths are from {from})",
+        embedyn_codegen::Printable(&full.to_string_lossy())
+    )
+}
+
 fn expand(args: &Args) -> Result<proc_macro2::TokenStream, ExpandError> {
     let given = args.path.value();
     // Relative paths resolve against `EMBEDYN_MODEL_DIR` when set (build systems that compile outside the
     // crate's folder, UI tests), else against the calling crate's manifest folder.
-    let base = std::env::var("EMBEDYN_MODEL_DIR")
-        .or_else(|_| std::env::var("CARGO_MANIFEST_DIR"))
-        .unwrap_or_else(|_| ".".into());
-    let full = std::path::Path::new(&base).join(&given);
+    let (base_dir, base) = match std::env::var("EMBEDYN_MODEL_DIR") {
+        Ok(dir) => (dir, Base::ModelDir),
+        Err(_) => match std::env::var("CARGO_MANIFEST_DIR") {
+            Ok(dir) => (dir, Base::ManifestDir),
+            Err(_) => (".".into(), Base::Current),
+        },
+    };
+    let full = std::path::Path::new(&base_dir).join(&given);
     let text = embedyn_codegen::bounded_read::read_model_file(&full).map_err(|error| {
         ExpandError::Unreadable {
             given: given.clone(),
+            full: full.clone(),
+            base,
             error,
         }
     })?;

@@ -411,6 +411,10 @@ impl<T: Real> Model<T> {
     }
 
     /// `q̇` from `v` (the floating base's quaternion and position rates), for integrating in time.
+    ///
+    /// # Panics
+    /// If `q` or `qdot` is shorter than [`Model::nq`] or `v` than [`Model::nv`] (it checks nothing else:
+    /// non-finite entries give non-finite rates).
     pub fn configuration_rate(&self, q: &[T], v: &[T], qdot: &mut [T]) {
         let half = T::from_f64(0.5);
         for j in &self.joints {
@@ -436,6 +440,10 @@ impl<T: Real> Model<T> {
     }
 
     /// Rescales every floating joint's quaternion to unit length.
+    ///
+    /// # Panics
+    /// If `q` is shorter than [`Model::nq`]. (A zero quaternion becomes NaN: [`crate::aba`] and the other
+    /// algorithms refuse it.)
     pub fn normalize_configuration(&self, q: &mut [T]) {
         for j in &self.joints {
             if j.joint_type == JointType::Floating {

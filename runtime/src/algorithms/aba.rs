@@ -23,6 +23,9 @@ use nalgebra::DMatrixViewMut;
 
 /// Forward dynamics `qdd = M(q)⁻¹ (τ − C(q, v) − g(q))`. The result is also left in `ws.qdd`.
 ///
+/// Inputs are checked (lengths, NaN and infinities: [`DynamicsError`]); the result is not: finite inputs
+/// whose result overflows the scalar give `Ok` with infinite or NaN entries (docs/conventions.md, "Errors").
+///
 /// ```
 /// # use embedyn_runtime as embedyn; // the facade `embedyn` re-exports this crate
 /// use embedyn::nalgebra::{Matrix3, Vector3};

@@ -14,6 +14,9 @@ use nalgebra::DMatrix;
 
 /// The joint-space mass matrix `M(q)` (symmetric, both triangles filled). Left in `ws.mass_matrix`.
 ///
+/// Inputs are checked (lengths, NaN and infinities: [`DynamicsError`]); the result is not: finite inputs
+/// whose result overflows the scalar give `Ok` with infinite or NaN entries (docs/conventions.md, "Errors").
+///
 /// ```
 /// # use embedyn_runtime as embedyn; // the facade `embedyn` re-exports this crate
 /// use embedyn::nalgebra::{Matrix3, Vector3};

@@ -358,6 +358,9 @@ pub fn kkt_forward_dynamics<T: Real>(
     v: &[T],
     tau: &[T],
 ) -> Result<Vec<T>, DynamicsError> {
+    // In the order of the other algorithms (q, v, then tau), so that the same input gets the same error.
+    check_configuration(model, q)?;
+    check_input("v", v, model.nv())?;
     check_input("tau", tau, model.nv())?;
     let nv = model.nv();
     let zeros = vec![T::zero(); nv];

@@ -11,6 +11,9 @@ use crate::Real;
 
 /// Inverse dynamics `τ = M(q) qdd + C(q, v) + g(q)` with the model's gravity. Left in `ws.tau` too.
 ///
+/// Inputs are checked (lengths, NaN and infinities: [`DynamicsError`]); the result is not: finite inputs
+/// whose result overflows the scalar give `Ok` with infinite or NaN entries (docs/conventions.md, "Errors").
+///
 /// ```
 /// # use embedyn_runtime as embedyn; // the facade `embedyn` re-exports this crate
 /// use embedyn::nalgebra::{Matrix3, Vector3};

@@ -7,7 +7,10 @@
 
 use super::embedding::{fill_y1, group_rows, member, y1_condition_of};
 use super::{embed, jacobian, relative_residual, residuals_scaled};
-use crate::algorithms::{constraint_kinematics, position_kinematics, DynamicsError, Workspace};
+use crate::algorithms::{
+    check_configuration, check_input, constraint_kinematics, position_kinematics, DynamicsError,
+    Workspace,
+};
 #[allow(unused_imports)]
 use crate::alloc_prelude::*;
 use crate::linalg::{solve_least_squares, solve_pivoted_in_place};
@@ -22,12 +25,19 @@ pub const COMPLETION_MAX_STEPS: usize = 50;
 /// level (`J v`), each relative to the magnitudes in its equation: `|r| / max(1, magnitude)` (docs/conventions.md,
 /// so 1e-9 means 1e-9 relative, and at least 1e-9 absolute in m, rad, m/s, rad/s). NaN where a residual is
 /// not a number.
+///
+/// # Errors
+/// [`DynamicsError::WrongLength`] or [`DynamicsError::NonFiniteInput`] for a `q` or `v` of the wrong
+/// length or with a NaN or infinite entry (also for a model without constraints), and
+/// [`DynamicsError::InvalidQuaternion`] as [`crate::aba`].
 pub fn constraint_violation<T: Real>(
     model: &Model<T>,
     ws: &mut Workspace<T>,
     q: &[T],
     v: &[T],
 ) -> Result<(f64, f64), DynamicsError> {
+    check_configuration(model, q)?;
+    check_input("v", v, model.nv())?;
     if !model.has_constraints() {
         return Ok((0.0, 0.0));
     }
@@ -77,12 +87,18 @@ pub fn complete_configuration<T: Real>(
 
 /// [`complete_configuration`] with at most `iterations` Newton steps per group, stopping once the relative
 /// residual is below 64 ε.
+///
+/// # Errors
+/// As [`crate::crba`] for a `q` of the wrong length, with a NaN or infinite entry (the dependent entries,
+/// the starting guess, included) or a zero quaternion, also for a model without loops; and
+/// [`DynamicsError::SingularConstraint`] where a loop's Jacobian is singular at an iterate.
 pub fn complete_configuration_with<T: Real>(
     model: &Model<T>,
     ws: &mut Workspace<T>,
     q: &mut [T],
     iterations: usize,
 ) -> Result<f64, DynamicsError> {
+    check_configuration(model, q)?;
     let tolerance = 64.0 * T::epsilon().to_f64();
     let mut worst_overall = 0.0f64;
     for gi in 0..model.groups.len() {
@@ -103,11 +119,15 @@ pub fn complete_configuration_with<T: Real>(
 
 /// One Newton step on every group (what generated `complete` iterates): returns the largest relative
 /// residual *before* the step, so that the caller stops when it is small enough.
+///
+/// # Errors
+/// As [`complete_configuration_with`].
 pub fn completion_step<T: Real>(
     model: &Model<T>,
     ws: &mut Workspace<T>,
     q: &mut [T],
 ) -> Result<T, DynamicsError> {
+    check_configuration(model, q)?;
     let mut worst = T::zero();
     for gi in 0..model.groups.len() {
         let r = newton_step(model, ws, gi, q, true)?;
@@ -183,12 +203,21 @@ fn newton_step<T: Real>(
 }
 
 /// Replaces the dependent entries of `v` by `X_G` times the independent ones (the velocity projection).
+///
+/// # Errors
+/// As the other algorithms: [`DynamicsError::WrongLength`] or [`DynamicsError::NonFiniteInput`] for a
+/// `q` or `v` of the wrong length or with a NaN or infinite entry (every entry of `v`, the dependent ones
+/// it replaces included, so that a NaN is named rather than silently dropped), and
+/// [`DynamicsError::InvalidQuaternion`]; [`DynamicsError::SingularConstraint`] where a loop is at or too
+/// near a singular configuration. `v` is unchanged on an error in the input.
 pub fn complete_velocity<T: Real>(
     model: &Model<T>,
     ws: &mut Workspace<T>,
     q: &[T],
     v: &mut [T],
 ) -> Result<(), DynamicsError> {
+    check_configuration(model, q)?;
+    check_input("v", v, model.nv())?;
     position_kinematics(model, ws, q)?;
     let (kin, scratch) = ws.split_constraints();
     for (gi, gw) in scratch.groups.iter_mut().enumerate() {
@@ -208,6 +237,12 @@ pub fn complete_velocity<T: Real>(
 
 /// cond₁(Y1) of group `group` at `q` (by an LU factorization: an independent check of the condition
 /// number the embedding computes and compares with [`super::singularity_threshold`]).
+///
+/// # Errors
+/// As [`crate::crba`] for a `q` of the wrong length, with a NaN or infinite entry or a zero quaternion.
+///
+/// # Panics
+/// If `group` is not less than `model.groups.len()`.
 pub fn y1_condition<T: Real>(
     model: &Model<T>,
     ws: &mut Workspace<T>,

@@ -85,6 +85,12 @@ use nalgebra::DMatrix;
 
 /// Position residuals of every constraint (raw rows, in constraint order), from `ws.world_placement`
 /// (run [`crate::forward_kinematics`] first) and `q` (for the linear ones).
+///
+/// A building block that checks nothing (the checked entry points are [`crate::constraint_kinematics`],
+/// [`constraint_violation`] and the completion functions).
+///
+/// # Panics
+/// If `q` is shorter than `model.nq()` or `out` than [`Model::constraint_raw_rows`].
 pub fn residuals<T: Real>(model: &Model<T>, ws: &Workspace<T>, q: &[T], out: &mut [T]) {
     let kin = ws.kinematics();
     let mut row = 0;
@@ -100,6 +106,12 @@ pub fn residuals<T: Real>(model: &Model<T>, ws: &Workspace<T>, q: &[T], out: &mu
 /// a linear row the largest of its terms and its offset): a row is satisfied to tolerance `tol` when
 /// `|r| ≤ tol · max(1, magnitude)` (docs/conventions.md). From the kinematics `kin`
 /// ([`Workspace::kinematics`]) and `q`.
+///
+/// A building block that checks nothing (the checked entry points are [`crate::constraint_kinematics`],
+/// [`constraint_violation`] and the completion functions).
+///
+/// # Panics
+/// If `q` is shorter than `model.nq()` or `out` or `scale` than [`Model::constraint_raw_rows`].
 pub fn residuals_scaled<T: Real>(
     model: &Model<T>,
     kin: Kinematics<'_, T>,
@@ -165,6 +177,12 @@ pub(crate) fn relative_residual<T: Real>(r: T, magnitude: T) -> T {
 }
 
 /// The constraint Jacobian over all spanning velocities (raw rows × nv), from `ws.world_placement`.
+///
+/// A building block that checks nothing (the checked entry points are [`crate::constraint_kinematics`],
+/// [`constraint_violation`] and the completion functions).
+///
+/// # Panics
+/// If `out` has fewer than [`Model::constraint_raw_rows`] rows or `model.nv()` columns.
 pub fn jacobian<T: Real>(model: &Model<T>, ws: &Workspace<T>, out: &mut DMatrix<T>) {
     let kin = ws.kinematics();
     let mut row = 0;
@@ -186,6 +204,12 @@ pub fn jacobian<T: Real>(model: &Model<T>, ws: &Workspace<T>, out: &mut DMatrix<
 
 /// `J̇ v` for every constraint (raw rows), from the kinematics and the velocity-product accelerations in
 /// `ws` (see [`crate::constraint_kinematics`]).
+///
+/// A building block that checks nothing (the checked entry points are [`crate::constraint_kinematics`],
+/// [`constraint_violation`] and the completion functions).
+///
+/// # Panics
+/// If `out` is shorter than [`Model::constraint_raw_rows`].
 pub fn bias<T: Real>(model: &Model<T>, ws: &Workspace<T>, out: &mut [T]) {
     let kin = ws.kinematics();
     let mut row = 0;
