@@ -202,16 +202,52 @@ fn triangle_inequality_violation_loads_with_a_warning() {
     );
 }
 
-/// Armature is not read yet (issue 10): ignoring it silently would change M without a word, so the
-/// loader warns once per file, at the first non-zero armature.
+/// Armature is read from `<dynamics armature>` and from transmissions' rotor inertias times their
+/// ratio squared (Drake's gear ratio, else `<mechanicalReduction>`, else 1), without a warning.
 #[test]
-fn armature_loads_with_a_warning() {
-    let w = warnings_of("armature.urdf");
-    assert_eq!(w.len(), 1, "{w:?}");
-    assert!(
-        w[0].contains("armature.urdf:14: <dynamics>") && w[0].contains("not supported yet"),
-        "{w:?}"
-    );
+fn armature_is_read_from_dynamics_and_transmissions() {
+    let loaded = load(&repo_path("tests/data/armature.urdf")).unwrap();
+    assert!(loaded.warnings.is_empty(), "{:?}", loaded.warnings);
+    let model = loaded.model::<f64>(&ModelOptions::default()).unwrap();
+    let armature: Vec<(&str, f64)> = model
+        .joints
+        .iter()
+        .map(|j| (j.name.as_str(), j.armature))
+        .collect();
+    let expected = [("j1", 100.0 * 2e-4), ("j2", 0.5 + 9.0 * 1e-4), ("j3", 0.1)];
+    for ((name, got), (want_name, want)) in armature.iter().zip(expected) {
+        assert_eq!(*name, want_name);
+        assert!(
+            (got - want).abs() <= 1e-15 * want,
+            "{name}: {got} vs {want}"
+        );
+    }
+}
+
+/// A negative armature or rotor inertia, a ratio that is not a number, and a rotor on a joint the model
+/// lacks are errors at their lines.
+#[test]
+fn bad_armature_is_an_error_at_its_line() {
+    let head = r#"<robot name="r" xmlns:drake="http://drake.mit.edu"><link name="base"/><link name="l"><inertial><mass value="1"/><inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial></link>
+<joint name="j" type="revolute"><parent link="base"/><child link="l"/>"#;
+    let cases = [
+        (r#"<dynamics armature="-1"/></joint>"#, "`armature` is -1e0; it must be ≥ 0"),
+        (
+            "</joint>\n<transmission name=\"t\"><joint name=\"j\"/><actuator name=\"m\"><drake:rotor_inertia value=\"1e-4\"/><mechanicalReduction>fifty</mechanicalReduction></actuator></transmission>",
+            "<mechanicalReduction> holds \"fifty\"",
+        ),
+        (
+            "</joint>\n<transmission name=\"t\"><joint name=\"k\"/><actuator name=\"m\"><drake:rotor_inertia value=\"1e-4\"/></actuator></transmission>",
+            "joint \"k\", which the model does not have",
+        ),
+    ];
+    for (tail, message) in cases {
+        let text = format!("{head}{tail}</robot>");
+        let e = embedyn::codegen::parse_urdf(&text, "r.urdf".as_ref())
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains(message) && e.contains("r.urdf:"), "{e}");
+    }
 }
 
 /// One warning at several elements is reported once, at the first, naming the others (talos_reduced

@@ -51,6 +51,12 @@ mod six_bar {
 mod parallel_gripper {
     embedyn::robot!("models/loops/parallel_gripper.urdf");
 }
+mod armature_arm {
+    embedyn::robot!("tests/data/armature.urdf", minv);
+}
+mod four_bar_armature {
+    embedyn::robot!("tests/data/loops/four_bar_armature.urdf");
+}
 mod four_bar_aba_only {
     // Exactly `aba` (no completion, embedding or XᵀMX): what a firmware loop that integrates needs.
     embedyn::robot!(
@@ -335,6 +341,18 @@ fn other_bundled_mechanisms_generated_match_interpreted() {
     check!(
         parallel_gripper,
         "models/loops/parallel_gripper.urdf",
+        false
+    );
+}
+
+/// Armature read from `<dynamics>` and transmissions, in generated aba, rnea, crba and minv of a tree
+/// and in a four-bar's aggregate link (on an independent and a dependent member).
+#[test]
+fn armature_generated_matches_interpreted() {
+    check!(armature_arm, "tests/data/armature.urdf", false, minv);
+    check!(
+        four_bar_armature,
+        "tests/data/loops/four_bar_armature.urdf",
         false
     );
 }

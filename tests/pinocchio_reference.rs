@@ -132,6 +132,15 @@ fn solo12_floating_base() {
     check_robot("solo12_floating", true);
 }
 
+/// Armature (issue 10) against Pinocchio with `model.armature` set (tests/data/pinocchio/armature.py): a
+/// three-joint arm whose armature comes from `<dynamics>` and from transmissions (so the loader's
+/// reading is checked too), and a floating Solo-12 with armature on its twelve joints.
+#[test]
+fn armature_matches_pinocchio() {
+    check_robot("armature_arm", false);
+    check_robot("solo12_armature_floating", true);
+}
+
 mod ur5_generated {
     embedyn::robot!("tests/data/pinocchio/ur5.urdf", f64_only);
 }

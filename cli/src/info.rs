@@ -19,6 +19,7 @@ pub fn info(loaded: &Loaded, options: &ModelOptions) -> Result<Value, CliError> 
                 "q_index": j.q_index,
                 "v_index": j.v_index,
                 "independent": model.is_independent(i),
+                "armature": j.armature,
             })
         })
         .collect();

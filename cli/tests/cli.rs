@@ -71,6 +71,24 @@ fn info_reports_joint_order_and_sizes() {
     assert_eq!(info["bodies"][2]["links"], json!(["link3", "link3_spacer"]));
 }
 
+/// `info` reports each joint's armature: `<dynamics armature>` plus r² · I of its transmission's rotor.
+#[test]
+fn info_reports_armature() {
+    let info = json_of(&["info", &repo("tests/data/armature.urdf")], "");
+    let armature: Vec<f64> = info["joints"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|j| j["armature"].as_f64().unwrap())
+        .collect();
+    assert_eq!(armature.len(), 3);
+    for (got, want) in armature.iter().zip([0.02, 0.5009, 0.1]) {
+        assert!((got - want).abs() <= 1e-15, "{armature:?}");
+    }
+    let plain = json_of(&["info", &repo("models/arm7.urdf")], "");
+    assert_eq!(plain["joints"][0]["armature"], 0.0);
+}
+
 #[test]
 fn info_floating_adds_root_joint_first() {
     let info = json_of(

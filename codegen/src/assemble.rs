@@ -236,6 +236,14 @@ fn build_model_f64(robot: &Robot, options: &ModelOptions) -> Result<Model<f64>, 
             .map_err(|e| {
                 LoadError::at(joint_location(robot, bodies_joint(&bodies, b)), e.into())
             })?;
+        if let Some(j) = pending.joint {
+            let armature = robot.joints[j].armature;
+            if armature != 0.0 {
+                builder
+                    .set_armature(index, armature)
+                    .map_err(|e| LoadError::at(joint_location(robot, Some(j)), e.into()))?;
+            }
+        }
         let mut links = pending.links.clone();
         // The body's own link first.
         if let Some(k) = links

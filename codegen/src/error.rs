@@ -318,6 +318,31 @@ pub enum LoadErrorKind {
         /// Its text.
         text: String,
     },
+    /// An attribute that must not be negative is (an armature, a rotor inertia).
+    #[error("`{attribute}` is {value:e}; it must be ≥ 0")]
+    Negative {
+        /// The attribute.
+        attribute: String,
+        /// Its value.
+        value: f64,
+    },
+    /// An element whose text must be a number (`<mechanicalReduction>50</mechanicalReduction>`) holds
+    /// something else.
+    #[error("<{element}> holds \"{text}\", which is not a finite number")]
+    TextNotANumber {
+        /// The element.
+        element: String,
+        /// Its text.
+        text: String,
+    },
+    /// A transmission with a rotor inertia names a joint the model does not have (or none).
+    #[error(
+        "its rotor inertia would add armature to joint \"{joint}\", which the model does not have"
+    )]
+    UnknownTransmissionJoint {
+        /// The joint named (empty when the transmission names none).
+        joint: String,
+    },
     /// An attribute that must be a finite number is infinite or NaN.
     #[error("`{attribute}=\"{text}\"` is not a finite number")]
     NotFinite {
@@ -767,9 +792,6 @@ pub enum WarningKind {
         /// The joints with non-zero damping or friction, in file order.
         joints: Vec<String>,
     },
-    /// A motor's armature, not supported yet.
-    #[error("armature (a motor's reflected rotor inertia) is not supported yet and is ignored: the dynamics computed are those without it")]
-    ArmatureIgnored,
 }
 
 /// What [`WarningKind::fold_key`] folds by: warnings of equal keys are reported as one.

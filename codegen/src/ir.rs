@@ -98,6 +98,8 @@ pub struct Joint {
     pub mimics: Vec<Mimic>,
     /// URDF+'s `independent` attribute, if given.
     pub independent: Option<bool>,
+    /// Armature (kg·m² or kg): `<dynamics armature>` plus r² · I of each transmission's rotor on it.
+    pub armature: f64,
     /// Line of the element in the model file, for messages.
     pub line: Option<u32>,
 }

@@ -302,7 +302,7 @@ impl<'a, 'input> Parser<'a, 'input> {
         }
         self.finish()?;
         self.warn_ignored_joint_dynamics(root);
-        self.warn_ignored_armature(root);
+        self.transmissions(root, &mut joints);
         fold_repeated_warnings(&mut self.warnings);
         Ok(Robot {
             name,
@@ -588,6 +588,10 @@ impl<'a, 'input> Parser<'a, 'input> {
             self.warn(node, what.clone(), WarningKind::MimicOnFixedJoint);
             mimics = Ok(Vec::new());
         }
+        let armature = match node.children().find(|d| d.has_tag_name("dynamics")) {
+            None => Ok(0.0),
+            Some(d) => self.non_negative(d, "armature", &format!("{what} <dynamics>")),
+        };
         let independent = match node.attribute("independent") {
             None => Ok(None),
             Some("true") => Ok(Some(true)),
@@ -602,6 +606,7 @@ impl<'a, 'input> Parser<'a, 'input> {
             ),
         };
         Ok(Joint {
+            armature: armature?,
             name: name.to_string(),
             kind: kind?,
             parent: parent?,
@@ -693,21 +698,83 @@ impl<'a, 'input> Parser<'a, 'input> {
         );
     }
 
-    /// A motor's armature (`<dynamics armature>`, or a transmission's `<drake:rotor_inertia>`) is not
-    /// read yet: it would add to M's diagonal, so ignoring it changes the numbers. One warning per file, at
-    /// the first element that has a non-zero one, until armature is supported.
-    fn warn_ignored_armature(&mut self, root: Node) {
-        let nonzero = |v: Option<&str>| v.is_some_and(|v| v.trim().parse::<f64>() != Ok(0.0));
-        let armature = root
-            .descendants()
-            .filter(|d| d.has_tag_name("dynamics") && nonzero(d.attribute("armature")))
-            .chain(root.descendants().filter(|d| {
-                d.tag_name().name() == "rotor_inertia" && nonzero(d.attribute("value"))
-            }))
-            .min_by_key(|d| d.range().start);
-        if let Some(node) = armature {
-            let what = format!("<{}>", node.tag_name().name());
-            self.warn(node, what, WarningKind::ArmatureIgnored);
+    /// ROS `<transmission>` blocks: each `<actuator>` with a rotor inertia I (Drake's
+    /// `<drake:rotor_inertia value>`) adds r² · I to the armature of the transmission's joint, with r its
+    /// `<drake:gear_ratio value>`, else its `<mechanicalReduction>` (in the actuator or, in the older
+    /// form, the transmission), else 1. A transmission without a rotor inertia adds nothing, whatever it
+    /// names (ROS files carry many for controllers only).
+    fn transmissions(&mut self, root: Node, joints: &mut [Joint]) {
+        let local = |n: &Node, tag: &str| n.is_element() && n.tag_name().name() == tag;
+        for t in root.children().filter(|n| n.has_tag_name("transmission")) {
+            let what = format!("transmission \"{}\"", t.attribute("name").unwrap_or(""));
+            let joint = t
+                .children()
+                .find(|n| n.has_tag_name("joint"))
+                .and_then(|n| n.attribute("name"));
+            for actuator in t.children().filter(|n| n.has_tag_name("actuator")) {
+                let Some(inertia) = actuator.children().find(|n| local(n, "rotor_inertia")) else {
+                    continue;
+                };
+                let aw = format!("{what} <actuator>");
+                let Ok(rotor) = self.non_negative(inertia, "value", &aw) else {
+                    continue;
+                };
+                let ratio = if let Some(g) = actuator.children().find(|n| local(n, "gear_ratio")) {
+                    self.number(g, "value", None, &aw)
+                } else if let Some(m) = actuator
+                    .children()
+                    .chain(t.children())
+                    .find(|n| local(n, "mechanicalReduction"))
+                {
+                    self.element_number(m, &aw)
+                } else {
+                    Ok(1.0)
+                };
+                let Ok(ratio) = ratio else {
+                    continue;
+                };
+                match joint.and_then(|name| joints.iter_mut().find(|j| j.name == name)) {
+                    Some(j) => j.armature += ratio * ratio * rotor,
+                    None => self.record(
+                        self.loc(t, what.clone()),
+                        LoadErrorKind::UnknownTransmissionJoint {
+                            joint: joint.unwrap_or("").to_string(),
+                        },
+                    ),
+                }
+            }
+        }
+    }
+
+    /// A finite number ≥ 0 in attribute `attr` (0 when absent).
+    fn non_negative(&self, node: Node, attr: &str, what: &str) -> Parsed<f64> {
+        let x = self.number(node, attr, Some(0.0), what)?;
+        if x < 0.0 {
+            return self.fail(
+                node,
+                what,
+                LoadErrorKind::Negative {
+                    attribute: attr.into(),
+                    value: x,
+                },
+            );
+        }
+        Ok(x)
+    }
+
+    /// The text of an element such as `<mechanicalReduction>50</mechanicalReduction>`, a finite number.
+    fn element_number(&self, node: Node, what: &str) -> Parsed<f64> {
+        let text = node.text().unwrap_or("").trim();
+        match text.parse::<f64>() {
+            Ok(x) if x.is_finite() => Ok(x),
+            _ => self.fail(
+                node,
+                what,
+                LoadErrorKind::TextNotANumber {
+                    element: node.tag_name().name().into(),
+                    text: text.into(),
+                },
+            ),
         }
     }
 
