@@ -754,6 +754,9 @@ pub struct Warning {
     /// not positive): one warning names them all, since a screen of near-identical lines hides what
     /// differs.
     pub same_for: Vec<String>,
+    /// Whether some warning folded into this one had other numbers than `kind`'s (which are then the
+    /// first element's, an example): the message says "also for" rather than "the same for".
+    pub numbers_differ: bool,
 }
 
 /// What is unusual, with its data; displayed as the warning's message after the location.
@@ -813,12 +816,6 @@ impl WarningKind {
             _ => WarningFoldKey::Kind(std::mem::discriminant(self)),
         }
     }
-
-    /// Whether warnings of this kind fold whatever their numbers (their message then says "also for"
-    /// rather than "the same for").
-    fn has_numbers(&self) -> bool {
-        matches!(self, WarningKind::InertiaNotPositive { .. })
-    }
 }
 
 /// The most names a warning lists one by one; the rest are counted.
@@ -848,7 +845,7 @@ impl fmt::Display for Warning {
         let mut message = self.kind.to_string();
         if !self.same_for.is_empty() {
             let names = listed(self.same_for.iter().cloned());
-            if self.kind.has_numbers() {
+            if self.numbers_differ {
                 message += &format!(" (also for {names}, with numbers of their own)");
             } else {
                 message += &format!(" (the same for {names})");

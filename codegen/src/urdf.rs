@@ -37,7 +37,11 @@ fn fold_repeated_warnings(warnings: &mut Vec<Warning>) {
     let mut first_of: HashMap<WarningFoldKey, usize> = HashMap::new();
     for w in warnings.drain(..) {
         match first_of.get(&w.kind.fold_key()) {
-            Some(&i) => folded[i].same_for.push(w.location.element),
+            Some(&i) => {
+                let first = &mut folded[i];
+                first.numbers_differ |= first.kind != w.kind;
+                first.same_for.push(w.location.element);
+            }
             None => {
                 first_of.insert(w.kind.fold_key(), folded.len());
                 folded.push(w);
@@ -174,6 +178,7 @@ impl<'a, 'input> Parser<'a, 'input> {
             location: self.loc(node, element),
             kind,
             same_for: Vec::new(),
+            numbers_differ: false,
         };
         self.warnings.push(w);
     }
@@ -1368,6 +1373,7 @@ mod kind_tests {
         let w = &loaded.warnings[0];
         assert!(matches!(w.kind, WarningKind::InertiaNotPositive { ixy, .. } if ixy == 2.0));
         assert_eq!(w.same_for.len(), 1999);
+        assert!(w.numbers_differ);
         assert_eq!(w.same_for[0], "link \"l1\" <inertial> <inertia>");
         assert!(
             w.to_string().ends_with("(also for link \"l1\" <inertial> <inertia>, link \"l2\" <inertial> <inertia>, link \"l3\" <inertial> <inertia>, link \"l4\" <inertial> <inertia>, link \"l5\" <inertial> <inertia> and 1994 more, with numbers of their own)"),
