@@ -305,9 +305,10 @@ impl<'a, 'input> Parser<'a, 'input> {
             }
             constraint_names.insert(name, (tag, line));
         }
+        // Before `finish`: a transmission's problems are collected with the others.
+        self.transmissions(root, &mut joints);
         self.finish()?;
         self.warn_ignored_joint_dynamics(root);
-        self.transmissions(root, &mut joints);
         fold_repeated_warnings(&mut self.warnings);
         Ok(Robot {
             name,
