@@ -57,6 +57,15 @@ mod armature_arm {
 mod four_bar_armature {
     embedyn::robot!("tests/data/loops/four_bar_armature.urdf");
 }
+mod moon_arm {
+    // The arm on the Moon, gravity folded into the code.
+    embedyn::robot!(
+        "models/arm7.urdf",
+        gravity = [0.0, 0.0, -1.62],
+        f64_only,
+        only(rnea)
+    );
+}
 mod four_bar_aba_only {
     // Exactly `aba` (no completion, embedding or XᵀMX): what a firmware loop that integrates needs.
     embedyn::robot!(
@@ -343,6 +352,41 @@ fn other_bundled_mechanisms_generated_match_interpreted() {
         "models/loops/parallel_gripper.urdf",
         false
     );
+}
+
+/// `gravity = [x, y, z]` is folded into the generated code: its `rnea` at rest is the interpreted gravity
+/// torque of the model loaded with that gravity, which is the Earth's scaled by 1.62 / 9.81 (gravity
+/// torques are linear in g).
+#[test]
+fn gravity_option_is_folded_into_generated_code() {
+    let loaded = embedyn::load(&common::repo_path("models/arm7.urdf")).unwrap();
+    let moon = loaded
+        .model::<f64>(&embedyn::ModelOptions {
+            gravity: [0.0, 0.0, -1.62],
+            ..Default::default()
+        })
+        .unwrap();
+    let earth: Model<f64> = load_model("models/arm7.urdf", false);
+    let mut rng = Rng::new(21);
+    let zeros = [0.0; moon_arm::NV];
+    for _ in 0..10 {
+        let q = rng.configuration(&moon);
+        let mut generated = [0.0; moon_arm::NV];
+        moon_arm::f64::rnea(q[..].try_into().unwrap(), &zeros, &zeros, &mut generated);
+        let interpreted = rnea(&moon, &mut Workspace::new(&moon), &q, &zeros, &zeros)
+            .unwrap()
+            .to_vec();
+        let scaled: Vec<f64> = rnea(&earth, &mut Workspace::new(&earth), &q, &zeros, &zeros)
+            .unwrap()
+            .iter()
+            .map(|t| t * 1.62 / 9.81)
+            .collect();
+        assert!(relative_error(&generated, &interpreted) <= 1e-13);
+        assert!(
+            relative_error(&interpreted, &scaled) <= 1e-13,
+            "{interpreted:?} {scaled:?}"
+        );
+    }
 }
 
 /// Armature read from `<dynamics>` and transmissions, in generated aba, rnea, crba and minv of a tree

@@ -69,6 +69,46 @@ pub struct Cli {
     pub command: Command,
 }
 
+/// Model options every command takes (CONTRACT §1 "Scene options").
+#[derive(clap::Args, Debug, Clone, Default)]
+pub struct SceneArgs {
+    /// Make the URDF root free with a floating joint named `root_joint`.
+    #[arg(long)]
+    pub floating: bool,
+    /// Gravity in the world frame, m/s² (default 0,0,-9.81).
+    #[arg(long, value_name = "X,Y,Z", value_parser = parse_gravity, allow_hyphen_values = true)]
+    pub gravity: Option<[f64; 3]>,
+}
+
+impl SceneArgs {
+    /// The loader's options for this scene.
+    pub fn options(&self) -> ModelOptions {
+        let mut options = ModelOptions {
+            floating: self.floating,
+            ..Default::default()
+        };
+        if let Some(g) = self.gravity {
+            options.gravity = g;
+        }
+        options
+    }
+}
+
+/// `X,Y,Z`: three finite numbers.
+fn parse_gravity(text: &str) -> Result<[f64; 3], String> {
+    let parts: Vec<&str> = text.split(',').map(str::trim).collect();
+    let numbers: Vec<f64> = parts
+        .iter()
+        .filter_map(|p| p.parse::<f64>().ok().filter(|x| x.is_finite()))
+        .collect();
+    match numbers[..] {
+        [x, y, z] if parts.len() == 3 => Ok([x, y, z]),
+        _ => Err(format!(
+            "expected three finite numbers X,Y,Z in m/s² (e.g. 0,0,-9.81), got \"{text}\""
+        )),
+    }
+}
+
 /// The commands of `embedyn`.
 #[derive(Subcommand, Debug)]
 pub enum Command {
@@ -76,18 +116,18 @@ pub enum Command {
     Info {
         /// The model file (URDF or URDF+).
         model: PathBuf,
-        /// Make the URDF root free with a floating joint named `root_joint`.
-        #[arg(long)]
-        floating: bool,
+        /// The scene: `--floating`, `--gravity`.
+        #[command(flatten)]
+        scene: SceneArgs,
     },
     /// Make states consistent with the loops and couplings: solve the dependent coordinates of `q` from the
     /// independent ones (the given dependent entries are the starting guess) and project `v`.
     Complete {
         /// The model file (URDF or URDF+).
         model: PathBuf,
-        /// Make the URDF root free with a floating joint named `root_joint`.
-        #[arg(long)]
-        floating: bool,
+        /// The scene: `--floating`, `--gravity`.
+        #[command(flatten)]
+        scene: SceneArgs,
         /// JSON input: `{"samples": [{"q": [...], "v": [...]}]}`; stdin when absent.
         #[arg(long)]
         input: Option<PathBuf>,
@@ -99,9 +139,9 @@ pub enum Command {
         /// Output folder (created if needed).
         #[arg(long)]
         out: PathBuf,
-        /// Make the URDF root free with a floating joint named `root_joint`.
-        #[arg(long)]
-        floating: bool,
+        /// The scene: `--floating`, `--gravity`.
+        #[command(flatten)]
+        scene: SceneArgs,
         /// Also generate `minv` (the O(N²) inverse mass matrix of Eq. 6).
         #[arg(long)]
         minv: bool,
@@ -120,9 +160,9 @@ pub enum Command {
     Bench {
         /// The model file (URDF or URDF+).
         model: PathBuf,
-        /// Make the URDF root free with a floating joint named `root_joint`.
-        #[arg(long)]
-        floating: bool,
+        /// The scene: `--floating`, `--gravity`.
+        #[command(flatten)]
+        scene: SceneArgs,
         /// Print JSON instead of a table.
         #[arg(long)]
         json: bool,
@@ -143,9 +183,9 @@ pub enum Command {
         /// The scalar type it computes in.
         #[arg(long, value_enum, default_value = "f64")]
         scalar: Scalar,
-        /// Make the URDF root free with a floating joint named `root_joint`.
-        #[arg(long)]
-        floating: bool,
+        /// The scene: `--floating`, `--gravity`.
+        #[command(flatten)]
+        scene: SceneArgs,
         /// JSON input: `{"samples": [...]}`; stdin when absent.
         #[arg(long)]
         input: Option<PathBuf>,
@@ -447,18 +487,18 @@ pub enum Printed {
 /// Runs a parsed command, returning what to print.
 pub fn run(cli: Cli) -> Result<Printed, CliError> {
     match cli.command {
-        Command::Info { model, floating } => {
+        Command::Info { model, scene } => {
             let loaded = load_reporting(&model)?;
-            info::info(&loaded, &options(floating)).map(Printed::Json)
+            info::info(&loaded, &scene.options()).map(Printed::Json)
         }
         Command::Bench {
             model,
-            floating,
+            scene,
             json,
             max_compile_memory,
         } => {
             let loaded = load_reporting(&model)?;
-            let result = bench::bench(&loaded, &options(floating), max_compile_memory)?;
+            let result = bench::bench(&loaded, &scene.options(), max_compile_memory)?;
             Ok(if json {
                 Printed::Json(result)
             } else {
@@ -468,7 +508,7 @@ pub fn run(cli: Cli) -> Result<Printed, CliError> {
         Command::Generate {
             model,
             out,
-            floating,
+            scene,
             minv,
             only,
             scalar,
@@ -476,7 +516,7 @@ pub fn run(cli: Cli) -> Result<Printed, CliError> {
         } => {
             let loaded = load_reporting(&model)?;
             let options = embedyn_codegen::GenerateOptions {
-                model: options(floating),
+                model: scene.options(),
                 f64: scalar != Some(Scalar::F32),
                 f32: scalar != Some(Scalar::F64),
                 max_compile_memory_mb: Some(max_compile_memory),
@@ -509,19 +549,19 @@ pub fn run(cli: Cli) -> Result<Printed, CliError> {
         }
         Command::Complete {
             model,
-            floating,
+            scene,
             input,
         } => {
             let loaded = load_reporting(&model)?;
             let text = read_input(input.as_deref())?;
-            complete::complete(&loaded, &options(floating), &text).map(Printed::Completed)
+            complete::complete(&loaded, &scene.options(), &text).map(Printed::Completed)
         }
         Command::Eval {
             model,
             algo,
             engine,
             scalar,
-            floating,
+            scene,
             input,
             max_compile_memory,
         } => {
@@ -529,7 +569,7 @@ pub fn run(cli: Cli) -> Result<Printed, CliError> {
             let text = read_input(input.as_deref())?;
             eval::eval(
                 &loaded,
-                &options(floating),
+                &scene.options(),
                 algo,
                 engine,
                 scalar,
@@ -566,13 +606,6 @@ pub fn complete_text(
 /// The document as a JSON tree (for the fuzzer, which inspects it; inputs there are small).
 fn as_value<T: serde::Serialize>(document: &T) -> Result<serde_json::Value, CliError> {
     serde_json::to_value(document).map_err(|e| InternalError::NotJson(e).into())
-}
-
-fn options(floating: bool) -> ModelOptions {
-    ModelOptions {
-        floating,
-        ..Default::default()
-    }
 }
 
 /// The most warnings printed one by one; the rest are counted, as errors are

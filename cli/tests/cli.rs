@@ -71,6 +71,40 @@ fn info_reports_joint_order_and_sizes() {
     assert_eq!(info["bodies"][2]["links"], json!(["link3", "link3_spacer"]));
 }
 
+/// `--gravity X,Y,Z` sets the scene's gravity for every command: the gravity torque on the Moon is the
+/// Earth's times 1.62 / 9.81; a malformed value is a usage error.
+#[test]
+fn gravity_option_scales_the_gravity_torque() {
+    let model = repo("models/arm7.urdf");
+    let zeros = vec![0.0; 7];
+    let input = json!({"samples": [{"q": [0.3, -0.5, 0.2, 1.0, -0.4, 0.6, 0.1],
+        "v": zeros, "qdd": zeros}]})
+    .to_string();
+    let earth = json_of(&["eval", &model, "--algo", "rnea"], &input);
+    let moon = json_of(
+        &["eval", &model, "--algo", "rnea", "--gravity", "0,0,-1.62"],
+        &input,
+    );
+    let (e, m) = (
+        flat(&earth["samples"][0]["tau"]),
+        flat(&moon["samples"][0]["tau"]),
+    );
+    assert!(e.iter().any(|t| t.abs() > 1e-3), "{e:?}");
+    for (e, m) in e.iter().zip(&m) {
+        assert!(
+            (m - e * 1.62 / 9.81).abs() <= 1e-12 * (1.0 + e.abs()),
+            "{e} {m}"
+        );
+    }
+    for bad in ["0,0", "0,0,x", "0,0,inf"] {
+        let err = error_of(&["info", &model, "--gravity", bad], "");
+        assert!(
+            err.contains("--gravity") && err.contains("three finite numbers"),
+            "{err}"
+        );
+    }
+}
+
 /// `info` reports each joint's armature: `<dynamics armature>` plus r² · I of its transmission's rotor.
 #[test]
 fn info_reports_armature() {

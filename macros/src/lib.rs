@@ -9,7 +9,8 @@ use syn::parse::{Parse, ParseStream};
 use syn::{Ident, LitStr, Path, Token};
 
 /// `robot!("model.urdf")` or `robot!("model.urdf", floating, minv, only(aba, kinematics), crate = ::my_facade)`
-/// (and `max_compile_memory = 4096` to raise the limit on rustc's estimated memory, MB).
+/// (and `max_compile_memory = 4096` to raise the limit on rustc's estimated memory, MB; `gravity = [0.0,
+/// 0.0, -1.62]` for another gravity than (0, 0, −9.81) m/s², folded into the code).
 struct Args {
     path: LitStr,
     floating: bool,
@@ -22,6 +23,34 @@ struct Args {
     only: Option<Vec<embedyn_codegen::Algorithm>>,
     /// `max_compile_memory = MB`.
     max_compile_memory: u64,
+    /// `gravity = [x, y, z]` (m/s², world frame).
+    gravity: Option<[f64; 3]>,
+}
+
+/// `[x, y, z]`: three number literals, each optionally negated.
+fn parse_gravity(input: ParseStream) -> syn::Result<[f64; 3]> {
+    let content;
+    let brackets = syn::bracketed!(content in input);
+    let mut values = Vec::new();
+    while !content.is_empty() {
+        let negative = content.parse::<Option<Token![-]>>()?.is_some();
+        let value = if content.peek(syn::LitFloat) {
+            content.parse::<syn::LitFloat>()?.base10_parse::<f64>()?
+        } else {
+            content.parse::<syn::LitInt>()?.base10_parse::<f64>()?
+        };
+        values.push(if negative { -value } else { value });
+        if !content.is_empty() {
+            content.parse::<Token![,]>()?;
+        }
+    }
+    match values[..] {
+        [x, y, z] if values.iter().all(|v| v.is_finite()) => Ok([x, y, z]),
+        _ => Err(syn::Error::new(
+            brackets.span.join(),
+            "gravity = [x, y, z]: three finite numbers in m/s² (e.g. [0.0, 0.0, -9.81])",
+        )),
+    }
 }
 
 /// The functions generated only when asked for, each an option of its own (`minv`).
@@ -41,6 +70,7 @@ impl Parse for Args {
             krate: None,
             only: None,
             max_compile_memory: embedyn_codegen::DEFAULT_COMPILE_MEMORY_MB,
+            gravity: None,
         };
         while !input.is_empty() {
             input.parse::<Token![,]>()?;
@@ -61,6 +91,10 @@ impl Parse for Args {
                     .extend(on_request().filter(|a| a.name() == name)),
                 "f64_only" => args.f32 = false,
                 "f32_only" => args.f64 = false,
+                "gravity" => {
+                    input.parse::<Token![=]>()?;
+                    args.gravity = Some(parse_gravity(input)?);
+                }
                 "max_compile_memory" => {
                     input.parse::<Token![=]>()?;
                     args.max_compile_memory = input.parse::<syn::LitInt>()?.base10_parse()?;
@@ -83,7 +117,7 @@ impl Parse for Args {
                     return Err(syn::Error::new(
                         key.span(),
                         format!(
-                            "unknown option `{other}` (expected floating, {}, f64_only, f32_only, only(…), max_compile_memory = MB or crate = path)",
+                            "unknown option `{other}` (expected floating, {}, f64_only, f32_only, only(…), gravity = [x, y, z], max_compile_memory = MB or crate = path)",
                             requested.join(", ")
                         ),
                     ));
@@ -195,7 +229,9 @@ fn expand(args: &Args) -> Result<proc_macro2::TokenStream, ExpandError> {
     let options = embedyn_codegen::GenerateOptions {
         model: embedyn_codegen::ModelOptions {
             floating: args.floating,
-            ..Default::default()
+            gravity: args
+                .gravity
+                .unwrap_or(embedyn_codegen::ModelOptions::default().gravity),
         },
         f64: args.f64,
         f32: args.f32,
