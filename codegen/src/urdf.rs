@@ -711,6 +711,12 @@ impl<'a, 'input> Parser<'a, 'input> {
     /// names (ROS files carry many for controllers only).
     fn transmissions(&mut self, root: Node, joints: &mut [Joint]) {
         let local = |n: &Node, tag: &str| n.is_element() && n.tag_name().name() == tag;
+        // By name, once: a file of many transmissions and joints stays linear to read.
+        let index: HashMap<String, usize> = joints
+            .iter()
+            .enumerate()
+            .map(|(i, j)| (j.name.clone(), i))
+            .collect();
         for t in root.children().filter(|n| n.has_tag_name("transmission")) {
             let what = format!("transmission \"{}\"", t.attribute("name").unwrap_or(""));
             let joint = t
@@ -739,8 +745,8 @@ impl<'a, 'input> Parser<'a, 'input> {
                 let Ok(ratio) = ratio else {
                     continue;
                 };
-                match joint.and_then(|name| joints.iter_mut().find(|j| j.name == name)) {
-                    Some(j) => j.armature += ratio * ratio * rotor,
+                match joint.and_then(|name| index.get(name)) {
+                    Some(&j) => joints[j].armature += ratio * ratio * rotor,
                     None => self.record(
                         self.loc(t, what.clone()),
                         LoadErrorKind::UnknownTransmissionJoint {
