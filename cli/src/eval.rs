@@ -206,7 +206,14 @@ fn eval_generated(
                 });
             }
         }
-        let o = finite(&o, i, name)?;
+        // Named as the output is in the JSON, as the interpreted engine names it.
+        let output = match algo {
+            Algo::Aba => "qdd",
+            Algo::Rnea => "tau",
+            Algo::Crba => "M",
+            _ => name,
+        };
+        let o = finite(&o, i, output)?;
         let q = &row[..nq];
         out.push(match algo {
             Algo::Aba => Output::Aba {

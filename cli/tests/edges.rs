@@ -476,6 +476,35 @@ fn bench_handles_no_coordinates_and_narrow_assembly() {
     }
 }
 
+/// A finite state whose result overflows (velocities of 1e200: their products are ∞) is refused by both
+/// engines with the same message, naming the output as the JSON does (`qdd`), not the function.
+#[test]
+fn an_overflowing_result_is_named_alike_by_both_engines() {
+    let model = repo("models/arm7.urdf");
+    let (q, v, tau) = (vec![0.1; 7], vec![1e200; 7], vec![0.0; 7]);
+    let input = json!({"samples": [{"q": q, "v": v, "tau": tau}]}).to_string();
+    let mut messages = Vec::new();
+    for engine in ["interpreted", "generated"] {
+        let run = embedyn(
+            &["eval", &model, "--algo", "aba", "--engine", engine],
+            &input,
+        );
+        let e = run.clean_failure().to_string();
+        assert!(
+            e.contains("sample 0") && e.contains("`qdd`[") && e.contains("is not finite"),
+            "{engine}: {e}"
+        );
+        // The error line (a first run of the generated engine also notes that it compiles).
+        messages.push(
+            e.lines()
+                .filter(|l| l.starts_with("error:"))
+                .collect::<Vec<_>>()
+                .join("\n"),
+        );
+    }
+    assert_eq!(messages[0], messages[1]);
+}
+
 /// Every output field is checked finite: `tau_independent` (Xᵀτ) overflows for a joint that mimics
 /// another with multiplier 1e8 and a huge force on it, although `tau` itself is finite.
 #[test]
