@@ -15,8 +15,10 @@
 //!   are tested to give the same motion (tests/constraint_embedding.rs).
 
 use super::aba::{backward_step, forward_step, init_articulated};
+use super::kinematics::world_placements;
 use super::{
-    check_configuration, check_input, crba, forward_kinematics, rnea, DynamicsError, Workspace,
+    check_configuration, check_input, crba, forward_kinematics, parent_placement, rnea,
+    DynamicsError, Workspace,
 };
 #[allow(unused_imports)]
 use crate::alloc_prelude::*;
@@ -53,21 +55,13 @@ pub(crate) fn position_kinematics<T: Real>(
     q: &[T],
 ) -> Result<(), DynamicsError> {
     check_configuration(model, q)?;
-    for (i, (joint, body)) in model.joints.iter().zip(&model.bodies).enumerate() {
-        let x = joint
-            .placement
-            .compose(&joint.joint_transform(q))
-            .named(&joint.name, "x");
-        ws.parent_placement[i] = x;
-        ws.world_placement[i] = match joint.parent {
-            Some(p) => ws.world_placement[p].compose(&x),
-            None => x,
-        }
-        .named(&body.name, "pose");
+    for (i, joint) in model.joints.iter().enumerate() {
+        ws.parent_placement[i] = parent_placement(joint, q);
         ws.velocity[i] = Motion::zero();
         ws.coriolis[i] = Motion::zero();
         ws.acceleration[i] = Motion::zero();
     }
+    world_placements(model, ws);
     Ok(())
 }
 
@@ -267,30 +261,28 @@ pub fn embedding_map_in<'w, T: Real>(
     }
     let (out, groups) = (&mut ws.embedding, &ws.constraints.groups);
     out.fill(T::zero());
-    {
-        let mut col = 0;
-        for j in (0..model.joints.len()).filter(|&j| model.is_independent(j)) {
-            let joint = &model.joints[j];
-            match model.group_of(j) {
-                None => {
-                    for k in 0..joint.nv() {
-                        out[(joint.v_index + k, col + k)] = T::one();
-                    }
-                }
-                Some(g) => {
-                    let group = &model.groups[g];
-                    let k = group
-                        .independent
-                        .iter()
-                        .position(|&b| b == j)
-                        .expect("independent member");
-                    for (m, &b) in group.bodies.iter().enumerate() {
-                        out[(model.joints[b].v_index, col)] = groups[g].x[(m, k)];
-                    }
+    let mut col = 0;
+    for j in (0..model.joints.len()).filter(|&j| model.is_independent(j)) {
+        let joint = &model.joints[j];
+        match model.group_of(j) {
+            None => {
+                for k in 0..joint.nv() {
+                    out[(joint.v_index + k, col + k)] = T::one();
                 }
             }
-            col += joint.nv();
+            Some(g) => {
+                let group = &model.groups[g];
+                let k = group
+                    .independent
+                    .iter()
+                    .position(|&b| b == j)
+                    .expect("independent member");
+                for (m, &b) in group.bodies.iter().enumerate() {
+                    out[(model.joints[b].v_index, col)] = groups[g].x[(m, k)];
+                }
+            }
         }
+        col += joint.nv();
     }
     Ok(&ws.embedding)
 }

@@ -15,6 +15,12 @@ pub fn forward_kinematics<T: Real>(
     check_configuration(model, q)?;
     check_input("v", v, model.nv())?;
     velocity_sweep(model, ws, q, v);
+    world_placements(model, ws);
+    Ok(())
+}
+
+/// Each body's pose in the world from the parent placements in `ws`, root first.
+pub(crate) fn world_placements<T: Real>(model: &Model<T>, ws: &mut Workspace<T>) {
     for (i, (joint, body)) in model.joints.iter().zip(&model.bodies).enumerate() {
         ws.world_placement[i] = match joint.parent {
             Some(p) => ws.world_placement[p].compose(&ws.parent_placement[i]),
@@ -22,7 +28,6 @@ pub fn forward_kinematics<T: Real>(
         }
         .named(&body.name, "pose");
     }
-    Ok(())
 }
 
 /// The world pose of every URDF link that rides on a moving body, from the poses of the last

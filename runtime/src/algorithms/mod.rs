@@ -153,10 +153,7 @@ pub(crate) fn check_configuration<T: Real>(model: &Model<T>, q: &[T]) -> Result<
 #[inline(always)]
 pub(crate) fn velocity_sweep<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, q: &[T], v: &[T]) {
     for (i, (joint, body)) in model.joints.iter().zip(&model.bodies).enumerate() {
-        let x = joint
-            .placement
-            .compose(&joint.joint_transform(q))
-            .named(&joint.name, "x");
+        let x = parent_placement(joint, q);
         let vj = joint.joint_motion(v);
         let vel = match joint.parent {
             Some(p) => x.inv_act_motion(&ws.velocity[p]) + vj,
@@ -166,6 +163,15 @@ pub(crate) fn velocity_sweep<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, q
         ws.parent_placement[i] = x;
         ws.velocity[i] = vel.named(&body.name, "v");
     }
+}
+
+/// `ᵖX_i(q)`: the pose of a joint's child body frame in its parent body frame (named for generated code).
+#[inline(always)]
+pub(crate) fn parent_placement<T: Real>(joint: &crate::model::Joint<T>, q: &[T]) -> Transform<T> {
+    joint
+        .placement
+        .compose(&joint.joint_transform(q))
+        .named(&joint.name, "x")
 }
 
 /// The name of a joint quantity with one entry per velocity coordinate, for generated code
