@@ -250,6 +250,21 @@ fn bad_armature_is_an_error_at_its_line() {
     }
 }
 
+/// A rotor on a joint the reader left out for a problem of its own adds no second error (as for mimic
+/// targets): the joint's problem is the one reported.
+#[test]
+fn a_transmission_on_a_joint_left_out_is_no_further_problem() {
+    let text = r#"<robot name="r" xmlns:drake="http://drake.mit.edu"><link name="base"/><link name="l"/>
+<joint name="j" type="hinge"><parent link="base"/><child link="l"/></joint>
+<transmission name="t"><joint name="j"/><actuator name="m"><drake:rotor_inertia value="1e-4"/></actuator></transmission></robot>"#;
+    let e = embedyn::codegen::parse_urdf(text, "r.urdf".as_ref()).unwrap_err();
+    assert!(e.also.is_empty(), "{e}");
+    assert!(
+        e.to_string().contains("unknown joint type \"hinge\""),
+        "{e}"
+    );
+}
+
 /// One warning at several elements is reported once, at the first, naming the others (talos_reduced
 /// printed twelve identical `<mimic>` lines).
 #[test]

@@ -306,7 +306,7 @@ impl<'a, 'input> Parser<'a, 'input> {
             constraint_names.insert(name, (tag, line));
         }
         // Before `finish`: a transmission's problems are collected with the others.
-        self.transmissions(root, &mut joints);
+        self.transmissions(root, &mut joints, &written_joints);
         self.finish()?;
         self.warn_ignored_joint_dynamics(root);
         fold_repeated_warnings(&mut self.warnings);
@@ -709,7 +709,10 @@ impl<'a, 'input> Parser<'a, 'input> {
     /// `<drake:gear_ratio value>`, else its `<mechanicalReduction>` (in the actuator or, in the older
     /// form, the transmission), else 1. A transmission without a rotor inertia adds nothing, whatever it
     /// names (ROS files carry many for controllers only).
-    fn transmissions(&mut self, root: Node, joints: &mut [Joint]) {
+    ///
+    /// A transmission naming a joint of the file that the reader left out (for a problem of its own,
+    /// reported) adds nothing and is no further problem, as for mimic targets.
+    fn transmissions(&mut self, root: Node, joints: &mut [Joint], written_joints: &HashSet<&str>) {
         let local = |n: &Node, tag: &str| n.is_element() && n.tag_name().name() == tag;
         // By name, once: a file of many transmissions and joints stays linear to read.
         let index: HashMap<String, usize> = joints
@@ -747,6 +750,7 @@ impl<'a, 'input> Parser<'a, 'input> {
                 };
                 match joint.and_then(|name| index.get(name)) {
                     Some(&j) => joints[j].armature += ratio * ratio * rotor,
+                    None if joint.is_some_and(|name| written_joints.contains(name)) => {}
                     None => self.record(
                         self.loc(t, what.clone()),
                         LoadErrorKind::UnknownTransmissionJoint {
