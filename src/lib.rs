@@ -38,6 +38,6 @@ pub struct GeneratedCodeDoctests;
 #[cfg(feature = "std")]
 pub use embedyn_codegen as codegen;
 #[cfg(feature = "std")]
-pub use embedyn_codegen::{load, LoadError, Loaded, ModelOptions, Warning};
+pub use embedyn_codegen::{load, LoadError, Loaded, LockedJoint, ModelOptions, Rotors, Warning};
 pub use embedyn_macros::robot;
 pub use embedyn_runtime::*;

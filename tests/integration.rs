@@ -25,3 +25,4 @@ mod pinocchio_reference;
 mod precision;
 mod random_loops;
 mod random_trees;
+mod scene_options;

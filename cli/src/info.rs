@@ -39,7 +39,16 @@ pub fn info(loaded: &Loaded, options: &ModelOptions) -> Result<Value, CliError> 
             })
         })
         .collect();
-    let robot = &loaded.robot;
+    let robot = &*loaded.scene(options)?;
+    // The rotors `--rotors reflected` removed (by their joints' names), or would remove.
+    let reflected: Vec<&str> = if options.rotors == embedyn_codegen::Rotors::Reflected {
+        embedyn_codegen::geared_rotors(&loaded.robot)
+            .iter()
+            .map(|r| loaded.robot.joints[r.joint].name.as_str())
+            .collect()
+    } else {
+        Vec::new()
+    };
     let link = |l: usize| robot.links[l].name.clone();
     let loops: Vec<Value> = robot
         .loops
@@ -81,5 +90,12 @@ pub fn info(loaded: &Loaded, options: &ModelOptions) -> Result<Value, CliError> 
         "couplings": couplings,
         "groups": groups,
         "independent_nv": model.independent_nv(),
+        "scene": {
+            "floating": options.floating,
+            "gravity": options.gravity,
+            "locked": options.locks.iter().map(|l| json!({"joint": l.joint, "value": l.value})).collect::<Vec<_>>(),
+            "rotors": options.rotors.as_str(),
+            "reflected_rotors": reflected,
+        },
     }))
 }

@@ -16,10 +16,13 @@ pub mod plot;
 mod runner;
 mod samples;
 mod sampling;
+pub mod tradeoff;
 
 use clap::{Parser, Subcommand, ValueEnum};
 use embedyn_codegen::bounded_read::{read_file_limited, read_to_string_limited, MAX_INPUT_BYTES};
-use embedyn_codegen::{load, LoadError, Loaded, ModelOptions, ReadError, UnknownAlgorithm};
+use embedyn_codegen::{
+    load, LoadError, Loaded, LockedJoint, ModelOptions, ReadError, Rotors, UnknownAlgorithm,
+};
 
 pub use bench::BenchError;
 pub use runner::{RunnerError, RunnerOutputProblem, RunnerSourceError};
@@ -79,6 +82,13 @@ pub struct SceneArgs {
     /// Gravity in the world frame, m/s² (default 0,0,-9.81).
     #[arg(long, value_name = "X,Y,Z", value_parser = parse_gravity, allow_hyphen_values = true)]
     pub gravity: Option<[f64; 3]>,
+    /// Fix a 1-DoF joint at VALUE (rad or m): its coordinate leaves q and v (repeatable).
+    #[arg(long = "lock", value_name = "JOINT=VALUE", value_parser = parse_lock, allow_hyphen_values = true)]
+    pub locks: Vec<LockedJoint>,
+    /// How geared rotors are modelled: `exact` (aggregate links) or `reflected` (armature on the driving
+    /// joints; the rotors leave the model).
+    #[arg(long, value_name = "exact|reflected", default_value = "exact", value_parser = parse_rotors)]
+    pub rotors: Rotors,
 }
 
 impl SceneArgs {
@@ -86,6 +96,8 @@ impl SceneArgs {
     pub fn options(&self) -> ModelOptions {
         let mut options = ModelOptions {
             floating: self.floating,
+            locks: self.locks.clone(),
+            rotors: self.rotors,
             ..Default::default()
         };
         if let Some(g) = self.gravity {
@@ -93,6 +105,27 @@ impl SceneArgs {
         }
         options
     }
+}
+
+/// `JOINT=VALUE`: a joint's name and a finite number (the name may hold `=`; the value follows the last).
+fn parse_lock(text: &str) -> Result<LockedJoint, String> {
+    let bad = || {
+        format!("expected JOINT=VALUE with VALUE a finite number in rad or m (e.g. knee=0.3), got \"{text}\"")
+    };
+    let (joint, value) = text.rsplit_once('=').ok_or_else(bad)?;
+    let value: f64 = value.trim().parse().map_err(|_| bad())?;
+    if joint.is_empty() || !value.is_finite() {
+        return Err(bad());
+    }
+    Ok(LockedJoint {
+        joint: joint.to_string(),
+        value,
+    })
+}
+
+/// `exact` or `reflected`.
+fn parse_rotors(text: &str) -> Result<Rotors, String> {
+    Rotors::parse(text).ok_or_else(|| format!("expected exact or reflected, got \"{text}\""))
 }
 
 /// `X,Y,Z`: three finite numbers.
@@ -117,7 +150,7 @@ pub enum Command {
     Info {
         /// The model file (URDF or URDF+).
         model: PathBuf,
-        /// The scene: `--floating`, `--gravity`.
+        /// The scene: `--floating`, `--gravity`, `--lock`, `--rotors`.
         #[command(flatten)]
         scene: SceneArgs,
     },
@@ -126,7 +159,7 @@ pub enum Command {
     Complete {
         /// The model file (URDF or URDF+).
         model: PathBuf,
-        /// The scene: `--floating`, `--gravity`.
+        /// The scene: `--floating`, `--gravity`, `--lock`, `--rotors`.
         #[command(flatten)]
         scene: SceneArgs,
         /// JSON input: `{"samples": [{"q": [...], "v": [...]}]}`; stdin when absent.
@@ -140,7 +173,7 @@ pub enum Command {
         /// Output folder (created if needed).
         #[arg(long)]
         out: PathBuf,
-        /// The scene: `--floating`, `--gravity`.
+        /// The scene: `--floating`, `--gravity`, `--lock`, `--rotors`.
         #[command(flatten)]
         scene: SceneArgs,
         /// Also generate `minv` (the O(N²) inverse mass matrix of Eq. 6).
@@ -161,12 +194,31 @@ pub enum Command {
     Bench {
         /// The model file (URDF or URDF+).
         model: PathBuf,
-        /// The scene: `--floating`, `--gravity`.
+        /// The scene: `--floating`, `--gravity`, `--lock`, `--rotors`.
         #[command(flatten)]
         scene: SceneArgs,
         /// Print JSON instead of a table.
         #[arg(long)]
         json: bool,
+        /// Refuse generated code whose compilation is estimated to need more memory than this (MB).
+        #[arg(long, value_name = "MB", default_value_t = embedyn_codegen::DEFAULT_COMPILE_MEMORY_MB)]
+        max_compile_memory: u64,
+    },
+    /// What each modelling choice costs and buys on this model: generated `aba` time per call and the
+    /// error of the independent accelerations against the exact model in double-double, for f64 and f32
+    /// and, where the model has geared rotors, exact and reflected rotors.
+    Tradeoff {
+        /// The model file (URDF or URDF+).
+        model: PathBuf,
+        /// The scene: `--floating`, `--gravity`, `--lock` (`--rotors` is varied).
+        #[command(flatten)]
+        scene: SceneArgs,
+        /// Print JSON instead of a table.
+        #[arg(long)]
+        json: bool,
+        /// Also draw error against time (log axes) as an SVG file.
+        #[arg(long, value_name = "FILE")]
+        svg: Option<PathBuf>,
         /// Refuse generated code whose compilation is estimated to need more memory than this (MB).
         #[arg(long, value_name = "MB", default_value_t = embedyn_codegen::DEFAULT_COMPILE_MEMORY_MB)]
         max_compile_memory: u64,
@@ -184,7 +236,7 @@ pub enum Command {
         /// The scalar type it computes in.
         #[arg(long, value_enum, default_value = "f64")]
         scalar: Scalar,
-        /// The scene: `--floating`, `--gravity`.
+        /// The scene: `--floating`, `--gravity`, `--lock`, `--rotors`.
         #[command(flatten)]
         scene: SceneArgs,
         /// JSON input: `{"samples": [...]}`; stdin when absent.
@@ -304,6 +356,15 @@ pub enum CliError {
     /// Building, caching or running the generated code's runner.
     #[error("{0}")]
     Runner(#[from] RunnerError),
+    /// A file the command was asked to write (`tradeoff --svg`).
+    #[error("cannot write {}: {error}", embedyn_codegen::Printable(&.path.to_string_lossy()))]
+    WriteFile {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        #[source]
+        error: std::io::Error,
+    },
     /// Timing (`bench`).
     #[error("{0}")]
     Bench(#[from] BenchError),
@@ -504,6 +565,27 @@ pub fn run(cli: Cli) -> Result<Printed, CliError> {
                 Printed::Json(result)
             } else {
                 Printed::Text(bench::table(&result))
+            })
+        }
+        Command::Tradeoff {
+            model,
+            scene,
+            json,
+            svg,
+            max_compile_memory,
+        } => {
+            let loaded = load_reporting(&model)?;
+            let result =
+                tradeoff::tradeoff(&loaded, &scene.options(), max_compile_memory, &mut |step| {
+                    output::note(&format!("embedyn tradeoff: {step}"))
+                })?;
+            if let Some(path) = svg {
+                tradeoff::write_svg(&result, &path)?;
+            }
+            Ok(if json {
+                Printed::Json(tradeoff::to_json(&result))
+            } else {
+                Printed::Text(tradeoff::table(&result))
             })
         }
         Command::Generate {

@@ -5,7 +5,7 @@ use std::io::Write;
 use std::path::PathBuf;
 use std::process::{Command, Stdio};
 
-fn repo(rel: &str) -> String {
+pub(crate) fn repo(rel: &str) -> String {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
         .join("..")
         .join(rel)
@@ -14,7 +14,7 @@ fn repo(rel: &str) -> String {
 }
 
 /// Runs `embedyn args` with `stdin`; returns (success, stdout, stderr).
-fn embedyn(args: &[&str], stdin: &str) -> (bool, String, String) {
+pub(crate) fn embedyn(args: &[&str], stdin: &str) -> (bool, String, String) {
     embedyn_with_env(args, stdin, &[])
 }
 
@@ -557,7 +557,7 @@ fn generated_engine_checks_the_input_before_compiling() {
     assert_eq!(built, 0, "nothing is compiled for an input that is refused");
 }
 
-fn embedyn_cached(args: &[&str], stdin: &str) -> (bool, String, String) {
+pub(crate) fn embedyn_cached(args: &[&str], stdin: &str) -> (bool, String, String) {
     let cache = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("embedyn-cache");
     embedyn_with_env(args, stdin, &[("EMBEDYN_CACHE_DIR", cache)])
 }

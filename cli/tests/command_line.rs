@@ -4,4 +4,5 @@
 mod cli;
 mod edges;
 mod scale;
+mod scene;
 mod standalone;

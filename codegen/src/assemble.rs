@@ -8,6 +8,7 @@
 
 use crate::error::{LoadError, LoadErrorKind, Location};
 use crate::ir::{Inertial, JointKind, LoopKind, Origin, Robot};
+use crate::scene::{self, LockedJoint, Rotors};
 use embedyn_runtime::constraints::GroupLabel;
 use embedyn_runtime::nalgebra::{Matrix3, Vector3};
 use embedyn_runtime::{
@@ -21,6 +22,10 @@ pub struct ModelOptions {
     pub floating: bool,
     /// Gravity in the world frame (m/s²).
     pub gravity: [f64; 3],
+    /// Joints fixed at a coordinate (`--lock`), in the order given.
+    pub locks: Vec<LockedJoint>,
+    /// How geared rotors are modelled (`--rotors`).
+    pub rotors: Rotors,
 }
 
 impl Default for ModelOptions {
@@ -28,6 +33,8 @@ impl Default for ModelOptions {
         ModelOptions {
             floating: false,
             gravity: [0.0, 0.0, -9.81],
+            locks: Vec::new(),
+            rotors: Rotors::Exact,
         }
     }
 }
@@ -35,7 +42,7 @@ impl Default for ModelOptions {
 /// The name of the joint `--floating` adds.
 pub const ROOT_JOINT: &str = "root_joint";
 
-fn origin_transform<T: Real>(o: &Origin) -> Transform<T> {
+pub(crate) fn origin_transform<T: Real>(o: &Origin) -> Transform<T> {
     Transform::from_xyz_rpy(o.xyz, o.rpy)
 }
 
@@ -82,6 +89,7 @@ pub(crate) fn convert_model<U: Real>(
 }
 
 fn build_model_f64(robot: &Robot, options: &ModelOptions) -> Result<Model<f64>, LoadError> {
+    let robot = &*scene::apply(robot, options)?;
     let path = &robot.source;
     let joint_loc = |j: usize| {
         let joint = &robot.joints[j];
@@ -140,8 +148,8 @@ fn build_model_f64(robot: &Robot, options: &ModelOptions) -> Result<Model<f64>, 
     while let Some(j) = stack.pop() {
         let joint = &robot.joints[j];
         let (parent_body, parent_pose) = link_body[joint.parent].expect("parent visited first");
-        let pose = parent_pose.compose(&origin_transform(&joint.origin));
-        if joint.kind.is_moving() {
+        if joint.moves() {
+            let pose = parent_pose.compose(&origin_transform(&joint.origin));
             if joint.kind == JointKind::Floating && parent_body.is_some() {
                 return Err(LoadError::at(
                     joint_loc(j),
@@ -158,6 +166,8 @@ fn build_model_f64(robot: &Robot, options: &ModelOptions) -> Result<Model<f64>, 
             });
             link_body[joint.child] = Some((Some(bodies.len() - 1), Transform::identity()));
         } else {
+            // A fixed joint, or one a scene locked: the child link is merged into the parent body.
+            let pose = parent_pose.compose(&scene::fixed_placement(joint));
             link_body[joint.child] = Some((parent_body, pose));
         }
         stack.extend(children[joint.child].iter().rev());

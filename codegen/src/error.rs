@@ -487,6 +487,40 @@ pub enum LoadErrorKind {
     /// `--floating` for a file that has a joint named like the one it adds.
     #[error("--floating adds the root's joint \"{}\", but the file already has a joint of that name; rename it", crate::assemble::ROOT_JOINT)]
     RootJointNameTaken,
+    /// `--lock` names a joint the model does not have.
+    #[error("--lock names joint \"{joint}\", which the model does not have")]
+    LockUnknownJoint {
+        /// The name given.
+        joint: String,
+    },
+    /// `--lock` on a joint that has not exactly one coordinate.
+    #[error("--lock fixes a joint of one coordinate (revolute, continuous or prismatic), and this joint is {kind}")]
+    LockNotOneDof {
+        /// The joint's type.
+        kind: &'static str,
+    },
+    /// `--lock` gives one joint two values.
+    #[error("--lock fixes this joint twice ({first} and {second}); give one value")]
+    LockedTwice {
+        /// The first value given.
+        first: f64,
+        /// The second.
+        second: f64,
+    },
+    /// A `--lock` value that is infinite or NaN.
+    #[error("--lock value {value} is not a finite number")]
+    LockValueNotFinite {
+        /// The value given.
+        value: f64,
+    },
+    /// `--lock` on a joint whose coordinate a constraint relates to others.
+    #[error("--lock cannot fix this joint: {what} \"{name}\" relates its coordinate to others (a locked joint would change the constraint; lock joints outside loops, couplings and mimic joints, or fix the joint in the file)")]
+    LockedJointInConstraint {
+        /// What the constraint is.
+        what: ConstraintElement,
+        /// Its name.
+        name: String,
+    },
     /// A floating joint below the root.
     #[error("a floating joint must connect the root (a link fixed to the world) to the rest of the tree")]
     FloatingNotAtRoot,
@@ -679,6 +713,8 @@ impl LoadErrorKind {
             | K::UnknownLink { link: a }
             | K::UnknownMimicTarget { joint: a }
             | K::FixedDriver { joint: a }
+            | K::LockUnknownJoint { joint: a }
+            | K::LockedJointInConstraint { name: a, .. }
             | K::ConstraintNameTaken { name: a, .. }
             | K::MergedInertiaOverflow { body_link: a } => shorten(a),
             K::NotANumber { attribute, text }

@@ -64,6 +64,32 @@ impl JointKind {
     pub fn is_moving(self) -> bool {
         self != JointKind::Fixed
     }
+
+    /// Whether the joint has exactly one coordinate (revolute, continuous, prismatic).
+    pub fn is_one_dof(self) -> bool {
+        matches!(
+            self,
+            JointKind::Revolute | JointKind::Continuous | JointKind::Prismatic
+        )
+    }
+
+    /// The name URDF gives the kind (`revolute`, …).
+    pub fn as_str(self) -> &'static str {
+        match self {
+            JointKind::Revolute => "revolute",
+            JointKind::Continuous => "continuous",
+            JointKind::Prismatic => "prismatic",
+            JointKind::Fixed => "fixed",
+            JointKind::Floating => "floating",
+        }
+    }
+}
+
+impl Joint {
+    /// Whether the joint has coordinates in the assembled model: a moving kind, not locked.
+    pub fn moves(&self) -> bool {
+        self.kind.is_moving() && self.locked.is_none()
+    }
 }
 
 /// `<mimic joint multiplier offset>`: this joint's coordinate = multiplier · q_joint + offset.
@@ -100,6 +126,9 @@ pub struct Joint {
     pub independent: Option<bool>,
     /// Armature (kg·m² or kg): `<dynamics armature>` plus r² · I of each transmission's rotor on it.
     pub armature: f64,
+    /// `Some(value)` when a scene fixes the joint at that coordinate (`--lock`, or a geared rotor reflected
+    /// at angle 0): it is then assembled as a fixed joint whose pose includes that motion. `None` as read.
+    pub locked: Option<f64>,
     /// Line of the element in the model file, for messages.
     pub line: Option<u32>,
 }

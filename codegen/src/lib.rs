@@ -23,6 +23,7 @@ mod error;
 mod generate;
 pub mod ir;
 pub mod names;
+pub mod scene;
 mod size;
 #[cfg(feature = "standalone")]
 pub mod standalone;
@@ -44,6 +45,7 @@ pub use generate::{
     format_tokens, generate_file, generate_source, generate_tokens, generation_model, Algorithm,
     GenerateOptions, UnparsableCode, GENERATOR_VERSION,
 };
+pub use scene::{geared_rotors, GearedRotor, LockedJoint, Rotors};
 pub use size::{FunctionSize, TooLargeToCompile, DEFAULT_COMPILE_MEMORY_MB};
 pub use urdf::{load_urdf, parse_urdf, Loaded};
 
@@ -59,5 +61,14 @@ impl Loaded {
     /// The interpreted model in scalar `T`.
     pub fn model<T: Real>(&self, options: &ModelOptions) -> Result<Model<T>, LoadError> {
         build_model(&self.robot, options)
+    }
+
+    /// The model as read, changed by the scene options that act on the file (`--lock`, `--rotors`):
+    /// locked joints and reflected rotors are fixed joints in it, reflected couplings are gone.
+    pub fn scene(
+        &self,
+        options: &ModelOptions,
+    ) -> Result<std::borrow::Cow<'_, ir::Robot>, LoadError> {
+        scene::apply(&self.robot, options)
     }
 }

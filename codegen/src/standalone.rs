@@ -153,10 +153,14 @@ pub fn crate_files(
     }
     readme.push_str(&format!(
         "\nnq = {}, nv = {}. Coordinates (as embedyn's docs/conventions.md says: revolute angles in rad, prismatic in m; a floating base is\n\
-         `q = [x y z qx qy qz qw …]`, `v = [v_lin ω …]` in the body frame; gravity (0, 0, −9.81)):\n\n\
+         `q = [x y z qx qy qz qw …]`, `v = [v_lin ω …]` in the body frame; gravity ({}, {}, {}) m/s²{}):\n\n\
          | joint | type | q index | v index | independent |\n|---|---|---:|---:|---|\n",
         model.nq(),
-        model.nv()
+        model.nv(),
+        model.gravity.x,
+        model.gravity.y,
+        model.gravity.z,
+        scene_note(&options.model),
     ));
     for (j, joint) in model.joints.iter().enumerate() {
         readme.push_str(&format!(
@@ -201,4 +205,20 @@ pub fn write_crate(
         written.push(path);
     }
     Ok(written)
+}
+
+/// The scene options that changed the model, for the README (empty when none did).
+fn scene_note(options: &crate::ModelOptions) -> String {
+    let mut note = String::new();
+    for lock in &options.locks {
+        note.push_str(&format!(
+            "; {} locked at {}",
+            code_span(&lock.joint),
+            lock.value
+        ));
+    }
+    if options.rotors == crate::Rotors::Reflected {
+        note.push_str("; geared rotors reflected (armature on the joints they drive)");
+    }
+    note
 }

@@ -613,6 +613,7 @@ impl<'a, 'input> Parser<'a, 'input> {
         };
         Ok(Joint {
             armature: armature?,
+            locked: None,
             name: name.to_string(),
             kind: kind?,
             parent: parent?,

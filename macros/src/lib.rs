@@ -10,7 +10,8 @@ use syn::{Ident, LitStr, Path, Token};
 
 /// `robot!("model.urdf")` or `robot!("model.urdf", floating, minv, only(aba, kinematics), crate = ::my_facade)`
 /// (and `max_compile_memory = 4096` to raise the limit on rustc's estimated memory, MB; `gravity = [0.0,
-/// 0.0, -1.62]` for another gravity than (0, 0, −9.81) m/s², folded into the code).
+/// 0.0, -1.62]` for another gravity than (0, 0, −9.81) m/s², folded into the code; `lock(knee = 0.3, …)` to fix
+/// joints; `rotors = reflected` for the reflected-inertia approximation of geared rotors).
 struct Args {
     path: LitStr,
     floating: bool,
@@ -25,6 +26,50 @@ struct Args {
     max_compile_memory: u64,
     /// `gravity = [x, y, z]` (m/s², world frame).
     gravity: Option<[f64; 3]>,
+    /// `lock(joint = value, …)`.
+    locks: Vec<embedyn_codegen::LockedJoint>,
+    /// `rotors = exact | reflected`.
+    rotors: embedyn_codegen::Rotors,
+}
+
+/// A number literal, optionally negated.
+fn parse_number(input: ParseStream) -> syn::Result<f64> {
+    let negative = input.parse::<Option<Token![-]>>()?.is_some();
+    let value = if input.peek(syn::LitFloat) {
+        input.parse::<syn::LitFloat>()?.base10_parse::<f64>()?
+    } else {
+        input.parse::<syn::LitInt>()?.base10_parse::<f64>()?
+    };
+    Ok(if negative { -value } else { value })
+}
+
+/// `(knee = 0.3, "left-knee" = -0.1)`: joint names (identifiers or string literals) and finite values.
+fn parse_locks(input: ParseStream) -> syn::Result<Vec<embedyn_codegen::LockedJoint>> {
+    let content;
+    syn::parenthesized!(content in input);
+    let mut locks = Vec::new();
+    while !content.is_empty() {
+        let (joint, span) = if content.peek(LitStr) {
+            let name: LitStr = content.parse()?;
+            (name.value(), name.span())
+        } else {
+            let name: Ident = content.parse()?;
+            (name.to_string(), name.span())
+        };
+        content.parse::<Token![=]>()?;
+        let value = parse_number(&content)?;
+        if !value.is_finite() {
+            return Err(syn::Error::new(
+                span,
+                "lock(joint = value): the value must be a finite number (rad or m)",
+            ));
+        }
+        locks.push(embedyn_codegen::LockedJoint { joint, value });
+        if !content.is_empty() {
+            content.parse::<Token![,]>()?;
+        }
+    }
+    Ok(locks)
 }
 
 /// `[x, y, z]`: three number literals, each optionally negated.
@@ -33,13 +78,7 @@ fn parse_gravity(input: ParseStream) -> syn::Result<[f64; 3]> {
     let brackets = syn::bracketed!(content in input);
     let mut values = Vec::new();
     while !content.is_empty() {
-        let negative = content.parse::<Option<Token![-]>>()?.is_some();
-        let value = if content.peek(syn::LitFloat) {
-            content.parse::<syn::LitFloat>()?.base10_parse::<f64>()?
-        } else {
-            content.parse::<syn::LitInt>()?.base10_parse::<f64>()?
-        };
-        values.push(if negative { -value } else { value });
+        values.push(parse_number(&content)?);
         if !content.is_empty() {
             content.parse::<Token![,]>()?;
         }
@@ -71,6 +110,8 @@ impl Parse for Args {
             only: None,
             max_compile_memory: embedyn_codegen::DEFAULT_COMPILE_MEMORY_MB,
             gravity: None,
+            locks: Vec::new(),
+            rotors: embedyn_codegen::Rotors::Exact,
         };
         while !input.is_empty() {
             input.parse::<Token![,]>()?;
@@ -95,6 +136,15 @@ impl Parse for Args {
                     input.parse::<Token![=]>()?;
                     args.gravity = Some(parse_gravity(input)?);
                 }
+                "lock" => args.locks.extend(parse_locks(input)?),
+                "rotors" => {
+                    input.parse::<Token![=]>()?;
+                    let choice: Ident = input.parse()?;
+                    args.rotors =
+                        embedyn_codegen::Rotors::parse(&choice.to_string()).ok_or_else(|| {
+                            syn::Error::new(choice.span(), "rotors = exact or rotors = reflected")
+                        })?;
+                }
                 "max_compile_memory" => {
                     input.parse::<Token![=]>()?;
                     args.max_compile_memory = input.parse::<syn::LitInt>()?.base10_parse()?;
@@ -117,7 +167,7 @@ impl Parse for Args {
                     return Err(syn::Error::new(
                         key.span(),
                         format!(
-                            "unknown option `{other}` (expected floating, {}, f64_only, f32_only, only(…), gravity = [x, y, z], max_compile_memory = MB or crate = path)",
+                            "unknown option `{other}` (expected floating, {}, f64_only, f32_only, only(…), gravity = [x, y, z], lock(joint = value, …), rotors = exact|reflected, max_compile_memory = MB or crate = path)",
                             requested.join(", ")
                         ),
                     ));
@@ -232,6 +282,8 @@ fn expand(args: &Args) -> Result<proc_macro2::TokenStream, ExpandError> {
             gravity: args
                 .gravity
                 .unwrap_or(embedyn_codegen::ModelOptions::default().gravity),
+            locks: args.locks.clone(),
+            rotors: args.rotors,
         },
         f64: args.f64,
         f32: args.f32,

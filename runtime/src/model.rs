@@ -752,7 +752,6 @@ impl<T: Real> ModelBuilder<T> {
             groups: Vec::new(),
             group_of: vec![None; n],
         };
-        crate::check::check_built(&model)?;
         if !model.constraints.is_empty() {
             model.groups = crate::constraints::build_groups(&model, &declared)?;
             for (g, group) in model.groups.iter().enumerate() {
@@ -761,6 +760,8 @@ impl<T: Real> ModelBuilder<T> {
                 }
             }
         }
+        // After the groups: which joints are dependent decides what the inertia check asks of them.
+        crate::check::check_built(&model)?;
         Ok(model)
     }
 }

@@ -33,6 +33,44 @@ fn resolvable_fraction<T: Real>() -> f64 {
     1e3 * T::epsilon().to_f64()
 }
 
+/// Whether joint `i`'s coordinate is a dependent one of an aggregate link (a loop, coupling or mimic
+/// joint determines its acceleration from the independent ones).
+fn is_dependent<T: Real>(model: &Model<T>, i: usize) -> bool {
+    model.group_of(i).is_some() && !model.is_independent(i)
+}
+
+/// The articulated-body backward sweep, except that a dependent joint of an aggregate link is held
+/// rigid: its body's articulated inertia joins its parent's unprojected. A dependent joint need not move
+/// inertia of its own — a geared rotor of no axial inertia, a massless link of a four-bar — since the
+/// constraint, not its own inertia, determines its acceleration; projecting along it would divide by
+/// its zero pivot and poison every ancestor. Its inertia then counts for the independent joints above
+/// it, as it does in the aggregate link.
+fn articulate_with_dependent_rigid<T: Real>(
+    model: &Model<T>,
+    ws: &mut Workspace<T>,
+    q: &[T],
+    v: &[T],
+    tau: &[T],
+) {
+    if !model.has_constraints() {
+        aba::articulate(model, ws, q, v, tau);
+        return;
+    }
+    crate::algorithms::velocity_sweep(model, ws, q, v);
+    aba::init_articulated(model, ws);
+    for i in (0..model.nbodies()).rev() {
+        if !is_dependent(model, i) {
+            aba::backward_step(model, ws, i, tau);
+            continue;
+        }
+        if let Some(parent) = model.joints[i].parent {
+            let x = ws.parent_placement[i];
+            let p = ws.inertia[i].act(&x);
+            ws.inertia[parent] += p;
+        }
+    }
+}
+
 /// What one configuration says about one joint.
 #[derive(Clone, Copy)]
 struct JointVerdict {
@@ -75,7 +113,7 @@ pub(crate) fn check_articulated_inertia<T: Real>(model: &Model<T>) -> Result<(),
     ];
     let mut unprojected: Vec<ArticulatedInertia<T>> = Vec::with_capacity(n);
     for q in [&q0, &q1] {
-        aba::articulate(model, &mut ws, q, &v, &tau);
+        articulate_with_dependent_rigid(model, &mut ws, q, &v, &tau);
         // Composite inertias, leaves first, from the placements the sweep left in `ws`; and each body's
         // inertia plus its children's articulated inertias before their joints are taken out (`ws.inertia`
         // keeps every body's `P` as it was before its own projection).
@@ -97,6 +135,12 @@ pub(crate) fn check_articulated_inertia<T: Real>(model: &Model<T>) -> Result<(),
             }
         }
         for i in 0..n {
+            if is_dependent(model, i) {
+                // Its acceleration follows from the constraints; its inertia was judged with its
+                // independent joints (rigidly attached, see `articulate_with_dependent_rigid`).
+                regular[i] = true;
+                continue;
+            }
             last[i] = judge_joint(model, &ws, &composite[i], &unprojected[i], i);
             regular[i] |= last[i].regular;
         }
