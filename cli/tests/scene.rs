@@ -102,7 +102,7 @@ fn bad_scene_options_are_refused_clearly() {
         (vec!["info", &ur5, "--lock", "=0.1"], "JOINT=VALUE"),
         (
             vec!["info", &ur5, "--lock", "knee=0.1"],
-            "--lock names joint \"knee\"",
+            "no joint \"knee\" to lock",
         ),
         (
             vec!["info", &ur5, "--rotors", "approximate"],

@@ -488,19 +488,19 @@ pub enum LoadErrorKind {
     #[error("--floating adds the root's joint \"{}\", but the file already has a joint of that name; rename it", crate::assemble::ROOT_JOINT)]
     RootJointNameTaken,
     /// `--lock` names a joint the model does not have.
-    #[error("--lock names joint \"{joint}\", which the model does not have")]
+    #[error("there is no joint \"{joint}\" to lock")]
     LockUnknownJoint {
         /// The name given.
         joint: String,
     },
     /// `--lock` on a joint that has not exactly one coordinate.
-    #[error("--lock fixes a joint of one coordinate (revolute, continuous or prismatic), and this joint is {kind}")]
+    #[error("only a joint of one coordinate (revolute, continuous or prismatic) can be locked, and this joint is {kind}")]
     LockNotOneDof {
         /// The joint's type.
         kind: &'static str,
     },
     /// `--lock` gives one joint two values.
-    #[error("--lock fixes this joint twice ({first} and {second}); give one value")]
+    #[error("the joint is locked twice ({first} and {second}); give one value")]
     LockedTwice {
         /// The first value given.
         first: f64,
@@ -508,13 +508,13 @@ pub enum LoadErrorKind {
         second: f64,
     },
     /// A `--lock` value that is infinite or NaN.
-    #[error("--lock value {value} is not a finite number")]
+    #[error("the value to lock the joint at, {value}, is not a finite number")]
     LockValueNotFinite {
         /// The value given.
         value: f64,
     },
     /// `--lock` on a joint whose coordinate a constraint relates to others.
-    #[error("--lock cannot fix this joint: {what} \"{name}\" relates its coordinate to others (a locked joint would change the constraint; lock joints outside loops, couplings and mimic joints, or fix the joint in the file)")]
+    #[error("the joint cannot be locked: {what} \"{name}\" relates its coordinate to others (locking it would change the constraint; lock joints outside loops, couplings and mimic joints, or fix the joint in the file)")]
     LockedJointInConstraint {
         /// What the constraint is.
         what: ConstraintElement,

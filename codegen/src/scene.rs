@@ -203,7 +203,7 @@ fn lock_joints(robot: &mut Robot, locks: &[LockedJoint], floating: bool) -> Resu
     };
     for lock in locks {
         let Some(j) = robot.joints.iter().position(|j| j.name == lock.joint) else {
-            let at = Location::new(&robot.source, None, "--lock");
+            let at = Location::new(&robot.source, None, "--lock / lock(…)");
             if floating && lock.joint == ROOT_JOINT {
                 return Err(LoadError::at(
                     at,
