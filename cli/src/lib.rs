@@ -12,6 +12,7 @@ mod complete;
 mod eval;
 mod info;
 mod output;
+pub mod plot;
 mod runner;
 mod samples;
 mod sampling;
