@@ -15,6 +15,7 @@ mod bad_input;
 mod constraint_embedding;
 mod dynamics_oracles;
 mod energy;
+mod extremes;
 mod fuzz_corpus;
 mod fuzz_findings;
 mod generated;
