@@ -129,3 +129,41 @@ fn armature_must_be_finite_and_not_negative() {
     let qdd = aba(&model, &mut Workspace::new(&model), &[0.0], &[0.0], &[2.5]).unwrap()[0];
     assert!((qdd - 2.5 / 1.25).abs() <= 1e-15, "{qdd}");
 }
+
+mod armature_arm_generated {
+    embedyn::robot!(
+        "tests/data/pinocchio/armature_arm.urdf",
+        f64_only,
+        only(aba, rnea, crba)
+    );
+}
+mod solo12_armature_generated {
+    embedyn::robot!(
+        "tests/data/pinocchio/solo12_armature_floating.urdf",
+        floating,
+        f64_only,
+        only(aba, rnea, crba)
+    );
+}
+
+/// Generated code with armature (read from `<dynamics>` and from transmissions) against Pinocchio with
+/// `model.armature` set: aba, rnea and crba to 1e-9 on the arm and the floating Solo-12.
+#[test]
+fn generated_armature_matches_pinocchio() {
+    use crate::pinocchio_reference::{check_generated, reference};
+    for (name, floating, functions) in [
+        (
+            "armature_arm",
+            false,
+            crate::generated_functions!(armature_arm_generated),
+        ),
+        (
+            "solo12_armature_floating",
+            true,
+            crate::generated_functions!(solo12_armature_generated),
+        ),
+    ] {
+        let model = load_model::<f64>(&format!("tests/data/pinocchio/{name}.urdf"), floating);
+        check_generated(name, &model, &reference(name), functions);
+    }
+}

@@ -376,3 +376,80 @@ fn romeo_hands_are_refused_naming_the_joint() {
         );
     }
 }
+
+/// A generated module's f64 `aba`, `rnea` and `crba` (M row-major) behind slices, for
+/// [`check_generated`].
+pub type GeneratedFunctions = (
+    fn(&[f64], &[f64], &[f64], &mut [f64]),
+    fn(&[f64], &[f64], &[f64], &mut [f64]),
+    fn(&[f64], &mut Vec<f64>),
+);
+
+/// The [`GeneratedFunctions`] of the module `robot!` expanded into `$m` (with `only(aba, rnea, crba)`).
+#[macro_export]
+macro_rules! generated_functions {
+    ($m:ident) => {{
+        let functions: $crate::pinocchio_reference::GeneratedFunctions = (
+            |q, v, t, out| {
+                $m::f64::aba(
+                    q.try_into().unwrap(),
+                    v.try_into().unwrap(),
+                    t.try_into().unwrap(),
+                    out.try_into().unwrap(),
+                )
+            },
+            |q, v, a, out| {
+                $m::f64::rnea(
+                    q.try_into().unwrap(),
+                    v.try_into().unwrap(),
+                    a.try_into().unwrap(),
+                    out.try_into().unwrap(),
+                )
+            },
+            |q, out| {
+                let mut m = [[0.0; $m::NV]; $m::NV];
+                $m::f64::crba(q.try_into().unwrap(), &mut m);
+                *out = m.iter().flatten().copied().collect();
+            },
+        );
+        functions
+    }};
+}
+
+/// Generated code against the reference `json`: aba, rnea and crba to 1e-9 relative; `model` is the
+/// interpreted model of the same file and options (for the coordinate order).
+pub fn check_generated(
+    name: &str,
+    model: &embedyn::Model<f64>,
+    json: &Value,
+    (aba_g, rnea_g, crba_g): GeneratedFunctions,
+) {
+    let (q_map, v_map) = coordinate_maps(name, model, json);
+    let pick = |x: &Value, map: &[usize]| -> Vec<f64> {
+        let x = vecf(x);
+        map.iter().map(|&i| x[i]).collect()
+    };
+    let nv = model.nv();
+    let mut worst = [0.0f64; 3];
+    for s in json["samples"].as_array().unwrap() {
+        let q = pick(&s["q_angle"], &q_map);
+        let v = pick(&s["v"], &v_map);
+        let mut out = vec![0.0; nv];
+        aba_g(&q, &v, &pick(&s["tau"], &v_map), &mut out);
+        worst[0] = worst[0].max(relative_error(&out, &pick(&s["qdd"], &v_map)));
+        rnea_g(&q, &v, &pick(&s["qdd_for_rnea"], &v_map), &mut out);
+        worst[1] = worst[1].max(relative_error(&out, &pick(&s["tau_rnea"], &v_map)));
+        let mut m = Vec::new();
+        crba_g(&q, &mut m);
+        let rows: Vec<Vec<f64>> = s["M"].as_array().unwrap().iter().map(vecf).collect();
+        let theirs: Vec<f64> = (0..nv * nv)
+            .map(|k| rows[v_map[k / nv]][v_map[k % nv]])
+            .collect();
+        worst[2] = worst[2].max(relative_error(&m, &theirs));
+    }
+    eprintln!(
+        "{name} generated: aba {:.1e} rnea {:.1e} crba {:.1e}",
+        worst[0], worst[1], worst[2]
+    );
+    assert!(worst.iter().all(|&w| w <= TOL), "{name}: {worst:?}");
+}

@@ -4,7 +4,8 @@
 
 use crate::common;
 use crate::constraint_embedding::consistent_state;
-use crate::pinocchio_reference::{check_model, coordinate_maps, recorded_locks, reference};
+use crate::generated_functions;
+use crate::pinocchio_reference::{check_generated, check_model, recorded_locks, reference};
 
 use common::{load_model, repo_path, Rng};
 use embedyn::codegen::{parse_urdf, LoadErrorKind};
@@ -61,14 +62,6 @@ fn model_with(path: &str, options: &ModelOptions) -> Result<Model<f64>, embedyn:
         .model::<f64>(options)
 }
 
-fn vecf(v: &Value) -> Vec<f64> {
-    v.as_array()
-        .unwrap()
-        .iter()
-        .map(|x| x.as_f64().unwrap())
-        .collect()
-}
-
 /// `--lock` gives Pinocchio's reduced model (`buildReducedModel` at the locked values): aba, rnea, nle,
 /// crba and the generalized gravity to 1e-9 relative, on a fixed arm (elbow and last wrist joint locked)
 /// and a floating quadruped (four hip abductions and a knee locked).
@@ -92,97 +85,23 @@ fn locked_joints_match_pinocchio() {
 /// aba, rnea and crba to 1e-9 relative.
 #[test]
 fn generated_locked_code_matches_pinocchio() {
-    type Functions = (
-        fn(&[f64], &[f64], &[f64], &mut [f64]),
-        fn(&[f64], &[f64], &[f64], &mut [f64]),
-        fn(&[f64], &mut Vec<f64>),
-    );
-    let ur5: Functions = (
-        |q, v, t, out| {
-            ur5_locked::f64::aba(
-                q.try_into().unwrap(),
-                v.try_into().unwrap(),
-                t.try_into().unwrap(),
-                out.try_into().unwrap(),
-            )
-        },
-        |q, v, a, out| {
-            ur5_locked::f64::rnea(
-                q.try_into().unwrap(),
-                v.try_into().unwrap(),
-                a.try_into().unwrap(),
-                out.try_into().unwrap(),
-            )
-        },
-        |q, out| {
-            let mut m = [[0.0; ur5_locked::NV]; ur5_locked::NV];
-            ur5_locked::f64::crba(q.try_into().unwrap(), &mut m);
-            *out = m.iter().flatten().copied().collect();
-        },
-    );
-    let solo: Functions = (
-        |q, v, t, out| {
-            solo12_locked::f64::aba(
-                q.try_into().unwrap(),
-                v.try_into().unwrap(),
-                t.try_into().unwrap(),
-                out.try_into().unwrap(),
-            )
-        },
-        |q, v, a, out| {
-            solo12_locked::f64::rnea(
-                q.try_into().unwrap(),
-                v.try_into().unwrap(),
-                a.try_into().unwrap(),
-                out.try_into().unwrap(),
-            )
-        },
-        |q, out| {
-            let mut m = [[0.0; solo12_locked::NV]; solo12_locked::NV];
-            solo12_locked::f64::crba(q.try_into().unwrap(), &mut m);
-            *out = m.iter().flatten().copied().collect();
-        },
-    );
-    for (name, urdf, floating, (aba_g, rnea_g, crba_g)) in [
-        ("ur5_locked", "tests/data/pinocchio/ur5.urdf", false, ur5),
+    for (name, urdf, floating, functions) in [
+        (
+            "ur5_locked",
+            "tests/data/pinocchio/ur5.urdf",
+            false,
+            generated_functions!(ur5_locked),
+        ),
         (
             "solo12_locked_floating",
             "tests/data/pinocchio/solo12.urdf",
             true,
-            solo,
+            generated_functions!(solo12_locked),
         ),
     ] {
         let json = reference(name);
         let model = model_with(urdf, &options_of(&json, floating)).unwrap();
-        let (q_map, v_map) = coordinate_maps(name, &model, &json);
-        let pick = |x: &Value, map: &[usize]| -> Vec<f64> {
-            let x = vecf(x);
-            map.iter().map(|&i| x[i]).collect()
-        };
-        let (nq, nv) = (model.nq(), model.nv());
-        let mut worst = [0.0f64; 3];
-        for s in json["samples"].as_array().unwrap() {
-            let q = pick(&s["q_angle"], &q_map);
-            let v = pick(&s["v"], &v_map);
-            let mut out = vec![0.0; nv];
-            aba_g(&q, &v, &pick(&s["tau"], &v_map), &mut out);
-            worst[0] = worst[0].max(relative_error(&out, &pick(&s["qdd"], &v_map)));
-            rnea_g(&q, &v, &pick(&s["qdd_for_rnea"], &v_map), &mut out);
-            worst[1] = worst[1].max(relative_error(&out, &pick(&s["tau_rnea"], &v_map)));
-            let mut m = Vec::new();
-            crba_g(&q, &mut m);
-            let rows: Vec<Vec<f64>> = s["M"].as_array().unwrap().iter().map(vecf).collect();
-            let theirs: Vec<f64> = (0..nv * nv)
-                .map(|k| rows[v_map[k / nv]][v_map[k % nv]])
-                .collect();
-            worst[2] = worst[2].max(relative_error(&m, &theirs));
-            assert_eq!(q.len(), nq);
-        }
-        eprintln!(
-            "{name} generated: aba {:.1e} rnea {:.1e} crba {:.1e}",
-            worst[0], worst[1], worst[2]
-        );
-        assert!(worst.iter().all(|&w| w <= 1e-9), "{name}: {worst:?}");
+        check_generated(name, &model, &json, functions);
     }
 }
 
