@@ -173,3 +173,32 @@ fn tradeoff_reports_every_variant_with_its_error_and_time() {
         "{out}"
     );
 }
+
+/// The standalone crate of a locked, reflected model says so in its README, with the gravity it folded.
+#[test]
+fn standalone_readme_states_the_scene() {
+    let out = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("scene-standalone");
+    let _ = std::fs::remove_dir_all(&out);
+    let model = repo("models/loops/geared_motor.urdf");
+    let (ok, _, err) = embedyn(
+        &[
+            "generate",
+            &model,
+            "--out",
+            out.to_str().unwrap(),
+            "--rotors",
+            "reflected",
+            "--lock",
+            "elbow=0.25",
+            "--gravity",
+            "0,0,-1.62",
+        ],
+        "",
+    );
+    assert!(ok, "{err}");
+    let readme = std::fs::read_to_string(out.join("README.md")).unwrap();
+    assert!(readme.contains("nq = 1, nv = 1"), "{readme}");
+    assert!(readme.contains("gravity (0, 0, -1.62) m/s²"), "{readme}");
+    assert!(readme.contains("`elbow` locked at 0.25"), "{readme}");
+    assert!(readme.contains("geared rotors reflected"), "{readme}");
+}

@@ -94,10 +94,12 @@ pub(crate) fn apply<'r>(
         return Ok(Cow::Borrowed(robot));
     }
     let mut scene = robot.clone();
-    lock_joints(&mut scene, &options.locks, options.floating)?;
+    // Rotors first: a joint that drives only reflected rotors is then outside every constraint and may
+    // be locked (its armature goes with it), and a reflected rotor may be locked at another angle.
     if options.rotors == Rotors::Reflected {
         reflect_rotors(&mut scene);
     }
+    lock_joints(&mut scene, &options.locks, options.floating)?;
     Ok(Cow::Owned(scene))
 }
 
@@ -193,6 +195,8 @@ fn lock_joints(robot: &mut Robot, locks: &[LockedJoint], floating: bool) -> Resu
     }
     let tree = LinkTree::new(robot);
     let uses = constraint_uses(robot, &tree);
+    // The value each joint was locked at by an earlier `--lock` (not by a reflected rotor).
+    let mut locked_by_user: Vec<Option<f64>> = vec![None; robot.joints.len()];
     let at_joint = |robot: &Robot, j: usize| {
         let joint = &robot.joints[j];
         Location::new(
@@ -227,7 +231,7 @@ fn lock_joints(robot: &mut Robot, locks: &[LockedJoint], floating: bool) -> Resu
         };
         let kind = kind
             .or_else(|| {
-                joint.locked.map(|first| LoadErrorKind::LockedTwice {
+                locked_by_user[j].map(|first| LoadErrorKind::LockedTwice {
                     first,
                     second: lock.value,
                 })
@@ -246,6 +250,7 @@ fn lock_joints(robot: &mut Robot, locks: &[LockedJoint], floating: bool) -> Resu
             return Err(LoadError::at(at_joint(robot, j), kind));
         }
         robot.joints[j].locked = Some(lock.value);
+        locked_by_user[j] = Some(lock.value);
     }
     Ok(())
 }
