@@ -13,6 +13,16 @@ mod hostile {
     embedyn::robot!("tests/data/hostile_names.urdf", f64_only);
 }
 
+mod hostile_locked {
+    // Joints named like keywords and with spaces, locked: by keyword, raw identifier and string literal.
+    embedyn::robot!(
+        "tests/data/hostile_names.urdf",
+        f64_only,
+        only(aba),
+        lock(r#fn = 0.1, self = -0.2, "肩 joint ✓" = 0.3)
+    );
+}
+
 #[path = "data/hostile_names.rs"]
 mod names;
 use names::{FRAMES, JOINTS};
@@ -35,6 +45,40 @@ fn hostile_names_through_the_macro_mean_what_the_model_says() {
         hostile::f64::aba(&q, &v, &tau, &mut qdd);
         let e = relative_error(&qdd, &want);
         assert!(e <= 1e-12, "generated vs interpreted: {e:e}");
+    }
+}
+
+/// `lock(…)` names joints as the file does: a raw identifier (`r#fn`, the joint `fn`), a keyword (`self`)
+/// and a string literal (any name) lock those joints, and the code is the interpreted model's with
+/// the same locks.
+#[test]
+fn hostile_names_lock_the_joints_they_name() {
+    let locks = [("fn", 0.1), ("self", -0.2), ("肩 joint ✓", 0.3)];
+    let loaded = embedyn::load(&common::repo_path("tests/data/hostile_names.urdf")).unwrap();
+    let model = loaded
+        .model::<f64>(&embedyn::ModelOptions {
+            locks: locks
+                .iter()
+                .map(|&(joint, value)| embedyn::LockedJoint {
+                    joint: joint.into(),
+                    value,
+                })
+                .collect(),
+            ..Default::default()
+        })
+        .unwrap();
+    assert_eq!(hostile_locked::NV, 9);
+    assert!(locks.iter().all(|(j, _)| model.joint_index(j).is_none()));
+    let mut ws = Workspace::new(&model);
+    let mut rng = Rng::new(9);
+    for _ in 0..5 {
+        let q: [f64; 9] = rng.configuration(&model).try_into().unwrap();
+        let v: [f64; 9] = rng.vec(9, -2.0, 2.0).try_into().unwrap();
+        let tau: [f64; 9] = rng.vec(9, -1.0, 1.0).try_into().unwrap();
+        let want = aba(&model, &mut ws, &q, &v, &tau).unwrap().to_vec();
+        let mut qdd = [0.0; 9];
+        hostile_locked::f64::aba(&q, &v, &tau, &mut qdd);
+        assert!(relative_error(&qdd, &want) <= 1e-12);
     }
 }
 

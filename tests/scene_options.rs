@@ -537,3 +537,81 @@ fn generated_reflected_code_matches_interpreted() {
         assert!(relative_error(m.as_flattened(), &interpreted) <= 1e-12);
     }
 }
+
+/// geared_motor.urdf's text with `edit` applied (each pair: text to find and its replacement, every
+/// occurrence; the text must occur).
+fn geared_motor_with(edits: &[(&str, &str)]) -> embedyn::Loaded {
+    let mut text = std::fs::read_to_string(repo_path("models/loops/geared_motor.urdf")).unwrap();
+    for (from, to) in edits {
+        assert!(text.contains(from), "{from}");
+        text = text.replace(from, to);
+    }
+    parse_urdf(&text, Path::new("geared_motor_edited.urdf")).unwrap()
+}
+
+/// Which side of a coupling is the rotor: the faster one, however the file writes the coupling or
+/// declares its joints. The same mechanism written with the rotor as the predecessor (ratio 1/6), or
+/// with no `independent` declarations (embedyn then picks the rotors as independent), reflects the same
+/// rotors and gives the same accelerations; the driven link is never taken for a rotor. (A tester found
+/// the driven forearm frozen as a "rotor", a quiet wrong answer.)
+#[test]
+fn the_rotor_is_the_faster_side_however_the_coupling_is_written() {
+    let reflected = ModelOptions {
+        rotors: Rotors::Reflected,
+        ..Default::default()
+    };
+    let plain = geared_motor_with(&[]).model::<f64>(&reflected).unwrap();
+    let swapped = geared_motor_with(&[(
+        "<predecessor link=\"forearm\"/>\n    <successor link=\"elbow_rotor\"/>\n    <ratio value=\"6\"/>",
+        "<predecessor link=\"elbow_rotor\"/>\n    <successor link=\"forearm\"/>\n    <ratio value=\"0.16666666666666666\"/>",
+    )]);
+    let undeclared = geared_motor_with(&[
+        (" independent=\"true\"", ""),
+        (" independent=\"false\"", ""),
+    ]);
+    let names = |m: &Model<f64>| m.joints.iter().map(|j| j.name.clone()).collect::<Vec<_>>();
+    assert_eq!(names(&plain), ["shoulder", "elbow"]);
+    let mut rng = Rng::new(23);
+    for loaded in [swapped, undeclared] {
+        let model = loaded.model::<f64>(&reflected).unwrap();
+        assert_eq!(names(&model), names(&plain));
+        let (mut wa, mut wb) = (Workspace::new(&plain), Workspace::new(&model));
+        for _ in 0..5 {
+            let (q, v, tau) = (
+                rng.vec(2, -1.0, 1.0),
+                rng.vec(2, -1.0, 1.0),
+                rng.vec(2, -1.0, 1.0),
+            );
+            let a = aba(&plain, &mut wa, &q, &v, &tau).unwrap().to_vec();
+            let b = aba(&model, &mut wb, &q, &v, &tau).unwrap().to_vec();
+            assert!(relative_error(&b, &a) <= 1e-12, "{a:?} {b:?}");
+        }
+    }
+    // A faster side that carries a moving joint is no rotor: nothing is reflected.
+    let path = "tests/data/scenes/rotor_with_children.urdf";
+    let exact: Model<f64> = load_model(path, false);
+    let model = model_with(path, &reflected).unwrap();
+    assert_eq!(names(&model), names(&exact));
+    assert!(model.has_constraints());
+}
+
+/// A ratio whose square times the rotor inertia overflows is an error naming the coupling, not an
+/// armature of infinity.
+#[test]
+fn a_reflected_inertia_that_overflows_is_refused_at_the_coupling() {
+    let loaded = geared_motor_with(&[(
+        "<successor link=\"elbow_rotor\"/>\n    <ratio value=\"6\"/>",
+        "<successor link=\"elbow_rotor\"/>\n    <ratio value=\"1e300\"/>",
+    )]);
+    let e = loaded
+        .model::<f64>(&ModelOptions {
+            rotors: Rotors::Reflected,
+            ..Default::default()
+        })
+        .unwrap_err();
+    assert!(
+        matches!(e.kind, LoadErrorKind::ReflectedInertiaOverflow { ratio, .. } if ratio == 1e300),
+        "{e}"
+    );
+    assert!(e.to_string().contains("coupling \"elbow_gear\""), "{e}");
+}

@@ -50,22 +50,25 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             DEFAULT_COMPILE_MEMORY_MB,
             &mut |step| eprintln!("{model}: {step}"),
         )?;
-        let base = result.variants[0].aba_ns;
+        let base = result.variants[0].aba_ns.unwrap_or(f64::NAN);
+        let number = |x: Option<f64>, precision: usize| {
+            x.map_or("refused".to_string(), |x| format!("{x:.precision$e}"))
+        };
         let name = Path::new(model)
             .file_stem()
             .unwrap()
             .to_string_lossy()
             .into_owned();
         for v in &result.variants {
+            let ns = v.aba_ns.unwrap_or(f64::NAN);
             table.push_str(&format!(
-                "| {name} | {} / {} | {} | {} | {:.0} | {:.2} | {:.1e} |\n",
+                "| {name} | {} / {} | {} | {} | {ns:.0} | {:.2} | {} |\n",
                 exact.nv(),
                 exact.independent_nv(),
                 v.scalar,
                 v.rotors,
-                v.aba_ns,
-                v.aba_ns / base,
-                v.rel_error
+                ns / base,
+                number(v.rel_error, 1)
             ));
         }
         for (scalar, marker) in [("f64", Marker::Circle), ("f32", Marker::Square)] {
@@ -73,7 +76,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 .variants
                 .iter()
                 .filter(|v| v.scalar == scalar)
-                .map(|v| (v.aba_ns, v.rel_error))
+                .map(|v| {
+                    (
+                        v.aba_ns.unwrap_or(f64::NAN),
+                        v.rel_error.unwrap_or(f64::NAN),
+                    )
+                })
                 .collect();
             plot = plot.series(
                 Series::new(format!("{name} {scalar} (exact → reflected)"), points)

@@ -25,11 +25,16 @@ pub struct Variant {
     pub scalar: &'static str,
     /// `exact` or `reflected`.
     pub rotors: &'static str,
-    /// Median ns per call of the generated `aba`.
-    pub aba_ns: f64,
-    /// The largest relative error of the independent accelerations over the states, against the exact
-    /// model in double-double (max|a − b| / max(1, max|b|)).
-    pub rel_error: f64,
+    /// Median ns per call of the generated `aba` (`None` where the variant was refused).
+    pub aba_ns: Option<f64>,
+    /// The largest relative error of the accelerations over the states, against the exact model in
+    /// double-double (max|a − b| / max(1, max|b|)): the independent accelerations with exact rotors,
+    /// the model's own coordinates with reflected rotors. `None` where the variant was refused or an
+    /// answer was not a number.
+    pub rel_error: Option<f64>,
+    /// Why the variant could not be built (a constant that does not fit f32, …).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub refused: Option<String>,
 }
 
 /// [`tradeoff`]'s result.
@@ -45,6 +50,9 @@ pub struct Tradeoff {
     pub reference: &'static str,
 }
 
+/// A state of the exact model: q, v and τ over its spanning coordinates.
+type State = (Vec<f64>, Vec<f64>, Vec<f64>);
+
 /// Measures every meaningful variant of `loaded` under `options` (its `--lock`s and gravity are kept;
 /// its `--rotors` choice is replaced by each choice in turn).
 pub fn tradeoff(
@@ -53,22 +61,34 @@ pub fn tradeoff(
     max_compile_memory_mb: u64,
     progress: &mut dyn FnMut(&str),
 ) -> Result<Tradeoff, CliError> {
-    let exact_options = ModelOptions {
-        rotors: Rotors::Exact,
+    let mut rotor_choices = vec![Rotors::Exact];
+    if !geared_rotors(&loaded.robot).is_empty() {
+        rotor_choices.push(Rotors::Reflected);
+    }
+    let options_with = |rotors| ModelOptions {
+        rotors,
         ..options.clone()
     };
-    let exact = loaded.model::<f64>(&exact_options)?;
-    let exact_dd = loaded.model::<DoubleDouble>(&exact_options)?;
-    // States of the exact model; torques on its independent coordinates only, so that the same torques
-    // act in every variant (only Xᵀτ acts, and X is the identity on the independent rows).
+    let exact = loaded.model::<f64>(&options_with(Rotors::Exact))?;
+    let exact_dd = loaded.model::<DoubleDouble>(&options_with(Rotors::Exact))?;
+    let models: Vec<Model<f64>> = rotor_choices
+        .iter()
+        .map(|&r| loaded.model::<f64>(&options_with(r)))
+        .collect::<Result<_, _>>()?;
+    // States of the exact model, with torques on the coordinates every variant keeps, so that the same
+    // torques act in each (a reflected model lacks the rotors' joints; in the exact model only Xᵀτ acts).
     let found = consistent_states(&exact, STATES, 0x7ade).map_err(BenchError::NoStates)?;
-    let independent = independent_v(&exact);
+    let restrictions: Vec<(Vec<usize>, Vec<usize>)> =
+        models.iter().map(|m| restriction(&exact, m)).collect();
+    let shared: Vec<usize> = (0..exact.nv())
+        .filter(|i| restrictions.iter().all(|(_, v_of)| v_of.contains(i)))
+        .collect();
     let mut rng = SplitMix64::new(0x7ade);
-    let states: Vec<(Vec<f64>, Vec<f64>, Vec<f64>)> = found
+    let states: Vec<State> = found
         .into_iter()
         .map(|s| {
             let mut tau = vec![0.0; exact.nv()];
-            for &i in &independent {
+            for &i in &shared {
                 tau[i] = rng.uniform(-1.0, 1.0);
             }
             (s.q, s.v, tau)
@@ -81,102 +101,39 @@ pub fn tradeoff(
     let mut ws_dd = Workspace::new(&exact_dd);
     let dd =
         |x: &[f64]| -> Vec<DoubleDouble> { x.iter().map(|&a| DoubleDouble::from_f64(a)).collect() };
+    // The exact accelerations over all spanning coordinates (they satisfy the constraints).
     let reference: Vec<Vec<f64>> = states
         .iter()
         .enumerate()
         .map(|(sample, (q, v, tau))| {
             let qdd = aba(&exact_dd, &mut ws_dd, &dd(q), &dd(v), &dd(tau))
                 .map_err(|error| CliError::Dynamics { sample, error })?;
-            Ok(independent.iter().map(|&i| qdd[i].to_f64()).collect())
+            Ok(qdd.iter().map(|x| x.to_f64()).collect())
         })
         .collect::<Result<_, CliError>>()?;
 
-    let mut rotor_choices = vec![Rotors::Exact];
-    if !geared_rotors(&loaded.robot).is_empty() {
-        rotor_choices.push(Rotors::Reflected);
-    }
+    let independent = independent_v(&exact);
     let mut variants = Vec::new();
-    for rotors in rotor_choices {
-        let variant_options = ModelOptions {
-            rotors,
-            ..options.clone()
+    for ((rotors, model), (q_of, v_of)) in rotor_choices.into_iter().zip(&models).zip(&restrictions)
+    {
+        // What is compared, as (index in the variant's qdd, index in the exact model's): the
+        // independent accelerations with exact rotors; every coordinate of the reflected model.
+        let compared: Vec<(usize, usize)> = if rotors == Rotors::Exact {
+            independent.iter().map(|&i| (i, i)).collect()
+        } else {
+            v_of.iter().copied().enumerate().collect()
         };
-        let model = loaded.model::<f64>(&variant_options)?;
-        // Each state of the exact model restricted to the variant's joints (matched by name: a reflected
-        // model keeps exactly the independent joints).
-        let (q_of, v_of) = restriction(&exact, &model);
-        let rows: Vec<Vec<f64>> = states
-            .iter()
-            .map(|(q, v, tau)| {
-                q_of.iter()
-                    .map(|&i| q[i])
-                    .chain(v_of.iter().map(|&i| v[i]))
-                    .chain(v_of.iter().map(|&i| tau[i]))
-                    .collect()
-            })
-            .collect();
-        // The variant's independent coordinates, in the order of the exact model's.
-        let variant_independent: Vec<usize> = independent
-            .iter()
-            .map(|&i| {
-                v_of.iter()
-                    .position(|&k| k == i)
-                    .expect("independent joints are kept")
-            })
-            .collect();
-        progress(&format!(
-            "generating and compiling aba with {} rotors ({} coordinates)",
-            rotors.as_str(),
-            model.nv()
-        ));
-        let constrained = model.has_constraints();
-        let binary = build_runner(
+        variants.extend(measure_variant(
             loaded,
-            &GenerateOptions {
-                model: variant_options.clone(),
-                algorithms: runner_algorithms(&[Algorithm::Aba], constrained),
-                exact: true,
-                max_compile_memory_mb: Some(max_compile_memory_mb),
-                ..Default::default()
-            },
-        )?;
-        let len = model.nv() + usize::from(constrained);
-        for scalar in ["f64", "f32"] {
-            progress(&format!(
-                "timing {scalar} aba with {} rotors",
-                rotors.as_str()
-            ));
-            let outputs = run(&binary, "aba", scalar, RowShape::Eval { len }, &rows)?;
-            let rel_error = outputs
-                .iter()
-                .zip(&reference)
-                .map(|(out, want)| {
-                    let got: Vec<f64> = variant_independent.iter().map(|&i| out[i]).collect();
-                    relative_error(&got, want)
-                })
-                // NaN (no correct digit, or a refusal the generated code signals by its measure) wins.
-                .fold(0.0f64, |m, e| {
-                    if e.is_nan() || m.is_nan() {
-                        f64::NAN
-                    } else {
-                        m.max(e)
-                    }
-                });
-            let aba_ns = run(&binary, "aba", scalar, RowShape::Bench, &rows)?
-                .first()
-                .and_then(|r| r.first().copied())
-                .ok_or_else(|| BenchError::NoTime {
-                    algorithm: "aba".into(),
-                    scalar: scalar.into(),
-                })?;
-            variants.push(Variant {
-                engine: "generated",
-                scalar,
-                rotors: rotors.as_str(),
-                aba_ns,
-                rel_error,
-            });
-        }
+            &options_with(rotors),
+            model,
+            (q_of, v_of),
+            &compared,
+            &states,
+            &reference,
+            max_compile_memory_mb,
+            progress,
+        )?);
     }
     Ok(Tradeoff {
         model: exact.name.clone(),
@@ -184,6 +141,103 @@ pub fn tradeoff(
         states: states.len(),
         reference: "the exact model (rotors exact, the same --lock and gravity), interpreted aba in double-double",
     })
+}
+
+/// Generates, times and checks one rotor choice's `aba` in f64 and f32 (f32 reported as refused when the
+/// model's constants do not fit it).
+#[allow(clippy::too_many_arguments)]
+fn measure_variant(
+    loaded: &Loaded,
+    options: &ModelOptions,
+    model: &Model<f64>,
+    (q_of, v_of): (&[usize], &[usize]),
+    compared: &[(usize, usize)],
+    states: &[State],
+    reference: &[Vec<f64>],
+    max_compile_memory_mb: u64,
+    progress: &mut dyn FnMut(&str),
+) -> Result<Vec<Variant>, CliError> {
+    let rotors = options.rotors.as_str();
+    // Each state of the exact model restricted to the variant's joints (matched by name).
+    let rows: Vec<Vec<f64>> = states
+        .iter()
+        .map(|(q, v, tau)| {
+            q_of.iter()
+                .map(|&i| q[i])
+                .chain(v_of.iter().map(|&i| v[i]))
+                .chain(v_of.iter().map(|&i| tau[i]))
+                .collect()
+        })
+        .collect();
+    let f32_refusal = loaded.model::<f32>(options).err().map(|e| e.to_string());
+    progress(&format!(
+        "generating and compiling aba with {rotors} rotors ({} coordinates)",
+        model.nv()
+    ));
+    let constrained = model.has_constraints();
+    let binary = build_runner(
+        loaded,
+        &GenerateOptions {
+            model: options.clone(),
+            algorithms: runner_algorithms(&[Algorithm::Aba], constrained),
+            exact: true,
+            max_compile_memory_mb: Some(max_compile_memory_mb),
+            f32: f32_refusal.is_none(),
+            ..Default::default()
+        },
+    )?;
+    let len = model.nv() + usize::from(constrained);
+    let mut variants = Vec::new();
+    for scalar in ["f64", "f32"] {
+        if let (Some(why), "f32") = (&f32_refusal, scalar) {
+            progress(&format!("f32 with {rotors} rotors refused: {why}"));
+            variants.push(Variant {
+                engine: "generated",
+                scalar,
+                rotors,
+                aba_ns: None,
+                rel_error: None,
+                refused: Some(why.clone()),
+            });
+            continue;
+        }
+        progress(&format!("timing {scalar} aba with {rotors} rotors"));
+        let outputs = run(&binary, "aba", scalar, RowShape::Eval { len }, &rows)?;
+        let rel_error = outputs
+            .iter()
+            .zip(reference)
+            .map(|(out, reference)| {
+                let (got, want): (Vec<f64>, Vec<f64>) = compared
+                    .iter()
+                    .map(|&(k, i)| (out[k], reference[i]))
+                    .unzip();
+                relative_error(&got, &want)
+            })
+            // NaN (no correct digit, or a refusal the generated code signals by its measure) wins.
+            .fold(0.0f64, |m, e| {
+                if e.is_nan() || m.is_nan() {
+                    f64::NAN
+                } else {
+                    m.max(e)
+                }
+            });
+        let aba_ns = run(&binary, "aba", scalar, RowShape::Bench, &rows)?
+            .first()
+            .and_then(|r| r.first().copied())
+            .ok_or_else(|| BenchError::NoTime {
+                algorithm: "aba".into(),
+                scalar: scalar.into(),
+            })?;
+        variants.push(Variant {
+            engine: "generated",
+            scalar,
+            rotors,
+            aba_ns: Some(aba_ns),
+            rel_error: (!rel_error.is_nan()).then_some(rel_error),
+            refused: None,
+        });
+    }
+    Ok(variants)
 }
 
 /// The v indices of `model`'s independent coordinates, in joint order.
@@ -214,27 +268,38 @@ fn restriction(exact: &Model<f64>, variant: &Model<f64>) -> (Vec<usize>, Vec<usi
 
 /// A table of the variants, one per line, with each one's time and error relative to exact f64.
 pub fn table(t: &Tradeoff) -> String {
-    let base = t.variants.first().map_or(f64::NAN, |v| v.aba_ns);
+    let base = t
+        .variants
+        .first()
+        .and_then(|v| v.aba_ns)
+        .unwrap_or(f64::NAN);
     let mut s = format!(
-        "{}: generated aba, {} random consistent states; error of the independent accelerations against {}\n\
+        "{}: generated aba, {} random consistent states; error of the accelerations against {}\n\
          scalar  rotors      ns/call   × exact f64   relative error   correct digits\n",
         t.model, t.states, t.reference
     );
     for v in &t.variants {
-        let digits = if v.rel_error.is_nan() {
-            "none (NaN)".to_string()
-        } else if v.rel_error <= 0.0 {
-            "all".to_string()
-        } else {
-            format!("{:.1}", (-v.rel_error.log10()).max(0.0))
+        let (Some(ns), rel_error) = (v.aba_ns, v.rel_error) else {
+            s.push_str(&format!(
+                "{:<7} {:<9} refused: {}\n",
+                v.scalar,
+                v.rotors,
+                v.refused.as_deref().unwrap_or("")
+            ));
+            continue;
+        };
+        let (error, digits) = match rel_error {
+            None => ("NaN".to_string(), "none".to_string()),
+            Some(e) if e <= 0.0 => ("0".to_string(), "all".to_string()),
+            Some(e) => (format!("{e:.2e}"), format!("{:.1}", (-e.log10()).max(0.0))),
         };
         s.push_str(&format!(
-            "{:<7} {:<9} {:>9.0} {:>13.2} {:>16.2e}   {}\n",
+            "{:<7} {:<9} {:>9.0} {:>13.2} {:>16}   {}\n",
             v.scalar,
             v.rotors,
-            v.aba_ns,
-            v.aba_ns / base,
-            v.rel_error,
+            ns,
+            ns / base,
+            error,
             digits
         ));
     }
@@ -266,7 +331,11 @@ pub fn svg(t: &Tradeoff) -> String {
         plot = plot.series(
             Series::new(
                 format!("{} {} rotors", v.scalar, v.rotors),
-                vec![(v.aba_ns, v.rel_error)],
+                // A refused or NaN variant is left out (the plot counts it under the figure).
+                vec![(
+                    v.aba_ns.unwrap_or(f64::NAN),
+                    v.rel_error.unwrap_or(f64::NAN),
+                )],
             )
             .marker(marker)
             .colour(k + 1),

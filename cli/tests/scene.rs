@@ -202,3 +202,29 @@ fn standalone_readme_states_the_scene() {
     assert!(readme.contains("`elbow` locked at 0.25"), "{readme}");
     assert!(readme.contains("geared rotors reflected"), "{readme}");
 }
+
+/// `tradeoff` on a geared arm whose file declares no independent joints (embedyn picks the rotors as
+/// independent, the reflected model keeps the driving joints): every variant is compared on the
+/// coordinates it has, none is missing (a tester found a panic here).
+#[test]
+fn tradeoff_compares_reflected_rotors_on_the_joints_they_keep() {
+    let text = std::fs::read_to_string(repo("models/loops/geared_motor.urdf"))
+        .unwrap()
+        .replace(" independent=\"true\"", "")
+        .replace(" independent=\"false\"", "");
+    let path = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("geared_undeclared.urdf");
+    std::fs::write(&path, text).unwrap();
+    let (ok, out, err) = embedyn_cached(&["tradeoff", path.to_str().unwrap(), "--json"], "");
+    assert!(ok, "{err}");
+    let result = json(&out);
+    let list = result["variants"].as_array().unwrap();
+    assert_eq!(list.len(), 4, "{out}");
+    for v in list {
+        let e = v["rel_error"].as_f64().unwrap();
+        if v["rotors"] == "exact" {
+            assert!(e <= if v["scalar"] == "f64" { 1e-12 } else { 1e-4 }, "{v}");
+        } else {
+            assert!(e > 1e-8 && e < 1.0, "{v}");
+        }
+    }
+}

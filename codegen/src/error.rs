@@ -521,6 +521,14 @@ pub enum LoadErrorKind {
         /// Its name.
         name: String,
     },
+    /// `--rotors reflected`: ratio² × the rotor's axial inertia overflows f64.
+    #[error("--rotors reflected would put ratio² × rotor inertia on the driving joints, and with ratio {ratio:e} and axial inertia {axial_inertia:e} kg·m² that overflows f64; model this coupling exactly")]
+    ReflectedInertiaOverflow {
+        /// The coupling's ratio.
+        ratio: f64,
+        /// The rotor's axial inertia (kg·m²).
+        axial_inertia: f64,
+    },
     /// A floating joint below the root.
     #[error("a floating joint must connect the root (a link fixed to the world) to the rest of the tree")]
     FloatingNotAtRoot,

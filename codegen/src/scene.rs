@@ -53,9 +53,11 @@ pub struct LockedJoint {
     pub value: f64,
 }
 
-/// A geared rotor, as `--rotors reflected` sees it: the one moving joint on one side of a `<coupling>`,
-/// whose child carries no moving joint and no loop, and which takes part in no other constraint. Its
-/// coordinate is `Σ gain · q_driver` over the joints on the coupling's other side.
+/// A geared rotor, as `--rotors reflected` sees it: the faster side of a `<coupling>` (the successor when
+/// |ratio| > 1, the predecessor when |ratio| < 1, the side declared `independent="false"` at |ratio| = 1)
+/// when that side is one moving joint whose child carries no moving joint and no loop, and which takes
+/// part in no other constraint. Its coordinate is `Σ gain · q_driver` over the joints on the coupling's
+/// other side.
 #[derive(Clone, Debug, PartialEq)]
 pub struct GearedRotor {
     /// Index of the coupling into [`Robot::couplings`].
@@ -97,7 +99,7 @@ pub(crate) fn apply<'r>(
     // Rotors first: a joint that drives only reflected rotors is then outside every constraint and may
     // be locked (its armature goes with it), and a reflected rotor may be locked at another angle.
     if options.rotors == Rotors::Reflected {
-        reflect_rotors(&mut scene);
+        reflect_rotors(&mut scene)?;
     }
     lock_joints(&mut scene, &options.locks, options.floating)?;
     Ok(Cow::Owned(scene))
@@ -293,11 +295,24 @@ pub fn geared_rotors(robot: &Robot) -> Vec<GearedRotor> {
                 axial_inertia: axial + joint.armature,
             })
         };
-        if let Some(r) = rotor(&successor, &predecessor, coupling.ratio)
-            .or_else(|| rotor(&predecessor, &successor, 1.0 / coupling.ratio))
-        {
-            rotors.push(r);
-        }
+        // The rotor is the side that turns faster: the successor when |ratio| > 1 (GRBDA's files write
+        // link, rotor, ratio 6), the predecessor when |ratio| < 1; at |ratio| = 1 the side declared
+        // dependent. Only that side is tried: the driven link is never taken for a rotor.
+        let declared_dependent =
+            |side: &[usize]| matches!(side, [j] if robot.joints[*j].independent == Some(false));
+        let successor_is_rotor = if coupling.ratio.abs() != 1.0 {
+            coupling.ratio.abs() > 1.0
+        } else {
+            declared_dependent(&successor) && !declared_dependent(&predecessor)
+        };
+        let found = if successor_is_rotor {
+            rotor(&successor, &predecessor, coupling.ratio)
+        } else if coupling.ratio.abs() != 1.0 || declared_dependent(&predecessor) {
+            rotor(&predecessor, &successor, 1.0 / coupling.ratio)
+        } else {
+            None
+        };
+        rotors.extend(found);
     }
     rotors
 }
@@ -332,11 +347,26 @@ fn rigid_subtree_inertia(
 
 /// `--rotors reflected`: each geared rotor's joint is fixed at angle 0 (its inertia joins its carrier),
 /// its coupling removed, and gain² × its axial inertia added to each driving joint's armature.
-fn reflect_rotors(robot: &mut Robot) {
+fn reflect_rotors(robot: &mut Robot) -> Result<(), LoadError> {
     let rotors = geared_rotors(robot);
     for rotor in &rotors {
         for &(d, gain) in &rotor.drivers {
-            robot.joints[d].armature += gain * gain * rotor.axial_inertia;
+            let armature = robot.joints[d].armature + gain * gain * rotor.axial_inertia;
+            if !armature.is_finite() {
+                let coupling = &robot.couplings[rotor.coupling];
+                return Err(LoadError::at(
+                    Location::new(
+                        &robot.source,
+                        coupling.line,
+                        format!("coupling \"{}\"", coupling.name),
+                    ),
+                    LoadErrorKind::ReflectedInertiaOverflow {
+                        ratio: coupling.ratio,
+                        axial_inertia: rotor.axial_inertia,
+                    },
+                ));
+            }
+            robot.joints[d].armature = armature;
         }
         let joint = &mut robot.joints[rotor.joint];
         joint.locked = Some(0.0);
@@ -347,4 +377,5 @@ fn reflect_rotors(robot: &mut Robot) {
         c += 1;
         !rotors.iter().any(|r| r.coupling == c - 1)
     });
+    Ok(())
 }

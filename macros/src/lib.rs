@@ -53,8 +53,9 @@ fn parse_locks(input: ParseStream) -> syn::Result<Vec<embedyn_codegen::LockedJoi
             let name: LitStr = content.parse()?;
             (name.value(), name.span())
         } else {
-            let name: Ident = content.parse()?;
-            (name.to_string(), name.span())
+            // Any identifier, keywords too (`type = 0.1`, `r#type = 0.1`), by its name without `r#`.
+            let name = content.call(<Ident as syn::ext::IdentExt>::parse_any)?;
+            (syn::ext::IdentExt::unraw(&name).to_string(), name.span())
         };
         content.parse::<Token![=]>()?;
         let value = parse_number(&content)?;

@@ -92,6 +92,16 @@ fn constants<T: Real>(model: &Model<T>) -> Vec<Constants> {
             ["placement rotation", "placement translation"],
             &j.placement,
         );
+        if j.has_armature() {
+            // A reflected rotor's ratio² · inertia (a ratio of 1e25 is 1e50 of it): named as armature,
+            // not as whatever inertia the overflow would poison later.
+            out.push(Constants {
+                element: element.clone(),
+                what: "armature",
+                kind: Kind::RotationalInertia,
+                values: vec![j.armature.to_f64()],
+            });
+        }
         out.push(Constants {
             element,
             what: "axis",
