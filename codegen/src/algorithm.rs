@@ -392,8 +392,8 @@ pub const ALGORITHMS: &[AlgorithmSpec] = &[
         traced_name: "gravity",
         wrapper: None,
         summary: "generalized gravity `g(q)` (`rnea` at `v = 0`, `qdd = 0`; only when asked for)",
-        doc: "Generalized gravity: `τ = g(q)`, the joint forces that hold the robot still at `q` (recursive Newton–Euler at `v = 0`, `qdd = 0`, unrolled: no velocity terms, no armature).",
-        doc_with_constraints: Some("Generalized gravity: `τ = g(q)` on the spanning tree's joints (recursive Newton–Euler at `v = 0`, `qdd = 0`, unrolled: no velocity terms, no armature); only its projection `Xᵀ τ` (`embedding`) acts on the independent coordinates."),
+        doc: "Generalized gravity: `τ = g(q)`, the joint forces that hold the robot still at `q` (Newton–Euler at `v = 0`, `qdd = 0`, unrolled: gravity carried down the tree, each subtree's mass and first moment carried up; no velocity terms, no armature).",
+        doc_with_constraints: Some("Generalized gravity: `τ = g(q)` on the spanning tree's joints (Newton–Euler at `v = 0`, `qdd = 0`, unrolled: gravity carried down the tree, each subtree's mass and first moment carried up; no velocity terms, no armature); only its projection `Xᵀ τ` (`embedding`) acts on the independent coordinates."),
         inputs: &[Q],
         outputs: &[OutputSpec {
             name: "tau",
