@@ -192,7 +192,7 @@ fn rnea_terms<'w, T: Real>(
             None => Motion::zero(),
         };
         if let Some(qdd) = qdd {
-            a = a + joint.joint_motion(qdd);
+            a += joint.joint_motion(qdd);
         }
         let a = (a + ws.coriolis[i]).named(&body.name, "a");
         let inertia = &body.inertia;
