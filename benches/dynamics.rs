@@ -1,5 +1,6 @@
 //! Interpreted-solver benchmarks: ABA, RNEA, CRBA and the Eq. 6 inverse on bundled and public robots,
-//! f64 and f32, and ABA on chains of 10, 100 and 1000 bodies (cost must grow linearly).
+//! f64 and f32, and ABA on chains of 10, 100 and 1000 bodies (cost must grow linearly); generated code
+//! (`gen_*`: aba, rnea, gravity, nle, crba) on the same robots.
 //!
 //! `cargo bench --bench dynamics`; `bench/compare.sh` runs this and Pinocchio in one go and writes
 //! the table in BENCHMARKS.md. Every call cycles through 64 pre-generated random states.
@@ -199,10 +200,11 @@ fn bench_loops(c: &mut Criterion) {
     }
 }
 
-/// The same models through `embedyn::robot!` (generated straight-line code).
+/// The same models through `embedyn::robot!` (generated straight-line code), with `gravity` and `nle`
+/// beside the default functions (timed next to `rnea`: issue 10's target is gravity ≤ 0.4× rnea).
 macro_rules! generated_models {
     ($($name:ident: $path:literal $(, $opt:ident)?;)*) => {
-        $(mod $name { embedyn::robot!($path $(, $opt)?); })*
+        $(mod $name { embedyn::robot!($path, gravity, nle $(, $opt)?); })*
 
         fn bench_generated(c: &mut Criterion) {
             $({
@@ -226,6 +228,16 @@ macro_rules! generated_models {
                 c.bench_function(&format!("gen_rnea/{name}"), |b| b.iter(|| {
                     k = (k + 1) & 63;
                     $name::f64::rnea(black_box(&q[k]), &v[k], &x[k], &mut out);
+                    black_box(out[0])
+                }));
+                c.bench_function(&format!("gen_gravity/{name}"), |b| b.iter(|| {
+                    k = (k + 1) & 63;
+                    $name::f64::gravity(black_box(&q[k]), &mut out);
+                    black_box(out[0])
+                }));
+                c.bench_function(&format!("gen_nle/{name}"), |b| b.iter(|| {
+                    k = (k + 1) & 63;
+                    $name::f64::nle(black_box(&q[k]), &v[k], &mut out);
                     black_box(out[0])
                 }));
                 c.bench_function(&format!("gen_crba/{name}"), |b| b.iter(|| {
@@ -253,6 +265,7 @@ macro_rules! generated_models {
 fn bench_name(module: &str) -> &str {
     match module {
         "solo12_free" => "solo12_floating",
+        "anymal_b_free" => "anymal_b_floating",
         other => other,
     }
 }
@@ -263,6 +276,7 @@ generated_models! {
     arm7: "models/arm7.urdf";
     panda: "tests/data/pinocchio/panda.urdf";
     anymal_b: "models/peers/anymal_b.urdf";
+    anymal_b_free: "models/peers/anymal_b.urdf", floating;
     solo12_free: "tests/data/pinocchio/solo12.urdf", floating;
     quadruped: "models/quadruped.urdf";
     humanoid34: "models/humanoid34.urdf";

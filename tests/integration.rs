@@ -20,6 +20,7 @@ mod fuzz_corpus;
 mod fuzz_findings;
 mod generated;
 mod generated_chain;
+mod gravity_nle;
 mod loop_simulation;
 mod model_scale;
 mod pinocchio_reference;

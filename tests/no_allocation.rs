@@ -6,8 +6,8 @@ mod common;
 use common::{load_model, Rng};
 use embedyn::constraints::{complete_configuration, complete_velocity};
 use embedyn::{
-    aba, crba, embedding_map_in, forward_kinematics, mass_matrix_inverse, reduced_mass_matrix_in,
-    rnea, Workspace,
+    aba, crba, embedding_map_in, forward_kinematics, gravity, mass_matrix_inverse, nle,
+    reduced_mass_matrix_in, rnea, Workspace,
 };
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -55,6 +55,8 @@ fn algorithm_calls_do_not_allocate() {
             forward_kinematics(&model, &mut ws, &q, &v).unwrap();
             let _ = aba(&model, &mut ws, &q, &v, &tau).unwrap();
             let _ = rnea(&model, &mut ws, &q, &v, &tau).unwrap();
+            let _ = gravity(&model, &mut ws, &q).unwrap();
+            let _ = nle(&model, &mut ws, &q, &v).unwrap();
             let _ = crba(&model, &mut ws, &q).unwrap();
             let _ = mass_matrix_inverse(&model, &mut ws, &q).unwrap();
         }
@@ -66,8 +68,9 @@ fn algorithm_calls_do_not_allocate() {
             after - before
         );
     }
-    // Models with loops and couplings: embedded forward dynamics, inverse dynamics, the tree's M, the
-    // embedding map, XᵀMX, position completion (from a guess near the assembly) and velocity projection.
+    // Models with loops and couplings: embedded forward dynamics, inverse dynamics (and at rest: gravity,
+    // nonlinear effects), the tree's M, the embedding map, XᵀMX, position completion (from a guess near
+    // the assembly) and velocity projection.
     for path in [
         "models/loops/four_bar_internal.urdf",
         "models/loops/biped_floating.urdf",
@@ -87,6 +90,8 @@ fn algorithm_calls_do_not_allocate() {
         for _ in 0..3 {
             let _ = aba(&model, &mut ws, &q, &v, &tau).unwrap();
             let _ = rnea(&model, &mut ws, &q, &v, &tau).unwrap();
+            let _ = gravity(&model, &mut ws, &q).unwrap();
+            let _ = nle(&model, &mut ws, &q, &v).unwrap();
             let _ = crba(&model, &mut ws, &q).unwrap();
             let _ = embedding_map_in(&model, &mut ws, &q).unwrap();
             let _ = reduced_mass_matrix_in(&model, &mut ws, &q).unwrap();

@@ -1,4 +1,4 @@
-//! `embedyn eval`: ABA, RNEA or CRBA on every sample.
+//! `embedyn eval`: ABA, RNEA, generalized gravity, nonlinear effects or CRBA on every sample.
 
 use super::runner::RowShape;
 use super::samples::Samples;
@@ -7,8 +7,8 @@ use embedyn_codegen::{Loaded, ModelOptions};
 use embedyn_runtime::constraints::{constraint_violation, singularity_threshold};
 use embedyn_runtime::nalgebra;
 use embedyn_runtime::{
-    aba, crba, embedding_map, reduced_mass_matrix, rnea, DynamicsError, JointType, Model, Real,
-    Workspace,
+    aba, crba, embedding_map, gravity, nle, reduced_mass_matrix, rnea, DynamicsError, JointType,
+    Model, Real, Workspace,
 };
 use serde::Serialize;
 
@@ -27,7 +27,8 @@ enum Output {
         qdd: Vec<f64>,
         qdd_independent: Vec<f64>,
     },
-    Rnea {
+    /// `rnea`, `gravity`, `nle`: joint forces on the spanning tree and their projection `Xᵀ τ`.
+    Torques {
         tau: Vec<f64>,
         tau_independent: Vec<f64>,
     },
@@ -35,6 +36,17 @@ enum Output {
         #[serde(rename = "M")]
         m: Vec<Vec<f64>>,
     },
+}
+
+/// Whether the algorithm's output is a generalized force (`rnea`, `gravity`, `nle`), reported as `tau` on
+/// the spanning tree's joints and `tau_independent` = `Xᵀ τ`.
+fn gives_torques(algo: Algo) -> bool {
+    matches!(algo, Algo::Rnea | Algo::Gravity | Algo::Nle)
+}
+
+/// Whether the algorithm reads a velocity (`v` of the sample; else the state is at rest).
+fn reads_velocity(algo: Algo) -> bool {
+    algo.spec().inputs.iter().any(|input| input.name == "v")
 }
 
 impl Evaluated {
@@ -74,9 +86,11 @@ pub fn eval(
         let zero = vec![0.0; nv];
         for i in 0..samples.len() {
             let q = samples.vector(i, "q")?;
-            let v = match algo {
-                Algo::Crba => &zero[..],
-                _ => samples.vector(i, "v")?,
+            // `v` must satisfy the velocity constraints where the algorithm reads one (`nle` too).
+            let v = if reads_velocity(algo) {
+                samples.vector(i, "v")?
+            } else {
+                &zero[..]
             };
             check_consistent(&model64, &mut ws, q, v, i)?;
         }
@@ -126,35 +140,28 @@ fn eval_generated(
     };
     let (nq, nv) = (model.nq(), model.nv());
     let mut rows = Vec::with_capacity(samples.len());
-    let zero = vec![0.0; nv];
+    // The runner reads `q` and two `NV`-vectors per sample: the function's inputs after `q` (its
+    // descriptor's), zeros for those it does not have.
+    let inputs = &algo.spec().inputs[1..];
+    if inputs.len() > 2 {
+        return Err(not_evaluated(algo));
+    }
     for i in 0..samples.len() {
         let mut row = samples.vector(i, "q")?.to_vec();
         check_quaternions(model, &row, i)?;
-        let (a, b) = match algo {
-            Algo::Aba => (
-                ("v", "tau"),
-                (samples.vector(i, "v")?, samples.vector(i, "tau")?),
-            ),
-            Algo::Rnea => (
-                ("v", "qdd"),
-                (samples.vector(i, "v")?, samples.vector(i, "qdd")?),
-            ),
-            Algo::Crba => (("v", "tau"), (&zero[..], &zero[..])),
-            other => return Err(not_evaluated(other)),
-        };
-        let ((name_a, name_b), (a, b)) = (a, b);
         // Finite in f64 but not in the scalar (1e308 as f32): refused as the interpreted engine refuses
         // it, naming the entry, rather than reported later as whatever the generated code makes of inf.
-        match scalar {
-            Scalar::F64 => {}
-            Scalar::F32 => {
-                for (name, x) in [("q", &row[..]), (name_a, a), (name_b, b)] {
-                    fits::<f32>(name, x, i)?;
-                }
-            }
+        if scalar == Scalar::F32 {
+            fits::<f32>("q", &row, i)?;
         }
-        row.extend_from_slice(a);
-        row.extend_from_slice(b);
+        for input in inputs {
+            let x = samples.vector(i, input.name)?;
+            if scalar == Scalar::F32 {
+                fits::<f32>(input.name, x, i)?;
+            }
+            row.extend_from_slice(x);
+        }
+        row.resize(nq + 2 * nv, 0.0);
         rows.push(row);
     }
     // (Built once every sample is known to be evaluable.)
@@ -167,7 +174,8 @@ fn eval_generated(
     // What one output row holds; the runner's output is checked against it (count and length).
     let len = match algo {
         Algo::Aba if model.has_constraints() => nv + 1,
-        Algo::Aba | Algo::Rnea => nv,
+        Algo::Aba => nv,
+        a if gives_torques(a) => nv,
         Algo::Crba if model.has_constraints() => model.independent_nv().pow(2) + 1,
         Algo::Crba => nv * nv,
         other => return Err(not_evaluated(other)),
@@ -175,7 +183,7 @@ fn eval_generated(
     let outputs = super::runner::run(&binary, name, scalar_name, RowShape::Eval { len }, &rows)?;
     let mut ws = Workspace::new(model);
     let mut model32 = match scalar {
-        Scalar::F32 if algo == Algo::Rnea && model.has_constraints() => {
+        Scalar::F32 if gives_torques(algo) && model.has_constraints() => {
             let m32 = loaded.model::<f32>(options)?;
             let ws32 = Workspace::new(&m32);
             Some((m32, ws32))
@@ -186,7 +194,11 @@ fn eval_generated(
     let mut out = Vec::with_capacity(outputs.len());
     for (i, (o, row)) in outputs.iter().zip(&rows).enumerate() {
         let mut o = o.clone();
-        if algo != Algo::Rnea && model.has_constraints() {
+        if algo
+            .reported_by(model.has_constraints())
+            .spec()
+            .returns_value(model.has_constraints())
+        {
             // The generated `aba` and `crba_independent` also return the singularity measure cond₁(Y1);
             // refuse where the interpreted engine does, by the same threshold for the scalar (NaN counts
             // as singular).
@@ -209,7 +221,7 @@ fn eval_generated(
         // Named as the output is in the JSON, as the interpreted engine names it.
         let output = match algo {
             Algo::Aba => "qdd",
-            Algo::Rnea => "tau",
+            a if gives_torques(a) => "tau",
             Algo::Crba => "M",
             _ => name,
         };
@@ -220,7 +232,7 @@ fn eval_generated(
                 qdd_independent: independent.iter().map(|&k| o[k]).collect(),
                 qdd: o,
             },
-            Algo::Rnea => {
+            a if gives_torques(a) => {
                 // Xᵀ τ with X in the scalar asked for, so that the singularity verdict is that scalar's.
                 let tau_independent: Vec<f64> = match model32.as_mut() {
                     Some((m32, ws32)) if model.has_constraints() => project(m32, ws32, q, &o, i)?,
@@ -228,7 +240,7 @@ fn eval_generated(
                     _ => o.clone(),
                 };
                 let tau_independent = finite(&tau_independent, i, "tau_independent")?;
-                Output::Rnea {
+                Output::Torques {
                     tau: o,
                     tau_independent,
                 }
@@ -305,7 +317,6 @@ fn eval_in<T: Real>(
     samples: &Samples,
 ) -> Result<Evaluated, CliError> {
     let mut ws = Workspace::new(model);
-    let nv = model.nv();
     let independent = independent_indices(model);
     let pick = |x: &[f64]| -> Vec<f64> { independent.iter().map(|&i| x[i]).collect() };
     let mut out = Vec::with_capacity(samples.len());
@@ -317,12 +328,10 @@ fn eval_in<T: Real>(
         let q = samples.vector(i, "q")?;
         check_quaternions(model, q, i)?;
         let q = cast::<T>(q);
-        let v = match algo {
-            Algo::Crba => vec![T::zero(); nv],
-            _ => cast::<T>(samples.vector(i, "v")?),
-        };
+        let v = || samples.vector(i, "v").map(cast::<T>);
         let value = match algo {
             Algo::Aba => {
+                let v = v()?;
                 let tau = cast::<T>(samples.vector(i, "tau")?);
                 let qdd = finite(aba(model, &mut ws, &q, &v, &tau).map_err(at)?, i, "qdd")?;
                 Output::Aba {
@@ -330,20 +339,28 @@ fn eval_in<T: Real>(
                     qdd,
                 }
             }
-            Algo::Rnea => {
-                let qdd = cast::<T>(samples.vector(i, "qdd")?);
-                let tau = finite(rnea(model, &mut ws, &q, &v, &qdd).map_err(at)?, i, "tau")?;
+            a if gives_torques(a) => {
+                let tau = match a {
+                    Algo::Rnea => {
+                        let qdd = cast::<T>(samples.vector(i, "qdd")?);
+                        rnea(model, &mut ws, &q, &v()?, &qdd)
+                    }
+                    Algo::Nle => nle(model, &mut ws, &q, &v()?),
+                    Algo::Gravity => gravity(model, &mut ws, &q),
+                    other => return Err(not_evaluated(other)),
+                };
+                let tau = finite(tau.map_err(at)?, i, "tau")?;
                 let tau_independent: Vec<f64> = if model.has_constraints() {
                     // Only Xᵀ τ acts on the independent coordinates.
                     let x = embedding_map(model, &mut ws, &q).map_err(at)?;
                     (0..x.ncols())
-                        .map(|c| (0..nv).map(|r| x[(r, c)].to_f64() * tau[r]).sum())
+                        .map(|c| (0..tau.len()).map(|r| x[(r, c)].to_f64() * tau[r]).sum())
                         .collect()
                 } else {
                     tau.clone()
                 };
                 let tau_independent = finite(&tau_independent, i, "tau_independent")?;
-                Output::Rnea {
+                Output::Torques {
                     tau,
                     tau_independent,
                 }

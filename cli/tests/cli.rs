@@ -690,6 +690,105 @@ fn both_engines_refuse_a_singular_loop_configuration() {
     );
 }
 
+/// `eval --algo gravity` and `--algo nle` (CONTRACT §3): `{"q"}` and `{"q", "v"}` in, `{"tau",
+/// "tau_independent"}` out, equal to `rnea` at `v = 0, qdd = 0` and at `qdd = 0`; on a tree
+/// `tau_independent` is `tau`, on a four-bar it is `Xᵀ τ` over the two independent joints (as `rnea`
+/// reports it), `nle`'s `v` must satisfy the velocity constraints while `gravity` reads none; the
+/// generated engine (the four-bar, `gravity` in f64 and `nle` in f32: two small crates) agrees.
+#[test]
+fn gravity_and_nle_report_tree_and_independent_torques() {
+    // (model, q, v consistent with the loops, independent coordinates)
+    let cases = [
+        (
+            "models/arm7.urdf",
+            json!([0.3, -0.5, 0.2, 1.0, -0.4, 0.6, 0.1]),
+            json!([0.5, -1.0, 0.3, 0.2, 0.1, -0.7, 1.1]),
+            7,
+        ),
+        (
+            "models/loops/four_bar_internal.urdf",
+            json!([0.2, -0.23852181413429285, 0.1, 0.06351674563095804]),
+            json!([1.0, -1.2346001352305047, 0.0, 0.2497501675301564]),
+            2,
+        ),
+    ];
+    for (file, q, v, ni) in cases {
+        let model = repo(file);
+        let nv = v.as_array().unwrap().len();
+        let zeros = vec![0.0; nv];
+        let at_rest = json!({"samples": [{"q": q, "v": zeros, "qdd": zeros}]}).to_string();
+        let moving = json!({"samples": [{"q": q, "v": v, "qdd": zeros}]}).to_string();
+        for (algo, input) in [("gravity", &at_rest), ("nle", &moving)] {
+            let out = json_of(&["eval", &model, "--algo", algo], input);
+            let sample = &out["samples"][0];
+            let mut keys: Vec<&str> = sample
+                .as_object()
+                .unwrap()
+                .keys()
+                .map(|k| k.as_str())
+                .collect();
+            keys.sort();
+            assert_eq!(keys, ["tau", "tau_independent"], "{file} {algo}");
+            assert_eq!(sample["tau"].as_array().unwrap().len(), nv, "{file} {algo}");
+            assert_eq!(
+                sample["tau_independent"].as_array().unwrap().len(),
+                ni,
+                "{file} {algo}"
+            );
+            assert_eq!(out["joints"].as_array().unwrap().len(), nv, "{file} {algo}");
+            if ni == nv {
+                assert_eq!(sample["tau"], sample["tau_independent"], "{file} {algo}");
+            }
+            let rnea = json_of(&["eval", &model, "--algo", "rnea"], input);
+            let e = scaled_difference(&flat(sample), &flat(&rnea["samples"][0]));
+            assert!(e <= 1e-14, "{file} {algo} vs rnea at rest: {e:e}");
+            // Only the fields the algorithm reads are required.
+            let minimal = if algo == "gravity" {
+                json!({"samples": [{"q": q}]})
+            } else {
+                json!({"samples": [{"q": q, "v": v}]})
+            };
+            assert_eq!(
+                json_of(&["eval", &model, "--algo", algo], &minimal.to_string()),
+                out
+            );
+        }
+        if ni < nv {
+            // A velocity off the constraints is refused by nle; gravity does not read it.
+            let off = json!({"samples": [{"q": q, "v": vec![1.0; nv]}]}).to_string();
+            let (ok, _, err) = embedyn(&["eval", &model, "--algo", "nle"], &off);
+            assert!(
+                !ok && err.contains("violates the velocity constraints"),
+                "{err}"
+            );
+            json_of(&["eval", &model, "--algo", "gravity"], &off);
+            for (algo, scalar, tol) in [("gravity", "f64", 1e-12), ("nle", "f32", 1e-4)] {
+                let interp = json_of(&["eval", &model, "--algo", algo], &moving);
+                let (ok, out, err) = embedyn_cached(
+                    &[
+                        "eval",
+                        &model,
+                        "--algo",
+                        algo,
+                        "--engine",
+                        "generated",
+                        "--scalar",
+                        scalar,
+                    ],
+                    &moving,
+                );
+                assert!(ok, "{algo} {scalar}: {err}");
+                let gen: Value = serde_json::from_str(&out).unwrap();
+                let e = scaled_difference(&flat(&gen["samples"]), &flat(&interp["samples"]));
+                assert!(
+                    e <= tol,
+                    "{file} {algo} generated {scalar} vs interpreted {e:e}"
+                );
+            }
+        }
+    }
+}
+
 #[test]
 fn bench_reports_every_engine_and_scalar() {
     let (ok, out, err) = embedyn_cached(
@@ -702,7 +801,7 @@ fn bench_reports_every_engine_and_scalar() {
     );
     assert!(ok, "{err}");
     let v: Value = serde_json::from_str(&out).unwrap();
-    for algo in ["aba", "rnea", "crba"] {
+    for algo in ["aba", "rnea", "gravity", "nle", "crba"] {
         for engine in ["interpreted_f64", "generated_f64", "generated_f32"] {
             let ns = v[algo][engine].as_f64().unwrap_or(f64::NAN);
             assert!(ns.is_finite() && ns > 0.0, "{algo} {engine}: {ns}");

@@ -8,7 +8,7 @@
 use crate::trace::Sym;
 use embedyn_runtime::constraints::{completion_step, constraint_condition};
 use embedyn_runtime::{
-    aba, crba, embedding_map_in, forward_kinematics, link_poses, mass_matrix_inverse,
+    aba, crba, embedding_map_in, forward_kinematics, gravity, link_poses, mass_matrix_inverse, nle,
     reduced_mass_matrix_in, rnea, DynamicsError, Model, Workspace,
 };
 
@@ -21,6 +21,10 @@ pub enum Algorithm {
     Aba,
     /// `rnea`: inverse dynamics.
     Rnea,
+    /// `gravity`: the generalized gravity `g(q)`.
+    Gravity,
+    /// `nle`: the nonlinear effects `C(q, v) v + g(q)`.
+    Nle,
     /// `crba`: the mass matrix.
     Crba,
     /// `minv`: the inverse mass matrix.
@@ -381,6 +385,74 @@ pub const ALGORITHMS: &[AlgorithmSpec] = &[
         interpreted: |model, ws, inputs| {
             rnea(model, ws, inputs[0], inputs[1], inputs[2]).map(|_| ())
         },
+    },
+    AlgorithmSpec {
+        algorithm: Algorithm::Gravity,
+        name: "gravity",
+        traced_name: "gravity",
+        wrapper: None,
+        summary: "generalized gravity `g(q)` (`rnea` at `v = 0`, `qdd = 0`; only when asked for)",
+        doc: "Generalized gravity: `τ = g(q)`, the joint forces that hold the robot still at `q` (Newton–Euler at `v = 0`, `qdd = 0`, unrolled: gravity carried down the tree, each subtree's mass and first moment carried up; no velocity terms, no armature).",
+        doc_with_constraints: Some("Generalized gravity: `τ = g(q)` on the spanning tree's joints (Newton–Euler at `v = 0`, `qdd = 0`, unrolled: gravity carried down the tree, each subtree's mass and first moment carried up; no velocity terms, no armature); only its projection `Xᵀ τ` (`embedding`) acts on the independent coordinates."),
+        inputs: &[Q],
+        outputs: &[OutputSpec {
+            name: "tau",
+            shape: Shape::Vector(Dim::Nv),
+            unit: "N·m or N",
+        }],
+        returns: Returns::Nothing,
+        needs_constraints: false,
+        generated: WhenGenerated::OnRequest,
+        readme_note: " — the generalized gravity `g(q)`",
+        readme_note_with_constraints: Some(" — the generalized gravity `g(q)` on the spanning tree's joints; `Xᵀ τ` acts on the independent coordinates"),
+        cli: Some(CliSpec {
+            help: "Generalized gravity g(q) (Newton–Euler at rest)",
+            with_constraints: None,
+        }),
+        growth: Growth::Linear,
+        predicted_operations: |c| 100.0 * c.nv,
+        trace: |model, ws, inputs| {
+            let tau = gravity(model, ws, &inputs[0])?.to_vec();
+            Ok(Traced {
+                outputs: vec![tau],
+                returned: None,
+            })
+        },
+        interpreted: |model, ws, inputs| gravity(model, ws, inputs[0]).map(|_| ()),
+    },
+    AlgorithmSpec {
+        algorithm: Algorithm::Nle,
+        name: "nle",
+        traced_name: "nle",
+        wrapper: None,
+        summary: "nonlinear effects `C(q, v) v + g(q)` (`rnea` at `qdd = 0`; only when asked for)",
+        doc: "Nonlinear effects: `τ = C(q, v) v + g(q)`, Coriolis, centrifugal and gravity forces (recursive Newton–Euler at `qdd = 0`, unrolled: no armature).",
+        doc_with_constraints: Some("Nonlinear effects: `τ = C(q, v) v + g(q)` on the spanning tree's joints (recursive Newton–Euler at `qdd = 0`, unrolled: no armature), for a `v` that satisfies the velocity constraints; only its projection `Xᵀ τ` (`embedding`) acts on the independent coordinates."),
+        inputs: &[Q, V],
+        outputs: &[OutputSpec {
+            name: "tau",
+            shape: Shape::Vector(Dim::Nv),
+            unit: "N·m or N",
+        }],
+        returns: Returns::Nothing,
+        needs_constraints: false,
+        generated: WhenGenerated::OnRequest,
+        readme_note: " — the nonlinear effects `C(q, v) v + g(q)`",
+        readme_note_with_constraints: Some(" — the nonlinear effects `C(q, v) v + g(q)` on the spanning tree's joints, for a `v` on the velocity constraints; `Xᵀ τ` acts on the independent coordinates"),
+        cli: Some(CliSpec {
+            help: "Nonlinear effects C(q, v) v + g(q) (Newton–Euler at qdd = 0)",
+            with_constraints: None,
+        }),
+        growth: Growth::Linear,
+        predicted_operations: |c| 215.0 * c.nv,
+        trace: |model, ws, inputs| {
+            let tau = nle(model, ws, &inputs[0], &inputs[1])?.to_vec();
+            Ok(Traced {
+                outputs: vec![tau],
+                returned: None,
+            })
+        },
+        interpreted: |model, ws, inputs| nle(model, ws, inputs[0], inputs[1]).map(|_| ()),
     },
     AlgorithmSpec {
         algorithm: Algorithm::Crba,
@@ -847,14 +919,14 @@ mod tests {
         let e = Algorithm::from_name("abba").unwrap_err().to_string();
         assert_eq!(
             e,
-            "unknown function `abba` (expected kinematics, aba, rnea, crba, minv, complete, embedding, crba_independent)"
+            "unknown function `abba` (expected kinematics, aba, rnea, gravity, nle, crba, minv, complete, embedding, crba_independent)"
         );
     }
 
     #[test]
     fn the_command_line_reports_crba_independent_for_crba_with_constraints() {
         let offered: Vec<&str> = Algorithm::offered_by_cli().map(Algorithm::name).collect();
-        assert_eq!(offered, ["aba", "rnea", "crba"]);
+        assert_eq!(offered, ["aba", "rnea", "gravity", "nle", "crba"]);
         assert_eq!(
             Algorithm::Crba.reported_by(true),
             Algorithm::CrbaIndependent

@@ -8,14 +8,14 @@ use quote::quote;
 use syn::parse::{Parse, ParseStream};
 use syn::{Ident, LitStr, Path, Token};
 
-/// `robot!("model.urdf")` or `robot!("model.urdf", floating, minv, only(aba, kinematics), crate = ::my_facade)`
+/// `robot!("model.urdf")` or `robot!("model.urdf", floating, minv, nle, only(aba, kinematics), crate = ::my_facade)`
 /// (and `max_compile_memory = 4096` to raise the limit on rustc's estimated memory, MB; `gravity = [0.0,
 /// 0.0, -1.62]` for another gravity than (0, 0, −9.81) m/s², folded into the code; `lock(knee = 0.3, …)` to fix
 /// joints; `rotors = reflected` for the reflected-inertia approximation of geared rotors).
 struct Args {
     path: LitStr,
     floating: bool,
-    /// Functions generated on request, each asked for by its name as an option (`minv`).
+    /// Functions generated on request, each asked for by its name as an option (`minv`, `gravity`, `nle`).
     requested: Vec<embedyn_codegen::Algorithm>,
     f64: bool,
     f32: bool,
@@ -93,7 +93,7 @@ fn parse_gravity(input: ParseStream) -> syn::Result<[f64; 3]> {
     }
 }
 
-/// The functions generated only when asked for, each an option of its own (`minv`).
+/// The functions generated only when asked for, each an option of its own (`minv`, `gravity`, `nle`).
 fn on_request() -> impl Iterator<Item = embedyn_codegen::Algorithm> {
     embedyn_codegen::Algorithm::generated(embedyn_codegen::algorithm::WhenGenerated::OnRequest)
 }
@@ -128,7 +128,8 @@ impl Parse for Args {
             let key: Ident = input.parse()?;
             match key.to_string().as_str() {
                 "floating" => args.floating = true,
-                name if on_request().any(|a| a.name() == name) => args
+                // (`gravity` alone asks for the function, `gravity = [x, y, z]` sets the vector.)
+                name if on_request().any(|a| a.name() == name) && !input.peek(Token![=]) => args
                     .requested
                     .extend(on_request().filter(|a| a.name() == name)),
                 "f64_only" => args.f32 = false,
@@ -182,8 +183,8 @@ impl Parse for Args {
 /// Generates straight-line dynamics for a URDF/URDF+ model at compile time.
 ///
 /// The path is relative to the calling crate's `Cargo.toml` (or to `$EMBEDYN_MODEL_DIR` when set). Expands to `NQ`, `NV`, `JOINTS`,
-/// `INDEPENDENT`, `FRAMES` and modules `f64`/`f32` with `kinematics`, `aba`, `rnea`, `crba` (and `minv` with the
-/// `minv` option; `only(aba, crba, …)` generates exactly the functions named, nothing else;
+/// `INDEPENDENT`, `FRAMES` and modules `f64`/`f32` with `kinematics`, `aba`, `rnea`, `crba` (and `minv`, `gravity`,
+/// `nle` each with the option of its name; `only(aba, crba, …)` generates exactly the functions named, nothing else;
 /// `f64_only`/`f32_only` one scalar module). Code that rustc is estimated to need more than 2 GB of
 /// memory to compile is a compile error naming the estimate and what shrinks it (fewer functions, one
 /// scalar type); `max_compile_memory = 4096` raises the limit (MB).

@@ -52,8 +52,8 @@ pub mod tree;
 
 #[cfg(feature = "alloc")]
 pub use algorithms::{
-    aba, constraint_kinematics, crba, embedding_map, embedding_map_in, forward_kinematics,
-    kinetic_energy, kkt_forward_dynamics, link_poses, mass_matrix_inverse, potential_energy,
+    aba, constraint_kinematics, crba, embedding_map, embedding_map_in, forward_kinematics, gravity,
+    kinetic_energy, kkt_forward_dynamics, link_poses, mass_matrix_inverse, nle, potential_energy,
     reduced_mass_matrix, reduced_mass_matrix_in, rnea, rnea_with_gravity, DynamicsError,
     Kinematics, Workspace,
 };

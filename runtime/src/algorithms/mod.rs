@@ -20,7 +20,7 @@ pub use embedded::{
 };
 pub use kinematics::{forward_kinematics, kinetic_energy, link_poses, potential_energy};
 pub use minv::mass_matrix_inverse;
-pub use rnea::{rnea, rnea_with_gravity};
+pub use rnea::{gravity, nle, rnea, rnea_with_gravity};
 pub use workspace::{Kinematics, Workspace};
 
 use crate::constraints::{ConstraintSet, GroupLabel};

@@ -1,13 +1,16 @@
-//! Inverse dynamics by the recursive Newton–Euler algorithm (the paper's Eqs. 1–3).
+//! Inverse dynamics by the recursive Newton–Euler algorithm (the paper's Eqs. 1–3), and its special
+//! cases at rest: the generalized gravity `g(q)` and the nonlinear effects `C(q, v) v + g(q)`.
 
 use super::{
-    check_configuration, check_input, gravity_in, per_coordinate, velocity_sweep, DynamicsError,
-    Workspace,
+    check_configuration, check_input, gravity_in, parent_placement, per_coordinate, velocity_sweep,
+    DynamicsError, Workspace,
 };
 #[allow(unused_imports)]
 use crate::alloc_prelude::*;
 use crate::model::Model;
+use crate::spatial::{Force, Motion, SpatialInertia};
 use crate::Real;
+use nalgebra::{Matrix3, Vector3};
 
 /// Inverse dynamics `τ = M(q) qdd + C(q, v) + g(q)` with the model's gravity. Left in `ws.tau` too.
 ///
@@ -51,16 +54,147 @@ pub fn rnea_with_gravity<'w, T: Real>(
     check_configuration(model, q)?;
     check_input("v", v, model.nv())?;
     check_input("qdd", qdd, model.nv())?;
+    Ok(rnea_terms(model, ws, q, v, Some(qdd), gravity))
+}
+
+/// The generalized gravity `g(q)`: the joint forces that hold the model still at `q` against the
+/// model's gravity, [`rnea`] at `v = 0`, `qdd = 0` (Pinocchio's `computeGeneralizedGravity`). Left in
+/// `ws.tau` too.
+///
+/// At rest every body accelerates at `−g` and nothing else, so the force a joint carries is the weight
+/// of the subtree it holds: the outward sweep carries only the gravity vector down the tree (no velocity
+/// sweep, no joint accelerations, no armature, which multiplies `qdd = 0`), and the inward sweep carries
+/// each subtree's mass and first moment `h = m c` up, `h(parent) += R h + m p`, instead of a spatial force.
+/// The joint force is then `Sᵀ (h × a, m a)` with `a = −g` in the body frame. This is a fraction of
+/// [`rnea`]'s arithmetic (on the 7-DoF z1 arm the generated `gravity` has about a tenth of `rnea`'s
+/// operations). For a model with loops, couplings or mimic joints the result is the spanning tree's joint
+/// forces; only their projection `Xᵀ g` ([`crate::embedding_map`]) acts on the independent coordinates.
+///
+/// Inputs are checked as [`rnea`]'s are. `ws.acceleration` holds `−g` in each body frame afterwards, and
+/// `ws.composite` each subtree's mass and first moment (its rotational inertia zero).
+///
+/// ```
+/// # use embedyn_runtime as embedyn; // the facade `embedyn` re-exports this crate
+/// use embedyn::nalgebra::{Matrix3, Vector3};
+/// use embedyn::{gravity, JointType, Model, SpatialInertia, Transform, Workspace};
+/// // A 1 kg point-like pendulum, 0.5 m below a horizontal pivot.
+/// let mut b = Model::<f64>::builder("pendulum");
+/// let inertia = SpatialInertia::from_com(1.0, Vector3::new(0.0, 0.0, -0.5), Matrix3::identity() * 1e-3);
+/// b.add_body(None, "pivot", JointType::Revolute, Vector3::x(), Transform::identity(), "bob", inertia)
+///     .unwrap();
+/// let model = b.build().unwrap();
+/// let mut ws = Workspace::new(&model);
+/// // At θ = 0.3 the pivot must carry the weight's moment: g(θ) = m g l sin θ.
+/// let g = gravity(&model, &mut ws, &[0.3]).unwrap();
+/// assert!((g[0] - 9.81 * 0.5 * 0.3f64.sin()).abs() < 1e-12);
+/// ```
+pub fn gravity<'w, T: Real>(
+    model: &Model<T>,
+    ws: &'w mut Workspace<T>,
+    q: &[T],
+) -> Result<&'w [T], DynamicsError> {
+    check_configuration(model, q)?;
+    // Outward: ᵖX_i(q) and a(i) = −g in body i's frame, a pure linear acceleration (`Rᵀ a(parent)`).
+    for (i, (joint, body)) in model.joints.iter().zip(&model.bodies).enumerate() {
+        let x = parent_placement(joint, q);
+        let a = match joint.parent {
+            Some(p) => x.rotation.tr_mul(&ws.acceleration[p].linear),
+            None => gravity_in(&model.gravity, &x).linear,
+        };
+        ws.acceleration[i] = Motion::new(Vector3::zeros(), a).named(&body.name, "a");
+        ws.velocity[i] = Motion::zero();
+        ws.coriolis[i] = Motion::zero();
+        ws.parent_placement[i] = x;
+        ws.composite[i] = SpatialInertia {
+            rotational: Matrix3::zeros(),
+            ..body.inertia
+        };
+    }
+    // Inward: the subtree's weight f(k) = (h × a, m a) about the body origin, 𝒯(k) = H(k) f(k); its mass
+    // and first moment join the parent's.
+    for i in (0..model.nbodies()).rev() {
+        let (joint, body) = (&model.joints[i], &model.bodies[i]);
+        let c = ws.composite[i].named(&body.name, "ic");
+        let a = &ws.acceleration[i].linear;
+        let f = Force::new(c.first_moment.cross(a), a * c.mass).named(&body.name, "f");
+        ws.force[i] = f;
+        let n = joint.nv();
+        for k in 0..n {
+            let tau = joint.subspace_column(k).dot(&f);
+            ws.tau[joint.v_index + k] = tau.named(&joint.name, per_coordinate(&TAU, n, k), "");
+        }
+        if let Some(p) = joint.parent {
+            let x = &ws.parent_placement[i];
+            let h = x.rotation * c.first_moment + x.translation * c.mass;
+            ws.composite[p].mass += c.mass;
+            ws.composite[p].first_moment += h;
+        }
+    }
+    Ok(&ws.tau)
+}
+
+/// The nonlinear effects `C(q, v) v + g(q)`: Coriolis, centrifugal and gravity forces, [`rnea`] at
+/// `qdd = 0` (Pinocchio's `nonLinearEffects`). Left in `ws.tau` too.
+///
+/// The acceleration terms are not computed (no joint accelerations, no armature, which multiplies
+/// `qdd = 0`). For a model with
+/// loops, couplings or mimic joints, `v` must satisfy the velocity constraints (as for every call) and
+/// the result is the spanning tree's joint forces; only `Xᵀ (C v + g)` acts on the independent
+/// coordinates.
+///
+/// Inputs are checked as [`rnea`]'s are.
+///
+/// ```
+/// # use embedyn_runtime as embedyn; // the facade `embedyn` re-exports this crate
+/// use embedyn::nalgebra::{Matrix3, Vector3};
+/// use embedyn::{nle, rnea, JointType, Model, SpatialInertia, Transform, Workspace};
+/// // A 1 kg point-like pendulum, 0.5 m below a horizontal pivot.
+/// let mut b = Model::<f64>::builder("pendulum");
+/// let inertia = SpatialInertia::from_com(1.0, Vector3::new(0.0, 0.0, -0.5), Matrix3::identity() * 1e-3);
+/// b.add_body(None, "pivot", JointType::Revolute, Vector3::x(), Transform::identity(), "bob", inertia)
+///     .unwrap();
+/// let model = b.build().unwrap();
+/// let mut ws = Workspace::new(&model);
+/// // A single pendulum swinging through θ = 0.3 has no Coriolis force: only gravity remains.
+/// let h = nle(&model, &mut ws, &[0.3], &[2.0]).unwrap()[0];
+/// assert!((h - 9.81 * 0.5 * 0.3f64.sin()).abs() < 1e-12);
+/// assert_eq!(h, rnea(&model, &mut ws, &[0.3], &[2.0], &[0.0]).unwrap()[0]);
+/// ```
+pub fn nle<'w, T: Real>(
+    model: &Model<T>,
+    ws: &'w mut Workspace<T>,
+    q: &[T],
+    v: &[T],
+) -> Result<&'w [T], DynamicsError> {
+    check_configuration(model, q)?;
+    check_input("v", v, model.nv())?;
+    Ok(rnea_terms(model, ws, q, v, None, true))
+}
+
+/// The Newton–Euler sweeps; without `qdd` its terms are left out rather than multiplied by zero (no
+/// joint accelerations, no armature). Inputs are checked by the caller.
+#[inline(always)]
+fn rnea_terms<'w, T: Real>(
+    model: &Model<T>,
+    ws: &'w mut Workspace<T>,
+    q: &[T],
+    v: &[T],
+    qdd: Option<&[T]>,
+    gravity: bool,
+) -> &'w [T] {
     velocity_sweep(model, ws, q, v);
     // Outward: α(k) = φ*(k+1,k) α(k+1) + H*(k) θ̈(k) + a(k), with the base accelerating at −g.
     for (i, (joint, body)) in model.joints.iter().zip(&model.bodies).enumerate() {
         let x = &ws.parent_placement[i];
-        let a_parent = match joint.parent {
+        let mut a = match joint.parent {
             Some(p) => x.inv_act_motion(&ws.acceleration[p]),
             None if gravity => gravity_in(&model.gravity, x),
-            None => crate::spatial::Motion::zero(),
+            None => Motion::zero(),
         };
-        let a = (a_parent + joint.joint_motion(qdd) + ws.coriolis[i]).named(&body.name, "a");
+        if let Some(qdd) = qdd {
+            a += joint.joint_motion(qdd);
+        }
+        let a = (a + ws.coriolis[i]).named(&body.name, "a");
         let inertia = &body.inertia;
         let vel = &ws.velocity[i];
         // f(k) = M(k) α(k) + b(k), b(k) = V ×* M V; children are added in the inward sweep.
@@ -74,8 +208,10 @@ pub fn rnea_with_gravity<'w, T: Real>(
         let n = joint.nv();
         for k in 0..n {
             let mut tau = joint.subspace_column(k).dot(&f);
-            if joint.has_armature() {
-                tau += joint.armature * qdd[joint.v_index + k];
+            if let Some(qdd) = qdd {
+                if joint.has_armature() {
+                    tau += joint.armature * qdd[joint.v_index + k];
+                }
             }
             ws.tau[joint.v_index + k] = tau.named(&joint.name, per_coordinate(&TAU, n, k), "");
         }
@@ -84,7 +220,7 @@ pub fn rnea_with_gravity<'w, T: Real>(
             ws.force[p] += fp;
         }
     }
-    Ok(&ws.tau)
+    &ws.tau
 }
 
 /// Names of the joint forces in generated code (see [`per_coordinate`]).
