@@ -167,3 +167,81 @@ fn generated_armature_matches_pinocchio() {
         check_generated(name, &model, &reference(name), functions);
     }
 }
+
+/// tests/data/armature.urdf's text with each `(from, to)` replaced (the text must occur).
+fn armature_file_with(edits: &[(&str, &str)]) -> Result<embedyn::Loaded, embedyn::LoadError> {
+    let mut text =
+        std::fs::read_to_string(crate::common::repo_path("tests/data/armature.urdf")).unwrap();
+    for (from, to) in edits {
+        assert!(text.contains(from), "{from}");
+        text = text.replace(from, to);
+    }
+    embedyn::codegen::parse_urdf(&text, "armature_edited.urdf".as_ref())
+}
+
+fn armature_of(loaded: &embedyn::Loaded, joint: &str) -> f64 {
+    let model = loaded.model::<f64>(&Default::default()).unwrap();
+    model.joints[model.joint_index(joint).unwrap()].armature
+}
+
+/// What a new user's transmissions found, each pinned: an undeclared `drake:` prefix loads (as Pinocchio
+/// does) with a warning saying what to declare; a gear ratio of 0, a rotor inertia without `value` and a
+/// negative one are errors naming the element; a rotor on a fixed joint and a transmission of several
+/// joints add nothing, with a warning, instead of silently vanishing or landing on the first joint.
+#[test]
+fn transmission_edge_cases_are_read_or_reported() {
+    use embedyn::codegen::{LoadErrorKind, WarningKind};
+    let undeclared = armature_file_with(&[(" xmlns:drake=\"http://drake.mit.edu\"", "")]).unwrap();
+    assert!((armature_of(&undeclared, "j1") - 0.02).abs() < 1e-15);
+    assert!(undeclared.warnings.iter().any(
+        |w| matches!(&w.kind, WarningKind::UndeclaredNamespace { prefix } if prefix == "drake")
+    ));
+
+    let zero = armature_file_with(&[(
+        "<drake:gear_ratio value=\"10\"/>",
+        "<drake:gear_ratio value=\"0\"/>",
+    )])
+    .unwrap_err();
+    assert!(matches!(zero.kind, LoadErrorKind::ZeroGearRatio), "{zero}");
+    assert!(zero.to_string().contains("<gear_ratio>"), "{zero}");
+    let missing = armature_file_with(&[(
+        "<drake:rotor_inertia value=\"2e-4\"/>",
+        "<drake:rotor_inertia/>",
+    )])
+    .unwrap_err();
+    assert!(
+        matches!(missing.kind, LoadErrorKind::MissingAttribute { .. }),
+        "{missing}"
+    );
+    let negative = armature_file_with(&[(
+        "<drake:rotor_inertia value=\"2e-4\"/>",
+        "<drake:rotor_inertia value=\"-2e-4\"/>",
+    )])
+    .unwrap_err();
+    assert!(
+        negative.to_string().contains("<rotor_inertia>"),
+        "{negative}"
+    );
+
+    let fixed = armature_file_with(&[(
+        "<joint name=\"j1\" type=\"revolute\">",
+        "<joint name=\"j1\" type=\"fixed\">",
+    )])
+    .unwrap();
+    assert!(fixed
+        .warnings
+        .iter()
+        .any(|w| matches!(&w.kind, WarningKind::RotorOnFixedJoint { joint } if joint == "j1")));
+    let two = armature_file_with(&[(
+        "<joint name=\"j2\"/>",
+        "<joint name=\"j2\"/><joint name=\"j1\"/>",
+    )])
+    .unwrap();
+    assert!(two
+        .warnings
+        .iter()
+        .any(|w| matches!(w.kind, WarningKind::MultiJointTransmission { joints: 2 })));
+    // j2 keeps its <dynamics armature> only, j1 only its own transmission's.
+    assert!((armature_of(&two, "j2") - 0.5).abs() < 1e-15);
+    assert!((armature_of(&two, "j1") - 0.02).abs() < 1e-15);
+}

@@ -529,6 +529,9 @@ pub enum LoadErrorKind {
         /// The rotor's axial inertia (kg·m²).
         axial_inertia: f64,
     },
+    /// A transmission's gear ratio of zero.
+    #[error("a gear ratio of 0 would make the rotor's inertia vanish from the joint; the ratio is the rotor's speed over the joint's (e.g. 50)")]
+    ZeroGearRatio,
     /// A floating joint below the root.
     #[error("a floating joint must connect the root (a link fixed to the world) to the rest of the tree")]
     FloatingNotAtRoot,
@@ -833,6 +836,24 @@ pub enum WarningKind {
     /// A `<mimic>` on a fixed joint, ignored.
     #[error("<mimic> on a fixed joint has nothing to drive; ignored")]
     MimicOnFixedJoint,
+    /// A namespace prefix used without a declaration, read as if declared.
+    #[error("the namespace prefix `{prefix}` is used without a declaration; read as declared (add xmlns:{prefix}=\"…\" to <robot>, e.g. xmlns:drake=\"http://drake.mit.edu\")")]
+    UndeclaredNamespace {
+        /// The prefix.
+        prefix: String,
+    },
+    /// A transmission's rotor inertia on a joint that does not move.
+    #[error("a rotor inertia on the fixed joint \"{joint}\" moves nothing; ignored")]
+    RotorOnFixedJoint {
+        /// The joint.
+        joint: String,
+    },
+    /// A transmission of several joints with a rotor inertia: how it maps to the joints is not read.
+    #[error("a transmission of {joints} joints: embedyn reads the rotor inertia of transmissions of one joint (SimpleTransmission) only; its rotors add no armature (give each joint <dynamics armature>)")]
+    MultiJointTransmission {
+        /// How many joints it names.
+        joints: usize,
+    },
     /// Joint damping or friction, which the dynamics does not model.
     #[error("<dynamics damping/friction> of {} joint(s) ({}) ignored: embedyn computes the dynamics of ideal joints (as Pinocchio's algorithms do); add the losses to tau", .joints.len(), listed(.joints.iter().map(|j| format!("\"{j}\""))))]
     JointDynamicsIgnored {
@@ -856,7 +877,9 @@ impl WarningKind {
     /// are the first element's, an example), kinds with names fold only when equal.
     pub(crate) fn fold_key(&self) -> WarningFoldKey {
         match self {
-            WarningKind::JointDynamicsIgnored { .. } => WarningFoldKey::Message(self.to_string()),
+            WarningKind::JointDynamicsIgnored { .. }
+            | WarningKind::UndeclaredNamespace { .. }
+            | WarningKind::RotorOnFixedJoint { .. } => WarningFoldKey::Message(self.to_string()),
             _ => WarningFoldKey::Kind(std::mem::discriminant(self)),
         }
     }

@@ -78,7 +78,32 @@ pub fn parse_urdf(text: &str, path: &Path) -> Result<Loaded, LoadError> {
             LoadErrorKind::NestedTooDeep { limit: MAX_NESTING },
         ));
     }
-    let doc = Document::parse(text).map_err(|error| {
+    // Namespace prefixes used without a declaration (`<drake:rotor_inertia>` in a `<robot>` that never
+    // declares `xmlns:drake`, as files Pinocchio reads do) are declared on the root and reported; the
+    // declaration goes on the root's own line, so every line number stays.
+    let mut patched = std::borrow::Cow::Borrowed(text);
+    let mut undeclared: Vec<(String, u32)> = Vec::new();
+    let doc = loop {
+        match Document::parse(&patched) {
+            Err(roxmltree::Error::UnknownNamespace(prefix, pos))
+                if undeclared.len() < MAX_UNDECLARED_PREFIXES
+                    && !undeclared.iter().any(|(p, _)| *p == prefix) =>
+            {
+                let Some(at) = root_tag_end(&patched) else {
+                    break Document::parse(&patched);
+                };
+                let mut owned = patched.into_owned();
+                owned.insert_str(
+                    at,
+                    &format!(" xmlns:{prefix}=\"urn:embedyn:undeclared:{prefix}\""),
+                );
+                patched = std::borrow::Cow::Owned(owned);
+                undeclared.push((prefix, pos.row));
+            }
+            other => break other,
+        }
+    }
+    .map_err(|error| {
         let pos = error.pos();
         LoadError::at(
             Location::new(path, Some(pos.row), "XML"),
@@ -93,11 +118,43 @@ pub fn parse_urdf(text: &str, path: &Path) -> Result<Loaded, LoadError> {
         errors: RefCell::new(Vec::new()),
         omitted: Cell::new(0),
     };
+    for (prefix, line) in undeclared {
+        p.warnings.push(Warning {
+            location: Location::new(path, Some(line), "XML"),
+            kind: WarningKind::UndeclaredNamespace { prefix },
+            same_for: Vec::new(),
+            numbers_differ: false,
+        });
+    }
     let robot = p.robot()?;
     Ok(Loaded {
         robot,
         warnings: p.warnings,
     })
+}
+
+/// The most undeclared namespace prefixes declared on the reader's behalf (each costs a parse).
+const MAX_UNDECLARED_PREFIXES: usize = 8;
+
+/// Where the root element's name ends in `text` (after `<robot`), to declare a namespace there; `None`
+/// when the root is not `<robot` (the reader then reports that).
+fn root_tag_end(text: &str) -> Option<usize> {
+    let mut rest = 0;
+    while let Some(k) = text[rest..].find('<') {
+        let at = rest + k;
+        let tail = &text[at + 1..];
+        if tail.starts_with('?') || tail.starts_with('!') {
+            // A declaration, comment or doctype: skip past its end.
+            let end = if tail.starts_with("!--") { "-->" } else { ">" };
+            rest = at + 1 + tail.find(end)? + end.len();
+            continue;
+        }
+        let name_end = tail
+            .find(|c: char| c.is_whitespace() || c == '>' || c == '/')
+            .unwrap_or(tail.len());
+        return (&tail[..name_end] == "robot").then_some(at + 1 + name_end);
+    }
+    None
 }
 
 /// The problem of an element has been recorded in [`Parser::errors`]; what depends on the element is
@@ -723,33 +780,68 @@ impl<'a, 'input> Parser<'a, 'input> {
             .collect();
         for t in root.children().filter(|n| n.has_tag_name("transmission")) {
             let what = format!("transmission \"{}\"", t.attribute("name").unwrap_or(""));
-            let joint = t
+            let joint_elements: Vec<Node> =
+                t.children().filter(|n| n.has_tag_name("joint")).collect();
+            let joint = joint_elements.first().and_then(|n| n.attribute("name"));
+            let mut actuators = t
                 .children()
-                .find(|n| n.has_tag_name("joint"))
-                .and_then(|n| n.attribute("name"));
-            for actuator in t.children().filter(|n| n.has_tag_name("actuator")) {
-                let Some(inertia) = actuator.children().find(|n| local(n, "rotor_inertia")) else {
-                    continue;
-                };
-                let aw = format!("{what} <actuator>");
-                let Ok(rotor) = self.non_negative(inertia, "value", &aw) else {
+                .filter(|n| n.has_tag_name("actuator"))
+                .filter(|a| a.children().any(|n| local(&n, "rotor_inertia")))
+                .peekable();
+            if actuators.peek().is_none() {
+                continue;
+            }
+            if joint_elements.len() > 1 {
+                // A differential or four-bar transmission: which rotor reflects onto which joint, and with
+                // which cross terms, is not in the rotor inertia alone.
+                self.warn(
+                    t,
+                    what.clone(),
+                    WarningKind::MultiJointTransmission {
+                        joints: joint_elements.len(),
+                    },
+                );
+                continue;
+            }
+            for actuator in actuators {
+                let inertia = actuator
+                    .children()
+                    .find(|n| local(n, "rotor_inertia"))
+                    .expect("filtered above");
+                let element = |n: Node| format!("{what} <actuator> <{}>", n.tag_name().name());
+                let Ok(rotor) = self.required_non_negative(inertia, "value", &element(inertia))
+                else {
                     continue;
                 };
                 let ratio = if let Some(g) = actuator.children().find(|n| local(n, "gear_ratio")) {
-                    self.number(g, "value", None, &aw)
+                    self.number(g, "value", None, &element(g)).map(|r| (r, g))
                 } else if let Some(m) = actuator
                     .children()
                     .chain(t.children())
                     .find(|n| local(n, "mechanicalReduction"))
                 {
-                    self.element_number(m, &aw)
+                    self.element_number(m, &element(m)).map(|r| (r, m))
                 } else {
-                    Ok(1.0)
+                    Ok((1.0, actuator))
                 };
-                let Ok(ratio) = ratio else {
+                let Ok((ratio, ratio_node)) = ratio else {
                     continue;
                 };
+                if ratio == 0.0 {
+                    self.record(
+                        self.loc(ratio_node, element(ratio_node)),
+                        LoadErrorKind::ZeroGearRatio,
+                    );
+                    continue;
+                }
                 match joint.and_then(|name| index.get(name)) {
+                    Some(&j) if !joints[j].kind.is_moving() => self.warn(
+                        t,
+                        what.clone(),
+                        WarningKind::RotorOnFixedJoint {
+                            joint: joints[j].name.clone(),
+                        },
+                    ),
                     Some(&j) => joints[j].armature += ratio * ratio * rotor,
                     None if joint.is_some_and(|name| written_joints.contains(name)) => {}
                     None => self.record(
@@ -761,6 +853,22 @@ impl<'a, 'input> Parser<'a, 'input> {
                 }
             }
         }
+    }
+
+    /// A finite number ≥ 0 in attribute `attr`, which must be present.
+    fn required_non_negative(&self, node: Node, attr: &str, what: &str) -> Parsed<f64> {
+        let x = self.number(node, attr, None, what)?;
+        if x < 0.0 {
+            return self.fail(
+                node,
+                what,
+                LoadErrorKind::Negative {
+                    attribute: attr.into(),
+                    value: x,
+                },
+            );
+        }
+        Ok(x)
     }
 
     /// A finite number ≥ 0 in attribute `attr` (0 when absent).
