@@ -22,7 +22,11 @@ const MODELS: [&str; 5] = [
 ];
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let out = PathBuf::from(std::env::args().nth(1).unwrap_or_else(|| "bench/results/tradeoff".into()));
+    let out = PathBuf::from(
+        std::env::args()
+            .nth(1)
+            .unwrap_or_else(|| "bench/results/tradeoff".into()),
+    );
     std::fs::create_dir_all(&out)?;
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
     let mut table = String::from(
@@ -47,7 +51,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             &mut |step| eprintln!("{model}: {step}"),
         )?;
         let base = result.variants[0].aba_ns;
-        let name = Path::new(model).file_stem().unwrap().to_string_lossy().into_owned();
+        let name = Path::new(model)
+            .file_stem()
+            .unwrap()
+            .to_string_lossy()
+            .into_owned();
         for v in &result.variants {
             table.push_str(&format!(
                 "| {name} | {} / {} | {} | {} | {:.0} | {:.2} | {:.1e} |\n",
