@@ -1,10 +1,12 @@
 //! Dynamics of models with aggregate links (constraint embedding), and the Lagrange-multiplier oracle.
 //!
 //! The O(N) forward dynamics is Eq. 9 with the aggregate-link steps of Eqs. 19–24, in the arrangement of
-//! the alternative form (Eqs. 26–34): every member of a group is expressed in the frame of the one body
-//! the group hangs from, so the group's `E_G` is the identity per member, its `φ_G H*_G X_G` is one 6-vector
-//! per member and independent coordinate (`J_b`), and what the group passes to its parent is
-//! `Σ_b P_b − Ū D⁻¹ Ūᵀ` with `Ū = Σ_b P_b J_b` — no 6k×6k matrix is ever formed.
+//! the alternative form (Eqs. 26–34): every member of a group is referred to the one body the group hangs
+//! from, so the group's `E_G` is the identity per member, its `φ_G H*_G X_G` is one 6-vector per member and
+//! independent coordinate (`J_b`), and what the group passes to its parent is `Σ_b P_b − Ū D⁻¹ Ūᵀ` with
+//! `Ū = Σ_b P_b J_b` — no 6k×6k matrix is ever formed. The products of a member's `P_b` (`D_G`, `ε_G`,
+//! `P_b J_b`) are taken in the member's own frame and only their sums moved to the parent's: see
+//! [`group_backward`] for why.
 //!
 //! Errata of the paper, checked against this implementation (and its KKT oracle) rather than copied:
 //! - Eqs. 21 and 24: the step from the aggregate link to its outboard body uses the articulated
@@ -25,7 +27,7 @@ use crate::alloc_prelude::*;
 use crate::constraints::{embed, ConstraintSet};
 use crate::linalg::{cholesky_in_place, cholesky_solve_in_place, lu_in_place, lu_solve_in_place};
 use crate::model::Model;
-use crate::spatial::{Force, Motion};
+use crate::spatial::{ArticulatedInertia, Force, Motion};
 use crate::Real;
 use nalgebra::{DMatrix, Vector3};
 
@@ -83,7 +85,7 @@ pub(crate) fn aba<'w, T: Real>(
     for i in (0..model.nbodies()).rev() {
         match model.group_of(i) {
             None => backward_step(model, ws, i, tau),
-            Some(g) if model.groups[g].bodies[0] == i => group_backward(model, ws, g, v, tau)?,
+            Some(g) if model.groups[g].bodies[0] == i => group_backward(model, ws, g, tau)?,
             Some(_) => {}
         }
     }
@@ -97,18 +99,31 @@ pub(crate) fn aba<'w, T: Real>(
     Ok(&ws.qdd)
 }
 
-/// Eqs. 19–22 for one aggregate link: its members' articulated inertias and bias forces in the parent
-/// body's frame, `J_b`, `D_G`, `ε_G`, and the articulated inertia and bias force it passes on.
+/// Eqs. 19–22 for one aggregate link: `J_b`, `D_G`, `ε_G`, and the articulated inertia and bias force it
+/// passes on.
+///
+/// Each member's own quantities stay in its own frame: `j_b` and `c_b` (its `J_b` and velocity-product
+/// acceleration) are carried down the group from member to member, `u_b = P_b j_b` and the entries of
+/// `D_G` and `ε_G` are formed there, and only `Ū = Σ_b U_b`, `Σ_b P_b` and the bias force are moved
+/// to the parent body's frame. In that frame a member's inertia about the joint axis would be the
+/// difference of much larger terms (a geared rotor's `m|p|²` is 1e5 times its axial inertia, and the
+/// gear ratio squares the error: docs/accuracy.md, "(d) gears"); in its own frame nothing large cancels.
 fn group_backward<T: Real>(
     model: &Model<T>,
     ws: &mut Workspace<T>,
     gi: usize,
-    v: &[T],
     tau: &[T],
 ) -> Result<(), DynamicsError> {
     let g = &model.groups[gi];
     let gw = &mut ws.constraints.groups[gi];
     let ni = g.independent.len();
+    // ε_G = X_Gᵀ τ_G − Σ_b j_bᵀ (𝔷_b + P_b c_b),  D_G = Σ_b j_bᵀ P_b j_b,  and what the parent sees,
+    // Σ_b P_b − Ū D⁻¹ Ūᵀ and Σ_b (𝔷_b + P_b c_b) + Ū D⁻¹ ε (the parts before D⁻¹ summed here).
+    gw.eps.fill(T::zero());
+    gw.d.fill(T::zero());
+    gw.u_sum.fill(Force::zero());
+    let mut p_plus = ArticulatedInertia::zero();
+    let mut z = Force::zero();
     for (m, &b) in g.bodies.iter().enumerate() {
         let joint = &model.joints[b];
         let parent_member = joint.parent.filter(|&p| Some(p) != g.parent).map(|p| {
@@ -116,62 +131,55 @@ fn group_backward<T: Real>(
                 .binary_search(&p)
                 .expect("members hang from the group's parent or another member")
         });
-        let to_parent = match parent_member {
-            None => ws.parent_placement[b],
-            Some(pm) => gw.to_parent[pm].compose(&ws.parent_placement[b]),
-        };
-        let s = to_parent.act_motion(&joint.subspace_column(0));
-        let vel = to_parent.act_motion(&ws.velocity[b]);
-        let mut c = vel.cross_motion(&(s * v[joint.v_index])) + s * gw.kappa[m];
+        let s = joint.subspace_column(0);
+        let x = &ws.parent_placement[b];
+        let mut c = ws.coriolis[b] + s * gw.kappa[m];
+        if let Some(pm) = parent_member {
+            c += x.inv_act_motion(&gw.c[pm]);
+        }
+        gw.c[m] = c;
         for k in 0..ni {
             let mut j = s * gw.x[(m, k)];
             if let Some(pm) = parent_member {
-                j += gw.jac[pm * ni + k];
+                j += x.inv_act_motion(&gw.jac[pm * ni + k]);
             }
             gw.jac[m * ni + k] = j;
         }
-        if let Some(pm) = parent_member {
-            c += gw.c[pm];
-        }
-        gw.c[m] = c;
+        let to_parent = match parent_member {
+            None => *x,
+            Some(pm) => gw.to_parent[pm].compose(x),
+        };
         gw.to_parent[m] = to_parent;
-        gw.inertia[m] = ws.inertia[b].act(&to_parent);
-        gw.bias_force[m] = to_parent.act_force(&ws.force[b]);
-    }
-    // D_G = Σ_b J_bᵀ P_b J_b,  ε_G = X_Gᵀ τ_G − Σ_b J_bᵀ (𝔷_b + P_b c_b).
-    for k in 0..ni {
-        let mut eps = T::zero();
-        for (m, &b) in g.bodies.iter().enumerate() {
-            let joint = &model.joints[b];
-            eps += gw.x[(m, k)] * tau[joint.v_index];
+        let p = &ws.inertia[b];
+        // 𝔷_b + P_b c_b: its projection on j_b is the member's part of ε (P_b is symmetric).
+        let zb = ws.force[b] + p.mul_motion(&c);
+        for k in 0..ni {
+            let j = gw.jac[m * ni + k];
+            let mut eps = gw.x[(m, k)] * tau[joint.v_index] - j.dot(&zb);
             if joint.has_armature() {
                 // The members' rotors: θ̈_G = X_G θ̈_R + κ_G, so Xᵀ armature κ is known force.
                 eps -= gw.x[(m, k)] * joint.armature * gw.kappa[m];
             }
-        }
-        let mut usum = Force::zero();
-        for m in 0..g.bodies.len() {
-            let u = gw.inertia[m].mul_motion(&gw.jac[m * ni + k]);
-            eps -= gw.jac[m * ni + k].dot(&gw.bias_force[m]) + gw.c[m].dot(&u);
-            gw.u[m * ni + k] = u;
-            usum += u;
-        }
-        gw.u_sum[k] = usum;
-        gw.eps[k] = eps;
-    }
-    for k in 0..ni {
-        for l in k..ni {
-            let mut d = T::zero();
-            for (m, &b) in g.bodies.iter().enumerate() {
-                d += gw.jac[m * ni + k].dot(&gw.u[m * ni + l]);
-                let joint = &model.joints[b];
+            gw.eps[k] += eps;
+            let u = p.mul_motion(&j);
+            for l in 0..=k {
+                let mut d = gw.jac[m * ni + l].dot(&u);
                 if joint.has_armature() {
                     // D_G += X_Gᵀ armature X_G.
-                    d += gw.x[(m, k)] * joint.armature * gw.x[(m, l)];
+                    d += gw.x[(m, l)] * joint.armature * gw.x[(m, k)];
                 }
+                gw.d[(l, k)] += d;
             }
-            gw.d[(k, l)] = d;
-            gw.d[(l, k)] = d;
+            gw.u_sum[k] += to_parent.act_force(&u);
+        }
+        if g.parent.is_some() {
+            p_plus += p.act(&to_parent);
+            z += to_parent.act_force(&zb);
+        }
+    }
+    for k in 0..ni {
+        for l in 0..k {
+            gw.d[(k, l)] = gw.d[(l, k)];
         }
     }
     let pivot = cholesky_in_place(&mut gw.d);
@@ -181,13 +189,6 @@ fn group_backward<T: Real>(
         });
     }
     if let Some(p) = g.parent {
-        // What the parent sees: Σ_b P_b − Ū D⁻¹ Ūᵀ and Σ_b (𝔷_b + P_b c_b) + Ū D⁻¹ ε.
-        let mut p_plus = gw.inertia[0];
-        let mut z = gw.bias_force[0] + gw.inertia[0].mul_motion(&gw.c[0]);
-        for m in 1..g.bodies.len() {
-            p_plus += gw.inertia[m];
-            z += gw.bias_force[m] + gw.inertia[m].mul_motion(&gw.c[m]);
-        }
         // ν = D⁻¹ ε; W_k = Σ_l (D⁻¹)_kl Ū_l, one unit vector at a time through the factor.
         gw.ydd.copy_from_slice(&gw.eps);
         cholesky_solve_in_place(&gw.d, &mut gw.ydd);
@@ -210,7 +211,8 @@ fn group_backward<T: Real>(
     Ok(())
 }
 
-/// Eqs. 23–24: `θ̈_R = D⁻¹(ε − Ūᵀ α_parent)`, the members' accelerations, and `θ̈_G = X_G θ̈_R + κ_G`.
+/// Eqs. 23–24: `θ̈_R = D⁻¹(ε − Ūᵀ α_parent)`, the members' accelerations (each in its own frame,
+/// `α_b = X α_parent + c_b + j_b θ̈_R`), and `θ̈_G = X_G θ̈_R + κ_G`.
 fn group_forward<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, gi: usize) {
     let g = &model.groups[gi];
     let gw = &mut ws.constraints.groups[gi];
@@ -224,13 +226,13 @@ fn group_forward<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, gi: usize) {
     }
     cholesky_solve_in_place(&gw.d, &mut gw.ydd);
     for (m, &b) in g.bodies.iter().enumerate() {
-        let mut a = a_parent + gw.c[m];
+        let mut a = gw.to_parent[m].inv_act_motion(&a_parent) + gw.c[m];
         let mut qdd = gw.kappa[m];
         for k in 0..ni {
             a += gw.jac[m * ni + k] * gw.ydd[k];
             qdd += gw.x[(m, k)] * gw.ydd[k];
         }
-        ws.acceleration[b] = gw.to_parent[m].inv_act_motion(&a);
+        ws.acceleration[b] = a;
         ws.qdd[model.joints[b].v_index] = qdd;
     }
 }

@@ -9,7 +9,7 @@ use crate::algorithms::{DynamicsError, Kinematics, Workspace};
 use crate::alloc_prelude::*;
 use crate::linalg::{condition_number_1, lu_in_place, solve_pivoted_in_place};
 use crate::model::Model;
-use crate::spatial::{ArticulatedInertia, Force, Motion, Transform};
+use crate::spatial::{Force, Motion, Transform};
 use crate::Real;
 use nalgebra::DMatrix;
 
@@ -56,16 +56,15 @@ pub struct GroupWorkspace<T: Real> {
     /// Per dependent coordinate (in `Group::dependent` order): whether a loop of the group moves it
     /// (completion limits the Newton steps of those, not of coordinates only gears and mimics drive).
     pub(crate) loop_dependent: Vec<bool>,
-    // Articulated-body quantities, all in the parent body's frame.
+    // Articulated-body quantities: each member's in its own frame, their sums in the parent body's.
+    /// Per member, the pose of its frame in the parent body's frame.
     pub(crate) to_parent: Vec<Transform<T>>,
-    /// Per member, `J_b` (independent columns).
+    /// Per member × independent, `J_b` in the member's frame.
     pub(crate) jac: Vec<Motion<T>>,
+    /// Per member, its acceleration at `θ̈_R = 0` and rest parent (velocity products and `κ`), in its
+    /// frame.
     pub(crate) c: Vec<Motion<T>>,
-    pub(crate) inertia: Vec<ArticulatedInertia<T>>,
-    pub(crate) bias_force: Vec<Force<T>>,
-    /// Per member × independent, `U_b = P_b J_b`.
-    pub(crate) u: Vec<Force<T>>,
-    /// Per independent, `Ū = Σ_b U_b`.
+    /// Per independent, `Ū = Σ_b P_b J_b` in the parent body's frame.
     pub(crate) u_sum: Vec<Force<T>>,
     pub(crate) d: DMatrix<T>,
     pub(crate) eps: Vec<T>,
@@ -95,9 +94,6 @@ impl<T: Real> Default for GroupWorkspace<T> {
             to_parent: Vec::new(),
             jac: Vec::new(),
             c: Vec::new(),
-            inertia: Vec::new(),
-            bias_force: Vec::new(),
-            u: Vec::new(),
             u_sum: Vec::new(),
             d: m(),
             eps: Vec::new(),
@@ -155,9 +151,6 @@ impl<T: Real> GroupWorkspace<T> {
             to_parent: vec![Transform::identity(); m],
             jac: vec![Motion::zero(); m * ni],
             c: vec![Motion::zero(); m],
-            inertia: vec![ArticulatedInertia::zero(); m],
-            bias_force: vec![Force::zero(); m],
-            u: vec![Force::zero(); m * ni],
             u_sum: vec![Force::zero(); ni],
             d: DMatrix::zeros(ni, ni),
             eps: vec![T::zero(); ni],
