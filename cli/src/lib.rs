@@ -87,8 +87,8 @@ pub struct SceneArgs {
     pub locks: Vec<LockedJoint>,
     /// How geared rotors are modelled: `exact` (aggregate links) or `reflected` (armature on the driving
     /// joints; the rotors leave the model).
-    #[arg(long, value_name = "exact|reflected", default_value = "exact", value_parser = parse_rotors)]
-    pub rotors: Rotors,
+    #[arg(long, value_name = "exact|reflected", value_parser = parse_rotors)]
+    pub rotors: Option<Rotors>,
 }
 
 impl SceneArgs {
@@ -97,13 +97,29 @@ impl SceneArgs {
         let mut options = ModelOptions {
             floating: self.floating,
             locks: self.locks.clone(),
-            rotors: self.rotors,
+            rotors: self.rotors.unwrap_or_default(),
             ..Default::default()
         };
         if let Some(g) = self.gravity {
             options.gravity = g;
         }
         options
+    }
+}
+
+impl SceneArgs {
+    /// [`SceneArgs::options`] for `loaded`, saying on stderr where an option changes nothing (a
+    /// `--rotors reflected` on a model without geared rotors), so that a user does not believe it did.
+    pub fn options_for(&self, loaded: &Loaded) -> ModelOptions {
+        if self.rotors == Some(Rotors::Reflected)
+            && embedyn_codegen::geared_rotors(&loaded.robot).is_empty()
+        {
+            output::note(&format!(
+                "embedyn: {} has no geared rotor (a <coupling> whose faster side is a leaf body): --rotors reflected changes nothing",
+                embedyn_codegen::names::code_span(&loaded.robot.name)
+            ));
+        }
+        self.options()
     }
 }
 
@@ -551,7 +567,7 @@ pub fn run(cli: Cli) -> Result<Printed, CliError> {
     match cli.command {
         Command::Info { model, scene } => {
             let loaded = load_reporting(&model)?;
-            info::info(&loaded, &scene.options()).map(Printed::Json)
+            info::info(&loaded, &scene.options_for(&loaded)).map(Printed::Json)
         }
         Command::Bench {
             model,
@@ -560,7 +576,7 @@ pub fn run(cli: Cli) -> Result<Printed, CliError> {
             max_compile_memory,
         } => {
             let loaded = load_reporting(&model)?;
-            let result = bench::bench(&loaded, &scene.options(), max_compile_memory)?;
+            let result = bench::bench(&loaded, &scene.options_for(&loaded), max_compile_memory)?;
             Ok(if json {
                 Printed::Json(result)
             } else {
@@ -575,6 +591,9 @@ pub fn run(cli: Cli) -> Result<Printed, CliError> {
             max_compile_memory,
         } => {
             let loaded = load_reporting(&model)?;
+            if scene.rotors.is_some() {
+                output::note("embedyn tradeoff: measures every rotor choice; --rotors is ignored");
+            }
             let result =
                 tradeoff::tradeoff(&loaded, &scene.options(), max_compile_memory, &mut |step| {
                     output::note(&format!("embedyn tradeoff: {step}"))
@@ -599,7 +618,7 @@ pub fn run(cli: Cli) -> Result<Printed, CliError> {
         } => {
             let loaded = load_reporting(&model)?;
             let options = embedyn_codegen::GenerateOptions {
-                model: scene.options(),
+                model: scene.options_for(&loaded),
                 f64: scalar != Some(Scalar::F32),
                 f32: scalar != Some(Scalar::F64),
                 max_compile_memory_mb: Some(max_compile_memory),
@@ -637,7 +656,7 @@ pub fn run(cli: Cli) -> Result<Printed, CliError> {
         } => {
             let loaded = load_reporting(&model)?;
             let text = read_input(input.as_deref())?;
-            complete::complete(&loaded, &scene.options(), &text).map(Printed::Completed)
+            complete::complete(&loaded, &scene.options_for(&loaded), &text).map(Printed::Completed)
         }
         Command::Eval {
             model,
@@ -652,7 +671,7 @@ pub fn run(cli: Cli) -> Result<Printed, CliError> {
             let text = read_input(input.as_deref())?;
             eval::eval(
                 &loaded,
-                &scene.options(),
+                &scene.options_for(&loaded),
                 algo,
                 engine,
                 scalar,

@@ -37,8 +37,12 @@ fn parse_number(input: ParseStream) -> syn::Result<f64> {
     let negative = input.parse::<Option<Token![-]>>()?.is_some();
     let value = if input.peek(syn::LitFloat) {
         input.parse::<syn::LitFloat>()?.base10_parse::<f64>()?
-    } else {
+    } else if input.peek(syn::LitInt) {
         input.parse::<syn::LitInt>()?.base10_parse::<f64>()?
+    } else {
+        return Err(input.error(
+            "expected a number literal such as 0.3 or -1 (the macro reads the model at compile time: constants and expressions are not evaluated)",
+        ));
     };
     Ok(if negative { -value } else { value })
 }
