@@ -168,15 +168,8 @@ fn generated_armature_matches_pinocchio() {
     }
 }
 
-/// tests/data/armature.urdf's text with each `(from, to)` replaced (the text must occur).
 fn armature_file_with(edits: &[(&str, &str)]) -> Result<embedyn::Loaded, embedyn::LoadError> {
-    let mut text =
-        std::fs::read_to_string(crate::common::repo_path("tests/data/armature.urdf")).unwrap();
-    for (from, to) in edits {
-        assert!(text.contains(from), "{from}");
-        text = text.replace(from, to);
-    }
-    embedyn::codegen::parse_urdf(&text, "armature_edited.urdf".as_ref())
+    crate::common::edited_model("tests/data/armature.urdf", edits)
 }
 
 fn armature_of(loaded: &embedyn::Loaded, joint: &str) -> f64 {

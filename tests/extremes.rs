@@ -170,30 +170,24 @@ fn near_a_toggle_f32_refuses_where_f64_still_answers_and_both_refuse_at_it() {
 /// models/loops/geared_motor.urdf with both gear ratios `ratio` and both rotors' axial inertia
 /// `inertia` (transverse 0.6 × that), through the URDF+ loader.
 fn geared_motor<T: Real>(ratio: f64, inertia: f64) -> Model<T> {
-    let path = repo_path("models/loops/geared_motor.urdf");
-    let text = std::fs::read_to_string(&path).unwrap();
-    let rotor = r#"<inertia ixx="5.2e-05" ixy="0" ixz="0" iyy="9e-05" iyz="0" izz="5.2e-05"/>"#;
-    assert_eq!(text.matches(rotor).count(), 2, "geared_motor.urdf changed");
     let t = 0.6 * inertia;
-    let text = text
-        .replace(
-            rotor,
-            &format!(
-                r#"<inertia ixx="{t:e}" ixy="0" ixz="0" iyy="{inertia:e}" iyz="0" izz="{t:e}"/>"#
+    let rotor =
+        format!(r#"<inertia ixx="{t:e}" ixy="0" ixz="0" iyy="{inertia:e}" iyz="0" izz="{t:e}"/>"#);
+    let ratio = format!(r#"<ratio value="{ratio}"/>"#);
+    crate::common::edited_model(
+        "models/loops/geared_motor.urdf",
+        &[
+            (
+                r#"<inertia ixx="5.2e-05" ixy="0" ixz="0" iyy="9e-05" iyz="0" izz="5.2e-05"/>"#,
+                &rotor,
             ),
-        )
-        .replace(
-            r#"<ratio value="9"/>"#,
-            &format!(r#"<ratio value="{ratio}"/>"#),
-        )
-        .replace(
-            r#"<ratio value="6"/>"#,
-            &format!(r#"<ratio value="{ratio}"/>"#),
-        );
-    embedyn::codegen::parse_urdf(&text, &path)
-        .unwrap()
-        .model::<T>(&ModelOptions::default())
-        .unwrap()
+            (r#"<ratio value="9"/>"#, &ratio),
+            (r#"<ratio value="6"/>"#, &ratio),
+        ],
+    )
+    .unwrap()
+    .model::<T>(&ModelOptions::default())
+    .unwrap()
 }
 
 /// Worst relative error of the independent accelerations of the geared arm in `T` against

@@ -178,55 +178,53 @@ fn lock_refusals_name_the_joint_and_the_reason() {
         )
         .unwrap_err()
     };
-    let e = lock("models/arm7.urdf", false, &[("no_such_joint", 0.1)]);
-    assert!(
-        matches!(&e.kind, LoadErrorKind::LockUnknownJoint { joint } if joint == "no_such_joint"),
-        "{e}"
-    );
-    let e = lock(
-        "tests/data/pinocchio/solo12.urdf",
-        true,
-        &[("root_joint", 0.1)],
-    );
-    assert!(
-        matches!(e.kind, LoadErrorKind::LockNotOneDof { kind: "floating" }),
-        "{e}"
-    );
-    let e = lock(
-        "tests/data/pinocchio/ur5.urdf",
-        false,
-        &[("ee_fixed_joint", 0.1)],
-    );
-    assert!(
-        matches!(e.kind, LoadErrorKind::LockNotOneDof { kind: "fixed" }),
-        "{e}"
-    );
-    let e = lock(
-        "models/loops/biped_floating.urdf",
-        false,
-        &[("floating_base", 0.0)],
-    );
-    assert!(
-        matches!(e.kind, LoadErrorKind::LockNotOneDof { kind: "floating" }),
-        "{e}"
-    );
-    let e = lock(
-        "tests/data/pinocchio/ur5.urdf",
-        false,
-        &[("elbow_joint", 0.1), ("elbow_joint", 0.2)],
-    );
-    assert!(
-        matches!(e.kind, LoadErrorKind::LockedTwice { first, second } if first == 0.1 && second == 0.2),
-        "{e}"
-    );
+    type Expected = fn(&LoadErrorKind) -> bool;
+    let cases: [(&str, bool, &[(&str, f64)], Expected); 6] = [
+        (
+            "models/arm7.urdf",
+            false,
+            &[("no_such_joint", 0.1)],
+            |k| matches!(k, LoadErrorKind::LockUnknownJoint { joint } if joint == "no_such_joint"),
+        ),
+        (
+            "tests/data/pinocchio/solo12.urdf",
+            true,
+            &[("root_joint", 0.1)],
+            |k| matches!(k, LoadErrorKind::LockNotOneDof { kind: "floating" }),
+        ),
+        (
+            "tests/data/pinocchio/ur5.urdf",
+            false,
+            &[("ee_fixed_joint", 0.1)],
+            |k| matches!(k, LoadErrorKind::LockNotOneDof { kind: "fixed" }),
+        ),
+        (
+            "models/loops/biped_floating.urdf",
+            false,
+            &[("floating_base", 0.0)],
+            |k| matches!(k, LoadErrorKind::LockNotOneDof { kind: "floating" }),
+        ),
+        (
+            "tests/data/pinocchio/ur5.urdf",
+            false,
+            &[("elbow_joint", 0.1), ("elbow_joint", 0.2)],
+            |k| matches!(k, LoadErrorKind::LockedTwice { first, second } if *first == 0.1 && *second == 0.2),
+        ),
+        (
+            "tests/data/pinocchio/ur5.urdf",
+            false,
+            &[("elbow_joint", f64::NAN)],
+            |k| matches!(k, LoadErrorKind::LockValueNotFinite { .. }),
+        ),
+    ];
+    for (path, floating, locks, expected) in cases {
+        let e = lock(path, floating, locks);
+        assert!(expected(&e.kind), "{path} {locks:?}: {e}");
+    }
     let e = lock(
         "tests/data/pinocchio/ur5.urdf",
         false,
         &[("elbow_joint", f64::NAN)],
-    );
-    assert!(
-        matches!(e.kind, LoadErrorKind::LockValueNotFinite { .. }),
-        "{e}"
     );
     assert!(e.to_string().contains("joint \"elbow_joint\""), "{e}");
     use embedyn::codegen::ConstraintElement as C;
@@ -538,15 +536,8 @@ fn generated_reflected_code_matches_interpreted() {
     }
 }
 
-/// geared_motor.urdf's text with `edit` applied (each pair: text to find and its replacement, every
-/// occurrence; the text must occur).
 fn geared_motor_with(edits: &[(&str, &str)]) -> embedyn::Loaded {
-    let mut text = std::fs::read_to_string(repo_path("models/loops/geared_motor.urdf")).unwrap();
-    for (from, to) in edits {
-        assert!(text.contains(from), "{from}");
-        text = text.replace(from, to);
-    }
-    parse_urdf(&text, Path::new("geared_motor_edited.urdf")).unwrap()
+    crate::common::edited_model("models/loops/geared_motor.urdf", edits).unwrap()
 }
 
 /// Which side of a coupling is the rotor: the faster one, however the file writes the coupling or

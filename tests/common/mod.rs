@@ -9,6 +9,21 @@ pub fn repo_path(rel: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(rel)
 }
 
+/// The repo's model file `rel` with each `(from, to)` replaced (every occurrence; each must occur), read
+/// by the loader: the variations of a bundled model the tests need, without a file for each.
+pub fn edited_model(
+    rel: &str,
+    edits: &[(&str, &str)],
+) -> Result<embedyn::Loaded, embedyn::LoadError> {
+    let path = repo_path(rel);
+    let mut text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{rel}: {e}"));
+    for (from, to) in edits {
+        assert!(text.contains(from), "{rel} no longer contains {from}");
+        text = text.replace(from, to);
+    }
+    embedyn::codegen::parse_urdf(&text, &path)
+}
+
 pub fn load_model<T: Real>(rel: &str, floating: bool) -> Model<T> {
     let loaded = load(&repo_path(rel)).unwrap_or_else(|e| panic!("{e}"));
     loaded
