@@ -5,7 +5,7 @@
 
 use crate::common;
 
-use common::{cast, load_model, repo_path, to_f64, Rng};
+use common::{cast, load_model, to_f64, Rng};
 use embedyn::constraints::{complete_configuration, complete_velocity, singularity_threshold};
 use embedyn::nalgebra::{Matrix3, Vector3};
 use embedyn::{
