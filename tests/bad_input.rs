@@ -50,6 +50,42 @@ macro_rules! bad {
 
 bad!(malformed_xml, "malformed.urdf", [":17:", "malformed XML"]);
 bad!(
+    limit_reversed,
+    "limit_reversed.urdf",
+    [
+        ":38:",
+        "joint \"joint2\" <limit>",
+        "`lower` (1) is above `upper` (-1)"
+    ]
+);
+bad!(
+    limit_infinite,
+    "limit_infinite.urdf",
+    [
+        ":38:",
+        "joint \"joint2\" <limit>",
+        "`upper=\"inf\"` is not a finite number"
+    ]
+);
+bad!(
+    limit_nan_effort,
+    "limit_nan_effort.urdf",
+    [
+        ":38:",
+        "joint \"joint2\" <limit>",
+        "`effort=\"nan\"` is not a finite number"
+    ]
+);
+bad!(
+    limit_negative_velocity,
+    "limit_negative_velocity.urdf",
+    [
+        ":38:",
+        "joint \"joint2\" <limit>",
+        "`velocity` is -5e0; it must be ≥ 0"
+    ]
+);
+bad!(
     unknown_joint_type,
     "unknown_joint_type.urdf",
     [":33:", "joint \"joint2\"", "hinge"]

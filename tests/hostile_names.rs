@@ -23,6 +23,10 @@ mod hostile_locked {
     );
 }
 
+mod cases {
+    embedyn::robot!("tests/data/case_names.urdf", only(aba));
+}
+
 #[path = "data/hostile_names.rs"]
 mod names;
 use names::{FRAMES, JOINTS};
@@ -46,6 +50,79 @@ fn hostile_names_through_the_macro_mean_what_the_model_says() {
         let e = relative_error(&qdd, &want);
         assert!(e <= 1e-12, "generated vs interpreted: {e:e}");
     }
+}
+
+/// The index constants of hostile names are clean SCREAMING_SNAKE_CASE identifiers (this file denies
+/// warnings, `non_upper_case_globals` among them) that index the names they stand for; names that differ
+/// only in case get distinct constants, in file order.
+#[test]
+fn hostile_names_get_index_constants() {
+    use hostile::{frames, joints, q_index, v_index};
+    let named = [
+        (joints::Q_UOTE_158EF06C, "q\"uote"),
+        (joints::BACK_SLASH_1498E0B5, "back\\slash"),
+        (
+            joints::NEW_LINE_BUILD_EVIL_RS_3323C11F,
+            "new\nline\rbuild = \"evil.rs\"",
+        ),
+        (
+            joints::COMPILE_ERROR_BOOM_D7C2B64F,
+            "*/ compile_error!(\"boom\") /*",
+        ),
+        (joints::FN_0F1E18BB, "fn"),
+        (joints::SELF_06C604B3, "self"),
+        (joints::SELF_85BC0F95, "Self"),
+        (joints::CRATE_F5FE331D, "crate"),
+        (joints::JOINT_556C11E3, "肩 joint ✓"),
+        (joints::A_B_D44362D6, "a-b"),
+        (joints::A_B_2E7336DC, "a.b"),
+        (joints::A_B_C8687A08, "a b"),
+    ];
+    for (i, name) in named {
+        assert_eq!(JOINTS[i], name);
+        assert_eq!(hostile::JOINTS[i], name);
+    }
+    assert_eq!(q_index::SELF_85BC0F95, 6);
+    assert_eq!(v_index::A_B_C8687A08, 11);
+    let frames = [
+        (frames::L_1_E74E1FD8, "l\\1"),
+        (frames::ROBOT_A8B053BB, "</robot>"),
+        (frames::R_TYPE_F85499BE, "r#type"),
+        (frames::LINK_D2E2ADF7, "_"),
+        (frames::LINK_EFD5824F, "ロボット"),
+        (frames::TAB_BED_B429F1DA, "tab\tbed"),
+        (frames::BACK_TICK_PIPE_FE953C0C, "back`tick|pipe"),
+        (frames::SUPER_73D1B1B1, "super"),
+        (frames::LINK_1ST_E01DDF65, "1st"),
+        (frames::X_Y_CC96FED8, "x-y"),
+        (frames::X_Y_B24CA9B7, "x.y"),
+        (frames::X_Y_887FCEA6, "x y"),
+    ];
+    for (i, name) in frames {
+        assert_eq!(FRAMES[i], name);
+    }
+    assert_eq!(
+        hostile::FRAMES[hostile::frames::MERGED_E81B53F6],
+        "merged \"*/\""
+    );
+    // Names alike but for case: the first keeps the constant, the others take the next free suffix.
+    assert_eq!(cases::JOINTS[cases::joints::KNEE], "knee");
+    assert_eq!(cases::JOINTS[cases::joints::KNEE_3], "Knee");
+    assert_eq!(cases::JOINTS[cases::joints::KNEE_2], "knee_2");
+    assert_eq!(cases::FRAMES[cases::frames::FOOT], "Foot");
+    assert_eq!(cases::FRAMES[cases::frames::FOOT_3], "foot");
+    assert_eq!(cases::FRAMES[cases::frames::FOOT_2], "foot_2");
+    assert_eq!(cases::f64::LOWER, [-1.0, f64::NEG_INFINITY, -0.1]);
+    assert_eq!(cases::f32::UPPER, [1.0, f32::INFINITY, 0.3]);
+    assert_eq!(cases::f64::VELOCITY, [2.0, f64::INFINITY, f64::INFINITY]);
+    assert_eq!(cases::f64::EFFORT[0], 5.0);
+    // The locked joints leave their constants: `fn`, `self` and `肩 joint ✓` are gone, `Self` moved up.
+    assert_eq!(hostile_locked::joints::SELF_85BC0F95, 4);
+    assert_eq!(
+        hostile_locked::JOINTS[hostile_locked::joints::SELF_85BC0F95],
+        "Self"
+    );
+    assert_eq!(hostile_locked::f64::LOWER.len(), 9);
 }
 
 /// `lock(…)` names joints as the file does: a raw identifier (`r#fn`, the joint `fn`), a keyword (`self`)

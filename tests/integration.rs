@@ -21,6 +21,7 @@ mod fuzz_findings;
 mod generated;
 mod generated_chain;
 mod gravity_nle;
+mod limits;
 mod loop_simulation;
 mod model_scale;
 mod pinocchio_reference;

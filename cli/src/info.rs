@@ -19,6 +19,10 @@ pub fn info(loaded: &Loaded, options: &ModelOptions) -> Result<Value, CliError> 
                 "q_index": j.q_index,
                 "v_index": j.v_index,
                 "independent": model.is_independent(i),
+                "lower": j.limits.lower,
+                "upper": j.limits.upper,
+                "velocity": j.limits.velocity,
+                "effort": j.limits.effort,
                 "armature": j.armature,
             })
         })

@@ -123,6 +123,55 @@ fn info_reports_armature() {
     assert_eq!(plain["joints"][0]["armature"], 0.0);
 }
 
+/// `info` reports each joint's `<limit>` (CONTRACT §3): numbers as written, `null` where absent — a
+/// continuous joint's position limits, the `--floating` root's every limit, a joint locked away is gone.
+#[test]
+fn info_reports_limits() {
+    let limits = |args: &[&str]| -> Vec<(String, [serde_json::Value; 4])> {
+        let info = json_of(args, "");
+        info["joints"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|j| {
+                let name = j["name"].as_str().unwrap().to_string();
+                let l = ["lower", "upper", "velocity", "effort"].map(|k| {
+                    assert!(j.as_object().unwrap().contains_key(k), "{k}");
+                    j[k].clone()
+                });
+                (name, l)
+            })
+            .collect()
+    };
+    let panda = repo("tests/data/pinocchio/panda.urdf");
+    let got = limits(&["info", &panda]);
+    assert_eq!(got[3].0, "panda_joint4");
+    assert_eq!(
+        got[3].1,
+        [json!(-3.0718), json!(-0.0698), json!(2.175), json!(87.0)]
+    );
+    assert_eq!(
+        got[8].1,
+        [json!(0.0), json!(0.04), json!(0.2), json!(100.0)]
+    );
+    let locked = limits(&["info", &panda, "--lock", "panda_joint4=-1"]);
+    assert_eq!(locked.len(), 8);
+    assert_eq!(locked[3], got[4]);
+    let pendulum = repo("tests/data/pinocchio/double_pendulum_continuous.urdf");
+    let got = limits(&["info", &pendulum]);
+    assert_eq!(got[0].1, [json!(null), json!(null), json!(0.0), json!(0.0)]);
+    let solo = repo("tests/data/pinocchio/solo12.urdf");
+    let got = limits(&["info", &solo, "--floating"]);
+    assert_eq!(
+        got[0].1,
+        [json!(null), json!(null), json!(null), json!(null)]
+    );
+    assert_eq!(
+        got[1].1,
+        [json!(-10.0), json!(10.0), json!(1000.0), json!(1000.0)]
+    );
+}
+
 #[test]
 fn info_floating_adds_root_joint_first() {
     let info = json_of(

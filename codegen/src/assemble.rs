@@ -247,6 +247,12 @@ fn build_model_f64(robot: &Robot, options: &ModelOptions) -> Result<Model<f64>, 
                 LoadError::at(joint_location(robot, bodies_joint(&bodies, b)), e.into())
             })?;
         if let Some(j) = pending.joint {
+            let limits = robot.joints[j].limits;
+            if limits != Default::default() {
+                builder
+                    .set_limits(index, limits)
+                    .map_err(|e| LoadError::at(joint_location(robot, Some(j)), e.into()))?;
+            }
             let armature = robot.joints[j].armature;
             if armature != 0.0 {
                 builder
@@ -313,6 +319,7 @@ fn model_build_error(robot: &Robot, e: ModelError, scalar: &'static str) -> Load
         | ModelError::BadAxis { joint }
         | ModelError::FloatingNotRoot { joint }
         | ModelError::BadArmature { joint, .. }
+        | ModelError::BadLimit { joint, .. }
         | ModelError::ParentNotYetAdded { joint, .. } => joint_named(joint),
         ModelError::UnknownBody { .. } => None,
     };

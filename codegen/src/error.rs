@@ -351,6 +351,14 @@ pub enum LoadErrorKind {
         /// Its text.
         text: String,
     },
+    /// A joint's `<limit lower upper>` with lower above upper.
+    #[error("`lower` ({lower}) is above `upper` ({upper}): the joint could take no position")]
+    LimitsReversed {
+        /// The lower limit.
+        lower: f64,
+        /// The upper limit.
+        upper: f64,
+    },
     /// An attribute that must be three numbers (`xyz`, `rpy`) has another count of words.
     #[error("`{attribute}=\"{text}\"` must be three numbers")]
     NotThreeNumbers {

@@ -130,6 +130,127 @@ struct Generated {
     /// Whether the model has loops, couplings or mimic joints (then each scalar module has its
     /// `SINGULARITY_THRESHOLD`).
     constrained: bool,
+    /// The limits of each coordinate, for the scalar modules' `LOWER`, `UPPER`, `VELOCITY`, `EFFORT`.
+    limits: LimitTables,
+}
+
+/// Each coordinate's limits (`None` where the model gives none): position limits per entry of `q`,
+/// velocity and effort limits per entry of `v`.
+struct LimitTables {
+    lower: Vec<Option<f64>>,
+    upper: Vec<Option<f64>>,
+    velocity: Vec<Option<f64>>,
+    effort: Vec<Option<f64>>,
+}
+
+impl LimitTables {
+    fn of(model: &Model<f64>) -> Self {
+        let mut t = LimitTables {
+            lower: Vec::with_capacity(model.nq()),
+            upper: Vec::with_capacity(model.nq()),
+            velocity: Vec::with_capacity(model.nv()),
+            effort: Vec::with_capacity(model.nv()),
+        };
+        for j in &model.joints {
+            for _ in 0..j.nq() {
+                t.lower.push(j.limits.lower);
+                t.upper.push(j.limits.upper);
+            }
+            for _ in 0..j.nv() {
+                t.velocity.push(j.limits.velocity);
+                t.effort.push(j.limits.effort);
+            }
+        }
+        t
+    }
+
+    /// `LOWER`, `UPPER`, `VELOCITY` and `EFFORT` in `scalar`: each value as the interpreted model in that
+    /// scalar holds it (rounded once from f64), an absent bound (or one beyond f32's range) as ±infinity.
+    fn constants(&self, scalar: &str) -> TokenStream {
+        let value = |x: Option<f64>, absent: TokenStream| -> TokenStream {
+            let Some(x) = x else { return absent };
+            let (negative, literal) = if scalar == "f32" {
+                let y = x as f32;
+                if y.is_infinite() {
+                    return if y > 0.0 {
+                        quote!(S::INFINITY)
+                    } else {
+                        quote!(-S::INFINITY)
+                    };
+                }
+                (
+                    y.is_sign_negative(),
+                    proc_macro2::Literal::f32_unsuffixed(y.abs()),
+                )
+            } else {
+                (
+                    x.is_sign_negative(),
+                    proc_macro2::Literal::f64_unsuffixed(x.abs()),
+                )
+            };
+            if negative {
+                quote!(-#literal)
+            } else {
+                quote!(#literal)
+            }
+        };
+        let row = |values: &[Option<f64>], absent: TokenStream| -> Vec<TokenStream> {
+            values.iter().map(|&x| value(x, absent.clone())).collect()
+        };
+        let lower = row(&self.lower, quote!(-S::INFINITY));
+        let upper = row(&self.upper, quote!(S::INFINITY));
+        let velocity = row(&self.velocity, quote!(S::INFINITY));
+        let effort = row(&self.effort, quote!(S::INFINITY));
+        quote! {
+            /// Lower position limit of each coordinate of `q` (rad or m; `<limit lower>`): `-INFINITY`
+            /// where the model gives none (continuous and floating joints, a missing attribute).
+            pub const LOWER: [S; super::NQ] = [#(#lower),*];
+            /// Upper position limit of each coordinate of `q` (rad or m; `<limit upper>`): `INFINITY`
+            /// where the model gives none.
+            pub const UPPER: [S; super::NQ] = [#(#upper),*];
+            /// Velocity limit of each entry of `v` (rad/s or m/s, a magnitude; `<limit velocity>`):
+            /// `INFINITY` where the model gives none (floating joints, a missing attribute).
+            pub const VELOCITY: [S; super::NV] = [#(#velocity),*];
+            /// Effort limit of each entry of `tau` (N·m or N, a magnitude; `<limit effort>`): `INFINITY`
+            /// where the model gives none.
+            pub const EFFORT: [S; super::NV] = [#(#effort),*];
+        }
+    }
+}
+
+/// `pub mod #module { pub const NAME: usize = index; … }`: one constant per name (see
+/// [`crate::names::constants`]), each documented with the name it stands for.
+fn index_module(
+    module: &str,
+    doc: &str,
+    names: &[&str],
+    prefix: &str,
+    value: impl Fn(usize) -> usize,
+    what: &str,
+) -> TokenStream {
+    let module = format_ident!("{}", module);
+    let constants = crate::names::constants(names, prefix);
+    let items = constants
+        .iter()
+        .zip(names)
+        .enumerate()
+        .map(|(i, (c, name))| {
+            let ident = format_ident!("{}", c);
+            let doc = format!(" {what} {}.", code_span(name));
+            let index = proc_macro2::Literal::usize_unsuffixed(value(i));
+            quote! {
+                #[doc = #doc]
+                pub const #ident: usize = #index;
+            }
+        });
+    let doc = format!(" {doc}");
+    quote! {
+        #[doc = #doc]
+        #[allow(dead_code)]
+        pub mod #module {
+            #(#items)*
+        }
+    }
 }
 
 fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generated, LoadError> {
@@ -233,11 +354,52 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
         #[allow(dead_code)]
         pub const FRAMES: [&str; #nf] = [#(#frames),*];
     };
+    let q_index: Vec<usize> = model64.joints.iter().map(|j| j.q_index).collect();
+    let v_index: Vec<usize> = model64.joints.iter().map(|j| j.v_index).collect();
+    let indices = [
+        index_module(
+            "joints",
+            "Index in `JOINTS` (and `INDEPENDENT`) of each joint, by name: `JOINTS[joints::KNEE]` is the joint `knee`. Names are the joint names in SCREAMING_SNAKE_CASE (embedyn's docs/generated-code.md says how other names are spelled).",
+            &names,
+            "joint",
+            |i| i,
+            "Index in `JOINTS` of joint",
+        ),
+        index_module(
+            "q_index",
+            "Index in `q` (and `LOWER`, `UPPER`) of each joint's first coordinate, by name (as in `joints`).",
+            &names,
+            "joint",
+            |i| q_index[i],
+            "Index in `q` of the first coordinate of joint",
+        ),
+        index_module(
+            "v_index",
+            "Index in `v`, `qdd` and `tau` (and `VELOCITY`, `EFFORT`) of each joint's first entry, by name (as in `joints`).",
+            &names,
+            "joint",
+            |i| v_index[i],
+            "Index in `v` of the first entry of joint",
+        ),
+        index_module(
+            "frames",
+            "Index in `FRAMES` (and in the output of `kinematics`) of each link, by name: `FRAMES[frames::LF_FOOT]` is the link `lf_foot`.",
+            &frames,
+            "link",
+            |i| i,
+            "Index in `FRAMES` of link",
+        ),
+    ];
+    let header = quote! {
+        #header
+        #(#indices)*
+    };
     Ok(Generated {
         header,
         scalars,
         functions,
         constrained: model64.has_constraints(),
+        limits: LimitTables::of(&model64),
     })
 }
 
@@ -261,7 +423,12 @@ fn check_size_before_tracing(
 
 /// The scalar module `pub mod f64 { type S = f64; … }` around `functions`; for a model with constraints
 /// it also holds the scalar's singularity threshold.
-fn scalar_module(scalar: &str, constrained: bool, functions: &[TokenStream]) -> TokenStream {
+fn scalar_module(
+    scalar: &str,
+    constrained: bool,
+    limits: &LimitTables,
+    functions: &[TokenStream],
+) -> TokenStream {
     let module = format_ident!("{}", scalar);
     let doc = format!(" The generated dynamics in `{scalar}`.");
     let threshold = if constrained {
@@ -279,6 +446,7 @@ fn scalar_module(scalar: &str, constrained: bool, functions: &[TokenStream]) -> 
     } else {
         quote!()
     };
+    let limits = limits.constants(scalar);
     quote! {
         #[doc = #doc]
         // A program uses some of the functions generated for it; the others are not dead code to fix.
@@ -286,6 +454,7 @@ fn scalar_module(scalar: &str, constrained: bool, functions: &[TokenStream]) -> 
         pub mod #module {
             type S = #module;
             #threshold
+            #limits
             #(#functions)*
         }
     }
@@ -311,7 +480,7 @@ pub fn generate_tokens(
     let modules = generated
         .scalars
         .iter()
-        .map(|scalar| scalar_module(scalar, generated.constrained, &functions));
+        .map(|scalar| scalar_module(scalar, generated.constrained, &generated.limits, &functions));
     let header = generated.header;
     Ok(quote! {
         #header
@@ -340,8 +509,13 @@ pub fn generate_source(loaded: &Loaded, options: &GenerateOptions) -> Result<Str
         })
         .collect::<Result<Vec<String>, LoadError>>()?;
     for scalar in &generated.scalars {
-        let empty =
-            format_tokens(&scalar_module(scalar, generated.constrained, &[])).map_err(fail)?;
+        let empty = format_tokens(&scalar_module(
+            scalar,
+            generated.constrained,
+            &generated.limits,
+            &[],
+        ))
+        .map_err(fail)?;
         text.push_str(empty.strip_suffix("}\n").unwrap_or(&empty));
         for f in &functions {
             text.push_str(f);

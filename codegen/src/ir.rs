@@ -105,6 +105,9 @@ pub struct Mimic {
     pub line: Option<u32>,
 }
 
+/// A joint's `<limit>` as read (see [`Joint::limits`]).
+pub type Limits = embedyn_runtime::JointLimits<f64>;
+
 /// A URDF `<joint>`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Joint {
@@ -126,6 +129,10 @@ pub struct Joint {
     pub independent: Option<bool>,
     /// Armature (kg·m² or kg): `<dynamics armature>` plus r² · I of each transmission's rotor on it.
     pub armature: f64,
+    /// `<limit lower upper velocity effort>`, each `None` where absent: position limits of revolute and
+    /// prismatic joints only (a continuous, fixed or floating joint has none), velocity and effort of every
+    /// one-coordinate joint. Checked when read: finite, velocity and effort ≥ 0, lower ≤ upper.
+    pub limits: Limits,
     /// `Some(value)` when a scene fixes the joint at that coordinate (`--lock`, or a geared rotor reflected
     /// at angle 0): it is then assembled as a fixed joint whose pose includes that motion. `None` as read.
     pub locked: Option<f64>,

@@ -90,6 +90,36 @@ fn ends_in_suffix(s: &str) -> bool {
             .all(|c| c.is_ascii_digit() || (b'a'..=b'f').contains(c))
 }
 
+/// Constant names for a list of model names (joint or link names, in the model's order): each name's
+/// [`identifier`] in SCREAMING_SNAKE_CASE (`lf_foot` → `LF_FOOT`, `肩 joint ✓` → `JOINT_…_3A9F…`, with
+/// `prefix` where the name does not start with a letter). Names that give the same constant (they differ
+/// only in ASCII case: `Knee` and `knee`) are told apart deterministically: the first keeps it, each later
+/// one gets the smallest `_2`, `_3`, … that no other name of the list takes.
+pub fn constants(names: &[&str], prefix: &str) -> Vec<String> {
+    let bases: Vec<String> = names
+        .iter()
+        .map(|n| identifier(n, prefix).to_ascii_uppercase())
+        .collect();
+    let all: std::collections::HashSet<&str> = bases.iter().map(String::as_str).collect();
+    let mut taken = std::collections::HashSet::new();
+    let mut out = Vec::with_capacity(names.len());
+    for base in &bases {
+        let mut name = base.clone();
+        let mut n = 2;
+        while !taken.insert(name.clone()) {
+            loop {
+                name = format!("{base}_{n}");
+                n += 1;
+                if !all.contains(name.as_str()) {
+                    break;
+                }
+            }
+        }
+        out.push(name);
+    }
+    out
+}
+
 /// The crate name of a robot's generated code: its [`identifier`] followed by `_dynamics` (a valid
 /// package name, library name and Rust path segment, in snake_case).
 pub fn crate_name(robot: &str) -> String {
@@ -191,6 +221,45 @@ mod tests {
         }
         // Deterministic.
         assert_eq!(identifier("a.b", "robot"), identifier("a.b", "robot"));
+    }
+
+    #[test]
+    fn constants_are_screaming_snake_case_and_distinct() {
+        let names = [
+            "lf_foot",
+            "Knee",
+            "knee",
+            "knee_2",
+            "KNEE",
+            "fn",
+            "Self",
+            "self",
+            "肩 joint ✓",
+            "1st",
+            "a-b",
+            "a.b",
+        ];
+        let c = constants(&names, "joint");
+        assert_eq!(&c[..5], ["LF_FOOT", "KNEE", "KNEE_3", "KNEE_2", "KNEE_4"]);
+        for id in &c {
+            assert!(
+                id.starts_with(|c: char| c.is_ascii_uppercase())
+                    && id
+                        .chars()
+                        .all(|c| c.is_ascii_uppercase() || c.is_ascii_digit() || c == '_')
+                    && !id.contains("__")
+                    && !id.ends_with('_'),
+                "{id}"
+            );
+            assert!(syn::parse_str::<syn::Ident>(id).is_ok(), "{id}");
+        }
+        for i in 0..c.len() {
+            for k in 0..i {
+                assert_ne!(c[i], c[k]);
+            }
+        }
+        assert!(c[9].starts_with("JOINT_1ST_"), "{}", c[9]);
+        assert_eq!(constants(&names, "joint"), c);
     }
 
     #[test]

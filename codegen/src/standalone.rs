@@ -159,7 +159,8 @@ pub fn crate_files(
     readme.push_str(&format!(
         "\nnq = {}, nv = {}. Coordinates (as embedyn's docs/conventions.md says: revolute angles in rad, prismatic in m; a floating base is\n\
          `q = [x y z qx qy qz qw …]`, `v = [v_lin ω …]` in the body frame; gravity ({}, {}, {}) m/s²{}):\n\n\
-         | joint | type | q index | v index | independent |\n|---|---|---:|---:|---|\n",
+         | joint | constant | type | q index | v index | lower | upper | velocity | effort | independent |\n\
+         |---|---|---|---:|---:|---:|---:|---:|---:|---|\n",
         model.nq(),
         model.nv(),
         model.gravity.x,
@@ -167,13 +168,21 @@ pub fn crate_files(
         model.gravity.z,
         scene_note(&options.model),
     ));
+    let names: Vec<&str> = model.joints.iter().map(|j| j.name.as_str()).collect();
+    let constants = crate::names::constants(&names, "joint");
+    let limit = |x: Option<f64>| x.map_or_else(|| "—".to_string(), |x| x.to_string());
     for (j, joint) in model.joints.iter().enumerate() {
         readme.push_str(&format!(
-            "| {} | {} | {} | {} | {} |\n",
+            "| {} | `{}` | {} | {} | {} | {} | {} | {} | {} | {} |\n",
             table_cell(&joint.name),
+            constants[j],
             joint.joint_type.as_str(),
             joint.q_index,
             joint.v_index,
+            limit(joint.limits.lower),
+            limit(joint.limits.upper),
+            limit(joint.limits.velocity),
+            limit(joint.limits.effort),
             if model.is_independent(j) {
                 "yes"
             } else {
@@ -181,6 +190,16 @@ pub fn crate_files(
             }
         ));
     }
+    readme.push_str(
+        "\nIndex constants, so that code names joints and links instead of counting: `joints::C` is the joint's\n\
+         index in `JOINTS`, `q_index::C` and `v_index::C` its first index in `q` and in `v` (`qdd`, `tau`), with `C`\n\
+         the constant in the table; `frames::C` is a link's index in `FRAMES` (the order of `kinematics`), `C` the link\n\
+         name in SCREAMING_SNAKE_CASE (each constant's doc names its link). Limits from the model's `<limit>`, in each\n\
+         scalar module: `LOWER` and `UPPER` per entry of `q` (rad or m), `VELOCITY` and `EFFORT` per entry of `v`\n\
+         (rad/s or m/s, N·m or N); a bound the model does not give (— above) is `-INFINITY` in `LOWER` and\n\
+         `INFINITY` in the others, so `q[i].clamp(f64::LOWER[i], f64::UPPER[i])` and\n\
+         `tau[i].clamp(-f64::EFFORT[i], f64::EFFORT[i])` need no special case.\n",
+    );
     Ok(vec![
         (PathBuf::from("Cargo.toml"), cargo),
         (PathBuf::from("README.md"), readme),

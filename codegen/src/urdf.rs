@@ -9,7 +9,8 @@ use crate::error::{
     WarningFoldKey, WarningKind, MAX_KEPT_ERRORS,
 };
 use crate::ir::{
-    Coupling, Inertial, Joint, JointKind, Link, Loop, LoopFrame, LoopKind, Mimic, Origin, Robot,
+    Coupling, Inertial, Joint, JointKind, Limits, Link, Loop, LoopFrame, LoopKind, Mimic, Origin,
+    Robot,
 };
 use crate::xml_text::{nesting_too_deep, LineIndex, MAX_NESTING};
 use embedyn_runtime::nalgebra::Matrix3;
@@ -655,6 +656,10 @@ impl<'a, 'input> Parser<'a, 'input> {
             None => Ok(0.0),
             Some(d) => self.non_negative(d, "armature", &format!("{what} <dynamics>")),
         };
+        let limits = match (node.children().find(|l| l.has_tag_name("limit")), &kind) {
+            (Some(l), Ok(k)) if k.is_one_dof() => self.limits(l, *k, &what),
+            _ => Ok(Limits::default()),
+        };
         let independent = match node.attribute("independent") {
             None => Ok(None),
             Some("true") => Ok(Some(true)),
@@ -670,6 +675,7 @@ impl<'a, 'input> Parser<'a, 'input> {
         };
         Ok(Joint {
             armature: armature?,
+            limits: limits?,
             locked: None,
             name: name.to_string(),
             kind: kind?,
@@ -680,6 +686,53 @@ impl<'a, 'input> Parser<'a, 'input> {
             mimics: mimics?,
             independent: independent?,
             line: self.line(node),
+        })
+    }
+
+    /// `<limit lower upper velocity effort>` of a one-coordinate joint: each attribute optional (absent,
+    /// not 0, where missing), finite; velocity and effort ≥ 0; lower ≤ upper. A continuous joint has no
+    /// position limits (as in Pinocchio): its `lower` and `upper` are not read.
+    fn limits(&self, node: Node, kind: JointKind, what: &str) -> Parsed<Limits> {
+        let what = format!("{what} <limit>");
+        let read = |attr: &str| -> Parsed<Option<f64>> {
+            if node.attribute(attr).is_none() {
+                return Ok(None);
+            }
+            self.number(node, attr, None, &what).map(Some)
+        };
+        let magnitude = |attr: &str| -> Parsed<Option<f64>> {
+            match read(attr)? {
+                Some(x) if x < 0.0 => self.fail(
+                    node,
+                    what.as_str(),
+                    LoadErrorKind::Negative {
+                        attribute: attr.into(),
+                        value: x,
+                    },
+                ),
+                x => Ok(x),
+            }
+        };
+        let positioned = kind != JointKind::Continuous;
+        let lower = if positioned { read("lower") } else { Ok(None) };
+        let upper = if positioned { read("upper") } else { Ok(None) };
+        let velocity = magnitude("velocity");
+        let effort = magnitude("effort");
+        let (lower, upper, velocity, effort) = (lower?, upper?, velocity?, effort?);
+        if let (Some(l), Some(u)) = (lower, upper) {
+            if l > u {
+                return self.fail(
+                    node,
+                    what,
+                    LoadErrorKind::LimitsReversed { lower: l, upper: u },
+                );
+            }
+        }
+        Ok(Limits {
+            lower,
+            upper,
+            velocity,
+            effort,
         })
     }
 

@@ -58,7 +58,9 @@ pub use algorithms::{
     Kinematics, Workspace,
 };
 #[cfg(feature = "alloc")]
-pub use model::{Body, Joint, JointType, Model, ModelBuilder, ModelElement, ModelError};
+pub use model::{
+    Body, Joint, JointLimits, JointType, Model, ModelBuilder, ModelElement, ModelError,
+};
 #[cfg(feature = "std")]
 pub use scalar::DoubleDouble;
 pub use scalar::Real;

@@ -55,6 +55,45 @@ impl JointType {
     }
 }
 
+/// A joint's limits, as URDF's `<limit lower upper velocity effort>` gives them (Pinocchio's
+/// `lowerPositionLimit`, `upperPositionLimit`, `velocityLimit`, `effortLimit`): `None` where the model
+/// gives none. Position limits are in rad or m (revolute and prismatic joints only: a continuous or
+/// floating joint has none); velocity (rad/s or m/s) and effort (N·m or N) are magnitudes, ≥ 0. The
+/// solver does not enforce them: they are carried for reports and generated constants.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct JointLimits<T> {
+    /// Lowest coordinate.
+    pub lower: Option<T>,
+    /// Highest coordinate.
+    pub upper: Option<T>,
+    /// Largest speed.
+    pub velocity: Option<T>,
+    /// Largest force or torque.
+    pub effort: Option<T>,
+}
+
+impl<T: Copy> JointLimits<T> {
+    /// No limits at all.
+    pub fn none() -> Self {
+        JointLimits {
+            lower: None,
+            upper: None,
+            velocity: None,
+            effort: None,
+        }
+    }
+
+    /// The same limits with each value converted by `f`.
+    pub fn map<U>(&self, mut f: impl FnMut(T) -> U) -> JointLimits<U> {
+        JointLimits {
+            lower: self.lower.map(&mut f),
+            upper: self.upper.map(&mut f),
+            velocity: self.velocity.map(&mut f),
+            effort: self.effort.map(&mut f),
+        }
+    }
+}
+
 /// A moving joint: connects body `parent` (or the world) to the body of the same index.
 #[derive(Clone, Debug)]
 pub struct Joint<T: Real> {
@@ -78,6 +117,9 @@ pub struct Joint<T: Real> {
     /// times the gear ratio squared, as Pinocchio's `model.armature`. Zero by default; finite and ≥ 0
     /// ([`ModelBuilder::set_armature`] checks it).
     pub armature: T,
+    /// Position, velocity and effort limits (see [`JointLimits`]); none by default
+    /// ([`ModelBuilder::set_limits`] sets and checks them).
+    pub limits: JointLimits<T>,
 }
 
 impl<T: Real> Joint<T> {
@@ -227,6 +269,19 @@ pub enum ModelError {
         joint: String,
         /// The armature given.
         armature: f64,
+    },
+    /// A joint's limit is not finite, a velocity or effort limit is negative, its lower position limit
+    /// is above its upper one, or it has position limits without being revolute or prismatic.
+    #[error("joint `{joint}`: {limit} limit {value:e} {problem}")]
+    BadLimit {
+        /// The joint.
+        joint: String,
+        /// Which limit: `lower`, `upper`, `velocity` or `effort`.
+        limit: &'static str,
+        /// Its value.
+        value: f64,
+        /// What is wrong with it.
+        problem: &'static str,
     },
     /// A floating joint has a parent body.
     #[error("joint `{joint}`: a floating joint must connect a body to the world")]
@@ -473,6 +528,7 @@ impl<T: Real> Model<T> {
                     q_index: j.q_index,
                     v_index: j.v_index,
                     armature: c(j.armature),
+                    limits: j.limits.map(c),
                 })
                 .collect(),
             bodies: self
@@ -609,6 +665,7 @@ impl<T: Real> ModelBuilder<T> {
             q_index: self.nq,
             v_index: self.nv,
             armature: T::zero(),
+            limits: JointLimits::none(),
         });
         self.nq += joint_type.nq();
         self.nv += joint_type.nv();
@@ -634,6 +691,47 @@ impl<T: Real> ModelBuilder<T> {
             });
         }
         joint.armature = armature;
+        Ok(())
+    }
+
+    /// Sets the limits of body `body`'s joint (see [`JointLimits`]): every value finite, velocity and effort
+    /// ≥ 0, lower ≤ upper, and position limits only on a revolute or prismatic joint.
+    pub fn set_limits(&mut self, body: usize, limits: JointLimits<T>) -> Result<(), ModelError> {
+        let Some(joint) = self.joints.get_mut(body) else {
+            return Err(ModelError::UnknownBody { body });
+        };
+        let bad = |limit, value: f64, problem| ModelError::BadLimit {
+            joint: joint.name.clone(),
+            limit,
+            value,
+            problem,
+        };
+        let f = limits.map(|x| x.to_f64());
+        for (limit, value) in [
+            ("lower", f.lower),
+            ("upper", f.upper),
+            ("velocity", f.velocity),
+            ("effort", f.effort),
+        ] {
+            let Some(x) = value else { continue };
+            if !x.is_finite() {
+                return Err(bad(limit, x, "is not a finite number"));
+            }
+            if matches!(limit, "velocity" | "effort") && x < 0.0 {
+                return Err(bad(limit, x, "must be ≥ 0"));
+            }
+            if matches!(limit, "lower" | "upper")
+                && !matches!(joint.joint_type, JointType::Revolute | JointType::Prismatic)
+            {
+                return Err(bad(limit, x, "is for revolute and prismatic joints only"));
+            }
+        }
+        if let (Some(lower), Some(upper)) = (f.lower, f.upper) {
+            if lower > upper {
+                return Err(bad("lower", lower, "is above the upper limit"));
+            }
+        }
+        joint.limits = limits;
         Ok(())
     }
 

@@ -22,6 +22,54 @@ pub const INDEPENDENT: [bool; 4] = [true, false, true, false];
 /// fixed to the world are constant and not listed).
 #[allow(dead_code)]
 pub const FRAMES: [&str; 4] = ["crank", "coupler", "tip", "rocker"];
+/// Index in `JOINTS` (and `INDEPENDENT`) of each joint, by name: `JOINTS[joints::KNEE]` is the joint `knee`. Names are the joint names in SCREAMING_SNAKE_CASE (embedyn's docs/generated-code.md says how other names are spelled).
+#[allow(dead_code)]
+pub mod joints {
+    /// Index in `JOINTS` of joint `crank_joint`.
+    pub const CRANK_JOINT: usize = 0;
+    /// Index in `JOINTS` of joint `coupler_joint`.
+    pub const COUPLER_JOINT: usize = 1;
+    /// Index in `JOINTS` of joint `tip_joint`.
+    pub const TIP_JOINT: usize = 2;
+    /// Index in `JOINTS` of joint `rocker_joint`.
+    pub const ROCKER_JOINT: usize = 3;
+}
+/// Index in `q` (and `LOWER`, `UPPER`) of each joint's first coordinate, by name (as in `joints`).
+#[allow(dead_code)]
+pub mod q_index {
+    /// Index in `q` of the first coordinate of joint `crank_joint`.
+    pub const CRANK_JOINT: usize = 0;
+    /// Index in `q` of the first coordinate of joint `coupler_joint`.
+    pub const COUPLER_JOINT: usize = 1;
+    /// Index in `q` of the first coordinate of joint `tip_joint`.
+    pub const TIP_JOINT: usize = 2;
+    /// Index in `q` of the first coordinate of joint `rocker_joint`.
+    pub const ROCKER_JOINT: usize = 3;
+}
+/// Index in `v`, `qdd` and `tau` (and `VELOCITY`, `EFFORT`) of each joint's first entry, by name (as in `joints`).
+#[allow(dead_code)]
+pub mod v_index {
+    /// Index in `v` of the first entry of joint `crank_joint`.
+    pub const CRANK_JOINT: usize = 0;
+    /// Index in `v` of the first entry of joint `coupler_joint`.
+    pub const COUPLER_JOINT: usize = 1;
+    /// Index in `v` of the first entry of joint `tip_joint`.
+    pub const TIP_JOINT: usize = 2;
+    /// Index in `v` of the first entry of joint `rocker_joint`.
+    pub const ROCKER_JOINT: usize = 3;
+}
+/// Index in `FRAMES` (and in the output of `kinematics`) of each link, by name: `FRAMES[frames::LF_FOOT]` is the link `lf_foot`.
+#[allow(dead_code)]
+pub mod frames {
+    /// Index in `FRAMES` of link `crank`.
+    pub const CRANK: usize = 0;
+    /// Index in `FRAMES` of link `coupler`.
+    pub const COUPLER: usize = 1;
+    /// Index in `FRAMES` of link `tip`.
+    pub const TIP: usize = 2;
+    /// Index in `FRAMES` of link `rocker`.
+    pub const ROCKER: usize = 3;
+}
 /// The generated dynamics in `f64`.
 #[allow(clippy::all, clippy::pedantic, unused_parens, non_snake_case, dead_code)]
 pub mod f64 {
@@ -31,6 +79,18 @@ pub mod f64 {
     /// `crba_independent` is not below it (`cond.is_nan() || cond >= SINGULARITY_THRESHOLD`), the
     /// results are meaningless and the interpreted solver refuses.
     pub const SINGULARITY_THRESHOLD: S = 10000000000.0;
+    /// Lower position limit of each coordinate of `q` (rad or m; `<limit lower>`): `-INFINITY`
+    /// where the model gives none (continuous and floating joints, a missing attribute).
+    pub const LOWER: [S; super::NQ] = [-6.3, -6.3, -6.3, -6.3];
+    /// Upper position limit of each coordinate of `q` (rad or m; `<limit upper>`): `INFINITY`
+    /// where the model gives none.
+    pub const UPPER: [S; super::NQ] = [6.3, 6.3, 6.3, 6.3];
+    /// Velocity limit of each entry of `v` (rad/s or m/s, a magnitude; `<limit velocity>`):
+    /// `INFINITY` where the model gives none (floating joints, a missing attribute).
+    pub const VELOCITY: [S; super::NV] = [30.0, 30.0, 30.0, 30.0];
+    /// Effort limit of each entry of `tau` (N·m or N, a magnitude; `<limit effort>`): `INFINITY`
+    /// where the model gives none.
+    pub const EFFORT: [S; super::NV] = [100.0, 100.0, 100.0, 100.0];
     /// Forward kinematics: the world pose of every link on a moving body, in the order of `FRAMES`, as `[r00, r01, r02, r10, r11, r12, r20, r21, r22, x, y, z]` (the rotation row-major: its columns are the link's axes in world coordinates; then the link origin in the world).
     ///
     /// Bodies it computes, in the model's order: `crank`, `coupler`, `tip`, `rocker`.

@@ -17,10 +17,62 @@ pub const INDEPENDENT: [bool; 3] = [true, true, true];
 /// fixed to the world are constant and not listed).
 #[allow(dead_code)]
 pub const FRAMES: [&str; 3] = ["thigh", "shin", "foot"];
+/// Index in `JOINTS` (and `INDEPENDENT`) of each joint, by name: `JOINTS[joints::KNEE]` is the joint `knee`. Names are the joint names in SCREAMING_SNAKE_CASE (embedyn's docs/generated-code.md says how other names are spelled).
+#[allow(dead_code)]
+pub mod joints {
+    /// Index in `JOINTS` of joint `hip`.
+    pub const HIP: usize = 0;
+    /// Index in `JOINTS` of joint `knee`.
+    pub const KNEE: usize = 1;
+    /// Index in `JOINTS` of joint `ankle`.
+    pub const ANKLE: usize = 2;
+}
+/// Index in `q` (and `LOWER`, `UPPER`) of each joint's first coordinate, by name (as in `joints`).
+#[allow(dead_code)]
+pub mod q_index {
+    /// Index in `q` of the first coordinate of joint `hip`.
+    pub const HIP: usize = 0;
+    /// Index in `q` of the first coordinate of joint `knee`.
+    pub const KNEE: usize = 1;
+    /// Index in `q` of the first coordinate of joint `ankle`.
+    pub const ANKLE: usize = 2;
+}
+/// Index in `v`, `qdd` and `tau` (and `VELOCITY`, `EFFORT`) of each joint's first entry, by name (as in `joints`).
+#[allow(dead_code)]
+pub mod v_index {
+    /// Index in `v` of the first entry of joint `hip`.
+    pub const HIP: usize = 0;
+    /// Index in `v` of the first entry of joint `knee`.
+    pub const KNEE: usize = 1;
+    /// Index in `v` of the first entry of joint `ankle`.
+    pub const ANKLE: usize = 2;
+}
+/// Index in `FRAMES` (and in the output of `kinematics`) of each link, by name: `FRAMES[frames::LF_FOOT]` is the link `lf_foot`.
+#[allow(dead_code)]
+pub mod frames {
+    /// Index in `FRAMES` of link `thigh`.
+    pub const THIGH: usize = 0;
+    /// Index in `FRAMES` of link `shin`.
+    pub const SHIN: usize = 1;
+    /// Index in `FRAMES` of link `foot`.
+    pub const FOOT: usize = 2;
+}
 /// The generated dynamics in `f64`.
 #[allow(clippy::all, clippy::pedantic, unused_parens, non_snake_case, dead_code)]
 pub mod f64 {
     type S = f64;
+    /// Lower position limit of each coordinate of `q` (rad or m; `<limit lower>`): `-INFINITY`
+    /// where the model gives none (continuous and floating joints, a missing attribute).
+    pub const LOWER: [S; super::NQ] = [-2.0, 0.0, -0.8];
+    /// Upper position limit of each coordinate of `q` (rad or m; `<limit upper>`): `INFINITY`
+    /// where the model gives none.
+    pub const UPPER: [S; super::NQ] = [2.0, 2.5, 0.8];
+    /// Velocity limit of each entry of `v` (rad/s or m/s, a magnitude; `<limit velocity>`):
+    /// `INFINITY` where the model gives none (floating joints, a missing attribute).
+    pub const VELOCITY: [S; super::NV] = [10.0, 10.0, 10.0];
+    /// Effort limit of each entry of `tau` (N·m or N, a magnitude; `<limit effort>`): `INFINITY`
+    /// where the model gives none.
+    pub const EFFORT: [S; super::NV] = [100.0, 80.0, 40.0];
     /// Forward kinematics: the world pose of every link on a moving body, in the order of `FRAMES`, as `[r00, r01, r02, r10, r11, r12, r20, r21, r22, x, y, z]` (the rotation row-major: its columns are the link's axes in world coordinates; then the link origin in the world).
     ///
     /// Bodies it computes, in the model's order: `thigh`, `shin`, `foot`.
