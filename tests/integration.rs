@@ -12,6 +12,7 @@ mod common;
 
 mod armature;
 mod bad_input;
+mod configuration;
 mod constraint_embedding;
 mod dynamics_oracles;
 mod energy;

@@ -6,8 +6,8 @@ mod common;
 use common::{load_model, Rng};
 use embedyn::constraints::{complete_configuration, complete_velocity};
 use embedyn::{
-    aba, crba, embedding_map_in, forward_kinematics, gravity, mass_matrix_inverse, nle,
-    reduced_mass_matrix_in, rnea, Workspace,
+    aba, crba, difference, embedding_map_in, forward_kinematics, gravity, integrate,
+    mass_matrix_inverse, nle, random_configuration, reduced_mass_matrix_in, rnea, Workspace,
 };
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -50,8 +50,15 @@ fn algorithm_calls_do_not_allocate() {
         let q = rng.configuration(&model);
         let v = rng.vec(model.nv(), -1.0, 1.0);
         let tau = rng.vec(model.nv(), -1.0, 1.0);
+        // The configuration space: q ⊕ v, q1 ⊖ q0, a random configuration.
+        let (mut q_out, mut v_out) = (vec![0.0; model.nq()], vec![0.0; model.nv()]);
+        let (lower, upper) = (vec![-1.0; model.nq()], vec![1.0; model.nq()]);
+        let mut draws = embedyn::random::SplitMix64::new(3);
         let before = ALLOCATIONS.load(Ordering::SeqCst);
         for _ in 0..3 {
+            integrate(&model, &q, &v, &mut q_out).unwrap();
+            difference(&model, &q, &q_out, &mut v_out).unwrap();
+            random_configuration(&model, &mut draws, &lower, &upper, &mut q_out).unwrap();
             forward_kinematics(&model, &mut ws, &q, &v).unwrap();
             let _ = aba(&model, &mut ws, &q, &v, &tau).unwrap();
             let _ = rnea(&model, &mut ws, &q, &v, &tau).unwrap();

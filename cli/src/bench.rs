@@ -116,7 +116,7 @@ pub fn bench(
             black_box(run(model, ws, &[black_box(q), v, x]).is_ok());
         })
     };
-    let timed: Vec<Algorithm> = Algorithm::offered_by_cli().collect();
+    let timed: Vec<Algorithm> = Algorithm::timed_by_bench().collect();
     let binary = build_runner(
         loaded,
         &GenerateOptions {
@@ -130,7 +130,7 @@ pub fn bench(
     )?;
     let rows: Vec<Vec<f64>> = st
         .iter()
-        .map(|(q, v, x)| q.iter().chain(v).chain(x).copied().collect())
+        .map(|(q, v, x)| q.iter().chain(v).chain(x).chain(q).copied().collect())
         .collect();
     let mut result = serde_json::Map::new();
     for &algo in &timed {
@@ -170,7 +170,7 @@ fn time_generated(
 pub fn table(v: &Value) -> String {
     let mut s =
         String::from("median ns per call   interpreted_f64  generated_f64  generated_f32\n");
-    for algo in Algorithm::offered_by_cli().map(Algorithm::name) {
+    for algo in Algorithm::timed_by_bench().map(Algorithm::name) {
         let r = &v[algo];
         let f = |k: &str| r[k].as_f64().map_or("—".to_string(), |x| format!("{x:.0}"));
         s.push_str(&format!(

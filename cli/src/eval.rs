@@ -1,4 +1,5 @@
-//! `embedyn eval`: ABA, RNEA, generalized gravity, nonlinear effects or CRBA on every sample.
+//! `embedyn eval`: ABA, RNEA, generalized gravity, nonlinear effects, CRBA, `integrate` or `difference` on
+//! every sample.
 
 use super::runner::RowShape;
 use super::samples::Samples;
@@ -7,8 +8,8 @@ use embedyn_codegen::{Loaded, ModelOptions};
 use embedyn_runtime::constraints::{constraint_violation, singularity_threshold};
 use embedyn_runtime::nalgebra;
 use embedyn_runtime::{
-    aba, crba, embedding_map, gravity, nle, reduced_mass_matrix, rnea, DynamicsError, JointType,
-    Model, Real, Workspace,
+    aba, crba, difference, embedding_map, gravity, integrate, nle, reduced_mass_matrix, rnea,
+    DynamicsError, JointType, Model, Real, Workspace,
 };
 use serde::Serialize;
 
@@ -36,6 +37,16 @@ enum Output {
         #[serde(rename = "M")]
         m: Vec<Vec<f64>>,
     },
+    /// `integrate`: `q ⊕ v`.
+    Integrated { q: Vec<f64> },
+    /// `difference`: `q1 ⊖ q`.
+    Difference { v: Vec<f64> },
+}
+
+/// Whether the algorithm works on the configuration space (`integrate`, `difference`): on the spanning
+/// tree's coordinates as given, which need not satisfy the constraints.
+fn on_configuration_space(algo: Algo) -> bool {
+    matches!(algo, Algo::Integrate | Algo::Difference)
 }
 
 /// Whether the algorithm's output is a generalized force (`rnea`, `gravity`, `nle`), reported as `tau` on
@@ -81,7 +92,7 @@ pub fn eval(
         .map(|input| (input.name, input.len.len(&dims)))
         .collect();
     let samples = Samples::parse(input, &request)?;
-    if model64.has_constraints() {
+    if model64.has_constraints() && !on_configuration_space(algo) {
         let mut ws = Workspace::new(&model64);
         let zero = vec![0.0; nv];
         for i in 0..samples.len() {
@@ -140,10 +151,13 @@ fn eval_generated(
     };
     let (nq, nv) = (model.nq(), model.nv());
     let mut rows = Vec::with_capacity(samples.len());
-    // The runner reads `q` and two `NV`-vectors per sample: the function's inputs after `q` (its
-    // descriptor's), zeros for those it does not have.
+    // The runner reads `q`, two `NV`-vectors and a second configuration per sample: the function's
+    // inputs after `q` (its descriptor's) in their slots, zeros for those it does not have.
+    use embedyn_codegen::algorithm::Dim;
     let inputs = &algo.spec().inputs[1..];
-    if inputs.len() > 2 {
+    let vectors = inputs.iter().filter(|i| i.len == Dim::Nv).count();
+    let configurations = inputs.iter().filter(|i| i.len == Dim::Nq).count();
+    if vectors > 2 || configurations > 1 || vectors + configurations != inputs.len() {
         return Err(not_evaluated(algo));
     }
     for i in 0..samples.len() {
@@ -154,14 +168,21 @@ fn eval_generated(
         if scalar == Scalar::F32 {
             fits::<f32>("q", &row, i)?;
         }
+        let mut second = vec![0.0; nq];
         for input in inputs {
             let x = samples.vector(i, input.name)?;
             if scalar == Scalar::F32 {
                 fits::<f32>(input.name, x, i)?;
             }
-            row.extend_from_slice(x);
+            if input.len == Dim::Nq {
+                check_quaternions(model, x, i)?;
+                second.copy_from_slice(x);
+            } else {
+                row.extend_from_slice(x);
+            }
         }
         row.resize(nq + 2 * nv, 0.0);
+        row.extend_from_slice(&second);
         rows.push(row);
     }
     // (Built once every sample is known to be evaluable.)
@@ -178,6 +199,8 @@ fn eval_generated(
         a if gives_torques(a) => nv,
         Algo::Crba if model.has_constraints() => model.independent_nv().pow(2) + 1,
         Algo::Crba => nv * nv,
+        Algo::Integrate => nq,
+        Algo::Difference => nv,
         other => return Err(not_evaluated(other)),
     };
     let outputs = super::runner::run(&binary, name, scalar_name, RowShape::Eval { len }, &rows)?;
@@ -223,6 +246,8 @@ fn eval_generated(
             Algo::Aba => "qdd",
             a if gives_torques(a) => "tau",
             Algo::Crba => "M",
+            Algo::Integrate => "q",
+            Algo::Difference => "v",
             _ => name,
         };
         let o = finite(&o, i, output)?;
@@ -259,6 +284,8 @@ fn eval_generated(
                         .collect(),
                 }
             }
+            Algo::Integrate => Output::Integrated { q: o },
+            Algo::Difference => Output::Difference { v: o },
             other => return Err(not_evaluated(other)),
         });
     }
@@ -378,6 +405,22 @@ fn eval_in<T: Real>(
                     .map(|r| (0..n).map(|c| m[(r, c)].to_f64()).collect())
                     .collect();
                 Output::Crba { m: rows }
+            }
+            Algo::Integrate => {
+                let mut q_out = vec![T::zero(); model.nq()];
+                integrate(model, &q, &v()?, &mut q_out).map_err(at)?;
+                Output::Integrated {
+                    q: finite(&q_out, i, "q")?,
+                }
+            }
+            Algo::Difference => {
+                let q1 = samples.vector(i, "q1")?;
+                check_quaternions(model, q1, i)?;
+                let mut v_out = vec![T::zero(); model.nv()];
+                difference(model, &q, &cast::<T>(q1), &mut v_out).map_err(at)?;
+                Output::Difference {
+                    v: finite(&v_out, i, "v")?,
+                }
             }
             other => return Err(not_evaluated(other)),
         };

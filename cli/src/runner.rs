@@ -558,7 +558,8 @@ pub enum RowShape {
     Bench,
 }
 
-/// Runs the runner on `rows` (each q ‖ a ‖ b) and returns its output rows, each checked: as many rows as
+/// Runs the runner on `rows` (each q ‖ a ‖ b ‖ p: a configuration, two velocity-sized vectors, a second
+/// configuration) and returns its output rows, each checked: as many rows as
 /// asked for, each of the expected length, every entry a number.
 pub fn run(
     binary: &Path,
@@ -672,11 +673,12 @@ pub fn runner_algorithms(algorithms: &[Algorithm], constrained: bool) -> Vec<Alg
 }
 
 /// The runner's code for `algorithm` (evaluating, timing), read from its descriptor: the function that
-/// computes what the command line reports for it, called with `q` and up to two more `NV`-vectors and
-/// writing one `NV`-vector, `NV × NV` or `NI × NI` matrix, whose values are printed, then the returned
-/// singularity measure if any. `None` for a function the runner does not run by its own name: one that
-/// exists only for a model with constraints (the command line reaches `crba_independent` as `crba`), or
-/// whose arguments or outputs the runner has no buffers for (`kinematics`).
+/// computes what the command line reports for it, called with `q` and its other inputs — up to two
+/// `NV`-vectors (`a`, `b`, in order) and one more configuration (`p`) — and writing one `NQ`- or
+/// `NV`-vector, `NV × NV` or `NI × NI` matrix, whose values are printed, then the returned singularity
+/// measure if any. `None` for a function the runner does not run by its own name: one that exists only
+/// for a model with constraints (the command line reaches `crba_independent` as `crba`), or whose
+/// arguments or outputs the runner has no buffers for (`kinematics`).
 fn runner_calls(algorithm: Algorithm, constrained: bool) -> Option<(TokenStream, TokenStream)> {
     use embedyn_codegen::algorithm::{Dim, Shape};
     if algorithm.needs_constraints() {
@@ -688,18 +690,28 @@ fn runner_calls(algorithm: Algorithm, constrained: bool) -> Option<(TokenStream,
     };
     let (buffer, values) = match output.shape {
         Shape::Vector(Dim::Nv) => (quote!(out), quote!(out)),
+        Shape::Vector(Dim::Nq) => (quote!(out_q), quote!(out_q)),
         Shape::Matrix(Dim::Nv, Dim::Nv) => (quote!(mat), quote!(mat.as_flattened())),
         Shape::Matrix(Dim::Ni, Dim::Ni) => (quote!(mat_i), quote!(mat_i.as_flattened())),
         _ => return None,
     };
     let (first, rest) = spec.inputs.split_first()?;
-    if first.len != Dim::Nq || rest.len() > 2 || rest.iter().any(|i| i.len != Dim::Nv) {
+    if first.len != Dim::Nq {
         return None;
     }
-    let eval_args = [quote!(q), quote!(a), quote!(b)];
-    let bench_args = [quote!(black_box(&s.0)), quote!(&s.1), quote!(&s.2)];
-    let eval_args = &eval_args[..spec.inputs.len()];
-    let bench_args = &bench_args[..spec.inputs.len()];
+    // Each further input's slot of the row: the `NV`-vectors `a`, `b` in order, the configuration `p`.
+    let (mut eval_args, mut bench_args) = (vec![quote!(q)], vec![quote!(black_box(&s.0))]);
+    let mut vectors = [(quote!(a), quote!(&s.1)), (quote!(b), quote!(&s.2))].into_iter();
+    let mut configurations = [(quote!(p), quote!(&s.3))].into_iter();
+    for input in rest {
+        let (eval, bench) = match input.len {
+            Dim::Nv => vectors.next()?,
+            Dim::Nq => configurations.next()?,
+            _ => return None,
+        };
+        eval_args.push(eval);
+        bench_args.push(bench);
+    }
     let function = format_ident!("{}", spec.name);
     let values = quote!(#values.iter().map(|&x| f64::from(x)));
     Some(if spec.returns_value(constrained) {
@@ -721,7 +733,7 @@ fn runner_calls(algorithm: Algorithm, constrained: bool) -> Option<(TokenStream,
 /// The runner's `main.rs`, generated through `quote` and formatted like all generated code.
 ///
 /// Protocol on stdin: a line `ALGO SCALAR eval|bench`, then one sample per line (q, then two vectors of
-/// length NV, numbers separated by spaces; an empty line for a model without coordinates). Output: one
+/// length NV, then a second configuration of length NQ, numbers separated by spaces; an empty line for a model without coordinates). Output: one
 /// line per sample (eval), or one line with the median ns per call (bench); every number printed as an
 /// f64 that reads back exactly. Bad input is an error on stderr with exit status 2, never a panic.
 /// For a model with constraints, `crba` is `crba_independent` (`Xᵀ M X`, what the CLI reports), and
@@ -768,20 +780,22 @@ fn runner_main(
             fn #function(algo: &str, bench: bool, rows: &[Vec<f64>], text: &mut String) -> Result<(), Refusal> {
                 use #krate::#module as m;
                 type S = #scalar;
-                let states: Vec<([S; NQ], [S; NV], [S; NV])> = rows
+                let states: Vec<([S; NQ], [S; NV], [S; NV], [S; NQ])> = rows
                     .iter()
                     .map(|r| {
                         (
                             core::array::from_fn(|i| r[i] as S),
                             core::array::from_fn(|i| r[NQ + i] as S),
                             core::array::from_fn(|i| r[NQ + NV + i] as S),
+                            core::array::from_fn(|i| r[NQ + 2 * NV + i] as S),
                         )
                     })
                     .collect();
                 let mut out = [0.0 as S; NV];
+                let mut out_q = [0.0 as S; NQ];
                 let mut mat = [[0.0 as S; NV]; NV];
                 let mut mat_i = [[0.0 as S; NI]; NI];
-                let _ = (&mut out, &mut mat, &mut mat_i);
+                let _ = (&mut out, &mut out_q, &mut mat, &mut mat_i);
                 if bench {
                     let n = states.len();
                     if n == 0 {
@@ -793,14 +807,14 @@ fn runner_main(
                             k = (k + 1) % n;
                             let s = &states[k];
                             #bench_calls
-                            black_box((&out, &mat, &mat_i));
+                            black_box((&out, &out_q, &mat, &mat_i));
                         }),)*
                         other => return Err(Refusal::UnknownAlgorithm(other.to_string())),
                     };
                     text.push_str(&format!("{ns:?}\n"));
                 } else {
-                    for (q, a, b) in &states {
-                        let _ = (q, a, b);
+                    for (q, a, b, p) in &states {
+                        let _ = (q, a, b, p);
                         match algo {
                             #(#names => { #eval_calls })*
                             other => return Err(Refusal::UnknownAlgorithm(other.to_string())),
@@ -853,7 +867,7 @@ fn runner_main(
                     Refusal::UnknownMode(mode) => write!(f, "unknown mode {mode:?}"),
                     Refusal::NotANumber { row, text, error } => write!(f, "row {row}: {text:?}: {error}"),
                     Refusal::RowLength { row, numbers } => {
-                        write!(f, "row {row} has {numbers} numbers, expected {}", NQ + 2 * NV)
+                        write!(f, "row {row} has {numbers} numbers, expected {}", 2 * NQ + 2 * NV)
                     }
                     Refusal::ScalarNotGenerated(scalar) => write!(f, "scalar {scalar:?} was not generated"),
                     Refusal::UnknownAlgorithm(algo) => write!(f, "unknown algorithm {algo:?}"),
@@ -892,7 +906,7 @@ fn runner_main(
                         })
                     })
                     .collect::<Result<Vec<f64>, Refusal>>()?;
-                if row.len() != NQ + 2 * NV {
+                if row.len() != 2 * NQ + 2 * NV {
                     return Err(Refusal::RowLength { row: i, numbers: row.len() });
                 }
                 rows.push(row);

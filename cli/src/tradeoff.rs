@@ -166,6 +166,8 @@ fn measure_variant(
                 .map(|&i| q[i])
                 .chain(v_of.iter().map(|&i| v[i]))
                 .chain(v_of.iter().map(|&i| tau[i]))
+                // The runner's second configuration (no function of `tradeoff` reads it).
+                .chain(q_of.iter().map(|&i| q[i]))
                 .collect()
         })
         .collect();

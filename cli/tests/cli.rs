@@ -42,7 +42,7 @@ fn embedyn_with_env(args: &[&str], stdin: &str, env: &[(&str, PathBuf)]) -> (boo
     )
 }
 
-fn json_of(args: &[&str], stdin: &str) -> Value {
+pub(crate) fn json_of(args: &[&str], stdin: &str) -> Value {
     let (ok, out, err) = embedyn(args, stdin);
     assert!(ok, "embedyn {args:?} failed: {err}");
     serde_json::from_str(&out).unwrap()

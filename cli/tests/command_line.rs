@@ -2,6 +2,7 @@
 //! tests/integration.rs says why). `autotests = false` in cli/Cargo.toml lists it.
 
 mod cli;
+mod configuration;
 mod edges;
 mod scale;
 mod scene;

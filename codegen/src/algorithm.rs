@@ -8,8 +8,8 @@
 use crate::trace::Sym;
 use embedyn_runtime::constraints::{completion_step, constraint_condition};
 use embedyn_runtime::{
-    aba, crba, embedding_map_in, forward_kinematics, gravity, link_poses, mass_matrix_inverse, nle,
-    reduced_mass_matrix_in, rnea, DynamicsError, Model, Workspace,
+    aba, crba, difference, embedding_map_in, forward_kinematics, gravity, integrate, link_poses,
+    mass_matrix_inverse, nle, reduced_mass_matrix_in, rnea, DynamicsError, Model, Workspace,
 };
 
 /// The algorithms code can be generated for; [`Algorithm::spec`] describes each.
@@ -35,6 +35,10 @@ pub enum Algorithm {
     Embedding,
     /// `crba_independent`: `Xᵀ M X` (models with constraints).
     CrbaIndependent,
+    /// `integrate`: `q ⊕ v` on the configuration space.
+    Integrate,
+    /// `difference`: `q1 ⊖ q`, the velocity that `integrate` takes from `q` to `q1`.
+    Difference,
 }
 
 /// A length of an argument or an output, in the model's terms.
@@ -194,6 +198,8 @@ pub struct CliSpec {
     /// The function that computes what the command reports for a model with constraints, when that is
     /// not this one (`crba` reports `Xᵀ M X`, `crba_independent`).
     pub with_constraints: Option<Algorithm>,
+    /// Whether `embedyn bench` times it (on its random states `(q, v, x)`).
+    pub timed: bool,
 }
 
 /// Runs an algorithm on the traced scalar (inputs in the order of [`AlgorithmSpec::inputs`]).
@@ -267,6 +273,11 @@ const QDD: InputSpec = InputSpec {
     len: Dim::Nv,
     unit: "rad/s² or m/s²",
 };
+const Q1: InputSpec = InputSpec {
+    name: "q1",
+    len: Dim::Nq,
+    unit: "rad or m; a floating joint's [x y z qx qy qz qw]",
+};
 const MASS_UNIT: &str = "kg·m², kg·m or kg";
 
 /// Every algorithm, in the order generated code lists them (the order of [`Algorithm`]'s variants).
@@ -336,6 +347,7 @@ pub const ALGORITHMS: &[AlgorithmSpec] = &[
         cli: Some(CliSpec {
             help: "Forward dynamics (articulated-body algorithm)",
             with_constraints: None,
+            timed: true,
         }),
         growth: Growth::Linear,
         predicted_operations: |c| 440.0 * c.nv,
@@ -372,6 +384,7 @@ pub const ALGORITHMS: &[AlgorithmSpec] = &[
         cli: Some(CliSpec {
             help: "Inverse dynamics (recursive Newton–Euler)",
             with_constraints: None,
+            timed: true,
         }),
         growth: Growth::Linear,
         predicted_operations: |c| 215.0 * c.nv,
@@ -408,6 +421,7 @@ pub const ALGORITHMS: &[AlgorithmSpec] = &[
         cli: Some(CliSpec {
             help: "Generalized gravity g(q) (Newton–Euler at rest)",
             with_constraints: None,
+            timed: true,
         }),
         growth: Growth::Linear,
         predicted_operations: |c| 100.0 * c.nv,
@@ -442,6 +456,7 @@ pub const ALGORITHMS: &[AlgorithmSpec] = &[
         cli: Some(CliSpec {
             help: "Nonlinear effects C(q, v) v + g(q) (Newton–Euler at qdd = 0)",
             with_constraints: None,
+            timed: true,
         }),
         growth: Growth::Linear,
         predicted_operations: |c| 215.0 * c.nv,
@@ -476,6 +491,7 @@ pub const ALGORITHMS: &[AlgorithmSpec] = &[
         cli: Some(CliSpec {
             help: "Mass matrix (composite-rigid-body algorithm)",
             with_constraints: Some(Algorithm::CrbaIndependent),
+            timed: true,
         }),
         growth: Growth::Quadratic,
         predicted_operations: |c| c.crba,
@@ -617,6 +633,82 @@ pub const ALGORITHMS: &[AlgorithmSpec] = &[
             reduced_mass_matrix_in(model, ws, inputs[0]).map(|_| ())
         },
     },
+    AlgorithmSpec {
+        algorithm: Algorithm::Integrate,
+        name: "integrate",
+        traced_name: "integrate",
+        wrapper: None,
+        summary: "`q ⊕ v`: joint coordinates plus `v`, a floating joint moved by the SE(3) exponential of its body-frame twist (only when asked for)",
+        doc: "The configuration reached from `q` along `v` in unit time, `q_out = q ⊕ v` (Pinocchio's `integrate`): every revolute, continuous and prismatic coordinate plus its velocity; a floating joint's pose `M` moved to `M · exp(v)`, the SE(3) exponential of its body-frame twist `[v_lin ω]`. The quaternions of `q_out` have unit norm and the sign nearer `q`'s (Pinocchio's). A time step is `integrate(q, dt · v)`. Small angles through series, selected without branches.",
+        doc_with_constraints: None,
+        inputs: &[Q, V],
+        outputs: &[OutputSpec {
+            name: "q_out",
+            shape: Shape::Vector(Dim::Nq),
+            unit: "rad or m; a floating joint's [x y z qx qy qz qw]",
+        }],
+        returns: Returns::Nothing,
+        needs_constraints: false,
+        generated: WhenGenerated::OnRequest,
+        readme_note: " — `q ⊕ v`: a floating joint moves by the SE(3) exponential of its body-frame twist",
+        readme_note_with_constraints: None,
+        cli: Some(CliSpec {
+            help: "q ⊕ v (a floating joint by the SE(3) exponential of its body twist)",
+            with_constraints: None,
+            timed: false,
+        }),
+        growth: Growth::Linear,
+        predicted_operations: |c| 20.0 * c.nv + 200.0,
+        trace: |model, _ws, inputs| {
+            let mut q_out = vec![Sym::Const(0.0); model.nq()];
+            integrate(model, &inputs[0], &inputs[1], &mut q_out)?;
+            Ok(Traced {
+                outputs: vec![q_out],
+                returned: None,
+            })
+        },
+        interpreted: |model, _ws, inputs| {
+            integrate(model, inputs[0], inputs[1], &mut vec![0.0; model.nq()])
+        },
+    },
+    AlgorithmSpec {
+        algorithm: Algorithm::Difference,
+        name: "difference",
+        traced_name: "difference",
+        wrapper: None,
+        summary: "`q1 ⊖ q`: the `v` that `integrate` takes from `q` to `q1`, of least rotation (only when asked for)",
+        doc: "The velocity that `integrate` takes from `q` to `q1` in unit time, `v = q1 ⊖ q` (Pinocchio's `difference`): every revolute, continuous and prismatic coordinate `q1 − q` (angles not wrapped); a floating joint's body-frame twist `log(M⁻¹ M1)`, the least rotation (angle ≤ π, whatever the signs of the quaternions). Small angles and the shorter rotation are selected without branches.",
+        doc_with_constraints: None,
+        inputs: &[Q, Q1],
+        outputs: &[OutputSpec {
+            name: "v",
+            shape: Shape::Vector(Dim::Nv),
+            unit: "rad or m (a velocity over unit time)",
+        }],
+        returns: Returns::Nothing,
+        needs_constraints: false,
+        generated: WhenGenerated::OnRequest,
+        readme_note: " — `q1 ⊖ q`, the `v` of least rotation with `integrate(q, v) = q1`",
+        readme_note_with_constraints: None,
+        cli: Some(CliSpec {
+            help: "q1 ⊖ q (a floating joint by the SE(3) logarithm, least rotation)",
+            with_constraints: None,
+            timed: false,
+        }),
+        growth: Growth::Linear,
+        predicted_operations: |c| 20.0 * c.nv + 300.0,
+        trace: |model, _ws, inputs| {
+            let mut v = vec![Sym::Const(0.0); model.nv()];
+            difference(model, &inputs[0], &inputs[1], &mut v)?;
+            Ok(Traced {
+                outputs: vec![v],
+                returned: None,
+            })
+        },
+        interpreted: |model, _ws, inputs| {
+            difference(model, inputs[0], inputs[1], &mut vec![0.0; model.nv()])
+        },
+    },
 ];
 
 /// A matrix's entries row-major.
@@ -632,7 +724,7 @@ const _: () = {
         assert!(ALGORITHMS[i].algorithm as usize == i);
         i += 1;
     }
-    assert!(Algorithm::CrbaIndependent as usize + 1 == ALGORITHMS.len());
+    assert!(Algorithm::Difference as usize + 1 == ALGORITHMS.len());
 };
 
 impl Algorithm {
@@ -686,6 +778,14 @@ impl Algorithm {
         ALGORITHMS
             .iter()
             .filter(|s| s.cli.is_some())
+            .map(|s| s.algorithm)
+    }
+
+    /// The algorithms `embedyn bench` times, in table order.
+    pub fn timed_by_bench() -> impl Iterator<Item = Algorithm> {
+        ALGORITHMS
+            .iter()
+            .filter(|s| s.cli.is_some_and(|c| c.timed))
             .map(|s| s.algorithm)
     }
 
@@ -919,14 +1019,27 @@ mod tests {
         let e = Algorithm::from_name("abba").unwrap_err().to_string();
         assert_eq!(
             e,
-            "unknown function `abba` (expected kinematics, aba, rnea, gravity, nle, crba, minv, complete, embedding, crba_independent)"
+            "unknown function `abba` (expected kinematics, aba, rnea, gravity, nle, crba, minv, complete, embedding, crba_independent, integrate, difference)"
         );
     }
 
     #[test]
     fn the_command_line_reports_crba_independent_for_crba_with_constraints() {
         let offered: Vec<&str> = Algorithm::offered_by_cli().map(Algorithm::name).collect();
-        assert_eq!(offered, ["aba", "rnea", "gravity", "nle", "crba"]);
+        assert_eq!(
+            offered,
+            [
+                "aba",
+                "rnea",
+                "gravity",
+                "nle",
+                "crba",
+                "integrate",
+                "difference"
+            ]
+        );
+        let timed: Vec<&str> = Algorithm::timed_by_bench().map(Algorithm::name).collect();
+        assert_eq!(timed, ["aba", "rnea", "gravity", "nle", "crba"]);
         assert_eq!(
             Algorithm::Crba.reported_by(true),
             Algorithm::CrbaIndependent

@@ -36,6 +36,8 @@ mod algorithms;
 #[cfg(feature = "alloc")]
 mod check;
 #[cfg(feature = "alloc")]
+pub mod configuration;
+#[cfg(feature = "alloc")]
 pub mod constraints;
 // Fused multiply-add and exact rounding come from the platform's libm.
 #[cfg(feature = "std")]
@@ -57,6 +59,8 @@ pub use algorithms::{
     reduced_mass_matrix, reduced_mass_matrix_in, rnea, rnea_with_gravity, DynamicsError,
     Kinematics, Workspace,
 };
+#[cfg(feature = "alloc")]
+pub use configuration::{difference, integrate, random_configuration};
 #[cfg(feature = "alloc")]
 pub use model::{
     Body, Joint, JointLimits, JointType, Model, ModelBuilder, ModelElement, ModelError,
