@@ -185,14 +185,19 @@ fn hostile_names_generate_a_crate_that_builds_and_means_what_the_model_says() {
             quote::quote!(#item)
         );
     }
-    // The README's joint table: one row of five cells per joint, names shown escaped.
+    // The README's joint table: one row of ten cells per joint (name, constant, type, indices, four
+    // limits, independent), names shown escaped.
     let readme = std::fs::read_to_string(out.join("README.md")).unwrap();
     let rows: Vec<&str> = readme.lines().filter(|l| l.starts_with("| `")).collect();
     assert_eq!(rows.len(), HOSTILE_JOINTS.len(), "{readme}");
     for r in &rows {
         let cells = r.replace("\\|", "").matches('|').count();
-        assert_eq!(cells, 6, "{r}");
+        assert_eq!(cells, 11, "{r}");
     }
+    assert!(
+        readme.contains("| `fn` | `FN_0F1E18BB` | revolute | 4 | 4 | -3 | 3 | 10 | 10 | yes |"),
+        "{readme}"
+    );
     assert!(
         readme.contains("| `new\\nline\\rbuild = \\\"evil.rs\\\"` |"),
         "{readme}"

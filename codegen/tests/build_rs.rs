@@ -23,7 +23,12 @@ fn generate_file_matches_the_macro_expansion() {
             _ => None,
         })
         .collect();
-    assert_eq!(names, ["f64", "f32"]);
+    assert_eq!(
+        names,
+        ["joints", "q_index", "v_index", "frames", "f64", "f32"]
+    );
+    assert!(written.contains("pub const JOINT4: usize = 3;"));
+    assert!(written.contains("pub const LOWER: [S; super::NQ]"));
     for f in [
         "pub fn aba(",
         "pub fn rnea(",
