@@ -179,7 +179,8 @@ fn lock_refusals_name_the_joint_and_the_reason() {
         .unwrap_err()
     };
     type Expected = fn(&LoadErrorKind) -> bool;
-    let cases: [(&str, bool, &[(&str, f64)], Expected); 6] = [
+    type Case<'a> = (&'a str, bool, &'a [(&'a str, f64)], Expected);
+    let cases: [Case; 6] = [
         (
             "models/arm7.urdf",
             false,
