@@ -93,6 +93,8 @@ pub fn info(loaded: &Loaded, options: &ModelOptions) -> Result<Value, CliError> 
         "loops": loops,
         "couplings": couplings,
         "groups": groups,
+        // Every link of the file, merged ones and those fixed to the world included (CONTRACT §2 frames).
+        "frames": robot.links.iter().map(|l| l.name.as_str()).collect::<Vec<_>>(),
         "independent_nv": model.independent_nv(),
         "scene": {
             "floating": options.floating,

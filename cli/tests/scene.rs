@@ -228,3 +228,32 @@ fn tradeoff_compares_reflected_rotors_on_the_joints_they_keep() {
         }
     }
 }
+
+/// `info` lists the frames: every link of the file by name, in file order, merged links and links fixed
+/// to the world included (a locked joint's child stays a frame: only its coordinate goes).
+#[test]
+fn info_lists_every_link_as_a_frame() {
+    let ur5 = repo("tests/data/pinocchio/ur5.urdf");
+    let text = std::fs::read_to_string(&ur5).unwrap();
+    let written: Vec<&str> = text
+        .match_indices("<link name=\"")
+        .map(|(at, m)| {
+            let rest = &text[at + m.len()..];
+            &rest[..rest.find('"').unwrap()]
+        })
+        .collect();
+    for args in [
+        vec!["info", &ur5],
+        vec!["info", &ur5, "--lock", "elbow_joint=0.3"],
+    ] {
+        let (ok, out, err) = embedyn(&args, "");
+        assert!(ok, "{err}");
+        let frames: Vec<String> = json(&out)["frames"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|f| f.as_str().unwrap().to_string())
+            .collect();
+        assert_eq!(frames, written, "{args:?}");
+    }
+}
