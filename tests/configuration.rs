@@ -389,3 +389,48 @@ fn f32_integrate_and_difference_keep_f32_precision() {
         assert!(e < 1e-4, "f32 difference at {angle:?}: {e:e}");
     }
 }
+
+/// `random_configuration_within_limits` draws within the `<limit>`s the file gives (Panda: every joint
+/// limited, fingers in [0, 0.04] m) and within the defaults where it gives none (the continuous double
+/// pendulum), and draws what `random_configuration` draws with those bounds passed by hand.
+#[test]
+fn random_configurations_within_the_models_limits() {
+    use embedyn::random_configuration_within_limits;
+    for (path, limited) in [
+        ("tests/data/pinocchio/panda.urdf", true),
+        (
+            "tests/data/pinocchio/double_pendulum_continuous.urdf",
+            false,
+        ),
+    ] {
+        let model: embedyn::Model<f64> = common::load_model(path, false);
+        let nq = model.nq();
+        let lower: Vec<f64> = model
+            .joints
+            .iter()
+            .map(|j| j.limits.lower.unwrap_or(f64::NEG_INFINITY))
+            .collect();
+        let upper: Vec<f64> = model
+            .joints
+            .iter()
+            .map(|j| j.limits.upper.unwrap_or(f64::INFINITY))
+            .collect();
+        assert_eq!(lower.len(), nq);
+        assert_eq!(lower.iter().all(|x| x.is_finite()), limited, "{path}");
+        let (mut a, mut b) = (SplitMix64::new(3), SplitMix64::new(3));
+        let (mut q, mut by_hand) = (vec![0.0; nq], vec![0.0; nq]);
+        for _ in 0..100 {
+            random_configuration_within_limits(&model, &mut a, &mut q).unwrap();
+            random_configuration(&model, &mut b, &lower, &upper, &mut by_hand).unwrap();
+            assert_eq!(q, by_hand);
+            for i in 0..nq {
+                let (lo, hi) = if limited {
+                    (lower[i], upper[i])
+                } else {
+                    (-PI, PI)
+                };
+                assert!((lo..hi).contains(&q[i]), "{path}: q[{i}] = {}", q[i]);
+            }
+        }
+    }
+}

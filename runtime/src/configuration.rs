@@ -140,17 +140,56 @@ pub fn random_configuration<T: Real>(
     check_len("lower", lower.len(), model.nq())?;
     check_len("upper", upper.len(), model.nq())?;
     check_len("q_out", q_out.len(), model.nq())?;
+    draw_configuration(model, rng, |i| (lower[i], upper[i]), q_out);
+    Ok(())
+}
+
+/// [`random_configuration`] within the model's own joint limits (`<limit lower upper>`, [`Joint::limits`]):
+/// each bound the file gives is used, each it does not (a continuous joint, a floating joint's position)
+/// falls back to the defaults of [`random_configuration`].
+///
+/// # Errors
+/// [`DynamicsError::WrongLength`] if `q_out` is not [`Model::nq`] long.
+///
+/// [`Joint::limits`]: crate::Joint::limits
+pub fn random_configuration_within_limits<T: Real>(
+    model: &Model<T>,
+    rng: &mut SplitMix64,
+    q_out: &mut [T],
+) -> Result<(), DynamicsError> {
+    crate::algorithms::check_len("q_out", q_out.len(), model.nq())?;
+    draw_configuration(
+        model,
+        rng,
+        |i| {
+            // Limits are per joint of one coordinate; a floating joint's coordinates have none.
+            model
+                .joints
+                .iter()
+                .find(|j| j.q_index == i && j.nq() == 1)
+                .map_or((f64::NEG_INFINITY, f64::INFINITY), |j| {
+                    (
+                        j.limits.lower.map_or(f64::NEG_INFINITY, |x| x.to_f64()),
+                        j.limits.upper.map_or(f64::INFINITY, |x| x.to_f64()),
+                    )
+                })
+        },
+        q_out,
+    );
+    Ok(())
+}
+
+/// The draw of [`random_configuration`], with the bounds of coordinate `i` from `bounds(i)`.
+fn draw_configuration<T: Real>(
+    model: &Model<T>,
+    rng: &mut SplitMix64,
+    bounds: impl Fn(usize) -> (f64, f64),
+    q_out: &mut [T],
+) {
     let draw = |rng: &mut SplitMix64, i: usize, default: f64| {
-        let lo = if lower[i].is_finite() {
-            lower[i]
-        } else {
-            -default
-        };
-        let hi = if upper[i].is_finite() {
-            upper[i]
-        } else {
-            default
-        };
+        let (lower, upper) = bounds(i);
+        let lo = if lower.is_finite() { lower } else { -default };
+        let hi = if upper.is_finite() { upper } else { default };
         T::from_f64(rng.uniform(lo, hi))
     };
     for j in &model.joints {
@@ -178,7 +217,6 @@ pub fn random_configuration<T: Real>(
             }
         }
     }
-    Ok(())
 }
 
 /// √x in f64 without `std` (through the scalar trait's square root).

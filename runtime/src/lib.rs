@@ -60,7 +60,9 @@ pub use algorithms::{
     Kinematics, Workspace,
 };
 #[cfg(feature = "alloc")]
-pub use configuration::{difference, integrate, random_configuration};
+pub use configuration::{
+    difference, integrate, random_configuration, random_configuration_within_limits,
+};
 #[cfg(feature = "alloc")]
 pub use model::{
     Body, Joint, JointLimits, JointType, Model, ModelBuilder, ModelElement, ModelError,
