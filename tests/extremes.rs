@@ -7,10 +7,10 @@ use crate::common;
 
 use common::{cast, load_model, to_f64, Rng};
 use embedyn::constraints::{complete_configuration, complete_velocity, singularity_threshold};
-use embedyn::nalgebra::{Matrix3, Vector3};
+
 use embedyn::{
     aba, crba, forward_kinematics, kinetic_energy, potential_energy, relative_error, DoubleDouble,
-    DynamicsError, JointType, Model, ModelOptions, Real, SpatialInertia, Transform, Workspace,
+    DynamicsError, Model, ModelOptions, Real, Workspace,
 };
 
 /// ABA in `T` on f64 inputs (rounded to `T`), as f64.
@@ -73,32 +73,7 @@ fn a_200_body_chain_keeps_abas_accuracy_in_f64_and_f32() {
 /// An 8-body revolute chain, axes alternating z and y, 0.2 m links, masses alternating 1 kg and
 /// 1/`ratio` kg (inertias scaled with the mass).
 fn mass_ratio_chain(ratio: f64) -> Model<f64> {
-    let mut b = Model::<f64>::builder("mass_ratio");
-    for i in 0..8usize {
-        let m = if i % 2 == 0 { 1.0 } else { 1.0 / ratio };
-        let inertia = SpatialInertia::from_com(
-            m,
-            Vector3::new(0.0, 0.0, 0.1),
-            Matrix3::from_diagonal(&Vector3::new(4e-3 * m, 4e-3 * m, 1e-3 * m)),
-        );
-        let axis = if i % 2 == 0 {
-            Vector3::z()
-        } else {
-            Vector3::y()
-        };
-        let placement = Transform::from_xyz_rpy([0.0, 0.0, 0.2], [0.0; 3]);
-        b.add_body(
-            i.checked_sub(1),
-            format!("j{i}"),
-            JointType::Revolute,
-            axis,
-            placement,
-            format!("b{i}"),
-            inertia,
-        )
-        .unwrap();
-    }
-    b.build().unwrap()
+    common::chain_with_masses(8, |i| if i % 2 == 0 { 1.0 } else { 1.0 / ratio })
 }
 
 #[test]

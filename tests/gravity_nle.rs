@@ -4,7 +4,7 @@
 //! 1e-9 relative; on models with loops, couplings and mimic joints `rnea(q, 0, 0)` and `rnea(q, v, 0)`,
 //! tree torques and their projection `Xᵀ τ`; and armature, which multiplies `qdd = 0`, changing neither.
 
-use crate::common::{load_model, repo_path, Rng};
+use crate::common::{load_model, Rng};
 use crate::constraint_embedding::{consistent_state, LOOP_MODELS};
 use embedyn::{embedding_map, gravity, nle, relative_error, rnea, Model, Workspace};
 use serde_json::Value;
@@ -63,29 +63,11 @@ fn vecf(v: &Value) -> Vec<f64> {
 /// (`gravity_torque` where the file has it: the armature files have `nle` only); returns how many
 /// numbers were compared.
 fn check_against_pinocchio(name: &str, floating: bool) -> usize {
-    let json: Value = serde_json::from_str(
-        &std::fs::read_to_string(repo_path(&format!("tests/data/pinocchio/{name}.json"))).unwrap(),
-    )
-    .unwrap();
+    let json = crate::pinocchio_reference::reference(name);
     let model = load_model::<f64>(&format!("tests/data/pinocchio/{name}.urdf"), floating);
     let generated = generated_for(name).expect("a generated module per reference file");
-    // Pinocchio's joint order may differ: map by name (as tests/pinocchio_reference.rs does).
-    let mut v_map = vec![0usize; model.nv()];
-    let mut q_map = vec![0usize; model.nq()];
-    for j in &model.joints {
-        let pj = json["joints"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .find(|p| p["name"].as_str() == Some(j.name.as_str()))
-            .unwrap_or_else(|| panic!("{name}: joint {} not in the reference", j.name));
-        for k in 0..j.nv() {
-            v_map[j.v_index + k] = pj["idx_v"].as_u64().unwrap() as usize + k;
-        }
-        for k in 0..j.nq() {
-            q_map[j.q_index + k] = pj["idx_q_angle"].as_u64().unwrap() as usize + k;
-        }
-    }
+    // Pinocchio's joint order may differ: map by name.
+    let (q_map, v_map) = crate::pinocchio_reference::coordinate_maps(name, &model, &json);
     let pick = |x: &Value, map: &[usize]| -> Vec<f64> {
         let x = vecf(x);
         map.iter().map(|&i| x[i]).collect()

@@ -275,23 +275,7 @@ fn check_formerly_refused(name: &str, expected_warnings: &[&str]) {
         &std::fs::read_to_string(repo_path(&format!("tests/data/erd/{name}.json"))).unwrap(),
     )
     .unwrap();
-    assert_eq!(model.nq() as u64, json["nq_angle"].as_u64().unwrap());
-    assert_eq!(model.nv() as u64, json["nv"].as_u64().unwrap());
-    let pin_joints = json["joints"].as_array().unwrap();
-    let mut v_map = vec![0usize; model.nv()];
-    let mut q_map = vec![0usize; model.nq()];
-    for j in &model.joints {
-        let pj = pin_joints
-            .iter()
-            .find(|p| p["name"].as_str() == Some(j.name.as_str()))
-            .unwrap_or_else(|| panic!("{name}: joint {} not in the reference", j.name));
-        for k in 0..j.nv() {
-            v_map[j.v_index + k] = pj["idx_v"].as_u64().unwrap() as usize + k;
-        }
-        for k in 0..j.nq() {
-            q_map[j.q_index + k] = pj["idx_q_angle"].as_u64().unwrap() as usize + k;
-        }
-    }
+    let (q_map, v_map) = coordinate_maps(name, &model, &json);
     let pick = |x: &Value, map: &[usize]| -> Vec<f64> {
         let x = vecf(x);
         map.iter().map(|&i| x[i]).collect()

@@ -183,6 +183,11 @@ pub fn condition_number(m: &embedyn::nalgebra::DMatrix<f64>) -> f64 {
 
 /// A chain of `n` revolute bodies, axes alternating z and y, 0.2 m links of 1 kg with realistic inertia.
 pub fn chain(n: usize) -> Model<f64> {
+    chain_with_masses(n, |_| 1.0)
+}
+
+/// [`chain`] with body `i` of `mass(i)` kg (its inertia scaled with it).
+pub fn chain_with_masses(n: usize, mass: impl Fn(usize) -> f64) -> Model<f64> {
     use embedyn::nalgebra::{Matrix3, Vector3};
     use embedyn::{JointType, SpatialInertia, Transform};
     let mut b = Model::<f64>::builder(format!("chain{n}"));
@@ -192,10 +197,11 @@ pub fn chain(n: usize) -> Model<f64> {
         } else {
             Vector3::y()
         };
+        let m = mass(i);
         let inertia = SpatialInertia::from_com(
-            1.0,
+            m,
             Vector3::new(0.0, 0.0, 0.1),
-            Matrix3::from_diagonal(&Vector3::new(4e-3, 4e-3, 1e-3)),
+            Matrix3::from_diagonal(&Vector3::new(4e-3 * m, 4e-3 * m, 1e-3 * m)),
         );
         let placement = Transform::from_xyz_rpy([0.0, 0.0, 0.2], [0.0; 3]);
         b.add_body(
