@@ -14,6 +14,7 @@ mod armature;
 mod bad_input;
 mod configuration;
 mod constraint_embedding;
+mod contact;
 mod dynamics_oracles;
 mod energy;
 mod extremes;

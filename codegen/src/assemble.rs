@@ -173,8 +173,12 @@ fn build_model_f64(robot: &Robot, options: &ModelOptions) -> Result<Model<f64>, 
         stack.extend(children[joint.child].iter().rev());
     }
     // Merge every link's inertia into its body; links fixed to the world carry none that matters.
+    let mut world_links: Vec<(String, Transform<f64>)> = Vec::new();
     for (l, link) in robot.links.iter().enumerate() {
         let (body, pose) = link_body[l].expect("every link is reachable from the root");
+        if body.is_none() {
+            world_links.push((link.name.clone(), pose));
+        }
         if let Some(b) = body {
             bodies[b].links.push((link.name.clone(), pose));
             if let Some(inertial) = &link.inertial {
@@ -217,6 +221,8 @@ fn build_model_f64(robot: &Robot, options: &ModelOptions) -> Result<Model<f64>, 
     let g = options.gravity;
     let mut builder =
         Model::<f64>::builder(robot.name.clone()).gravity(Vector3::new(g[0], g[1], g[2]));
+    let (names, placements) = world_links.into_iter().unzip();
+    builder.set_world_links(names, placements);
     for (b, pending) in bodies.iter().enumerate() {
         let (name, jtype, axis) = match pending.joint {
             None => (ROOT_JOINT.to_string(), JointType::Floating, [0.0; 3]),

@@ -54,10 +54,13 @@ pub mod tree;
 
 #[cfg(feature = "alloc")]
 pub use algorithms::{
-    aba, constraint_kinematics, crba, embedding_map, embedding_map_in, forward_kinematics, gravity,
-    kinetic_energy, kkt_forward_dynamics, link_poses, mass_matrix_inverse, nle, potential_energy,
-    reduced_mass_matrix, reduced_mass_matrix_in, rnea, rnea_with_gravity, DynamicsError,
-    Kinematics, Workspace,
+    aba, aba_ext, center_of_mass, centroidal_momentum, centroidal_momentum_matrix,
+    centroidal_momentum_rate, com_jacobian, constraint_kinematics, crba, embedding_map,
+    embedding_map_in, forward_kinematics, forward_kinematics_acceleration,
+    frame_classical_acceleration, frame_jacobian, frame_placement, frame_velocity, gravity,
+    kinetic_energy, kkt_forward_dynamics, link_poses, mass_matrix_inverse, nle, nle_ext,
+    potential_energy, reduced_mass_matrix, reduced_mass_matrix_in, rnea, rnea_ext,
+    rnea_with_gravity, CenterOfMass, DynamicsError, Kinematics, LinkWrench, Reference, Workspace,
 };
 #[cfg(feature = "alloc")]
 pub use configuration::{
@@ -65,7 +68,7 @@ pub use configuration::{
 };
 #[cfg(feature = "alloc")]
 pub use model::{
-    Body, Joint, JointLimits, JointType, Model, ModelBuilder, ModelElement, ModelError,
+    Body, FrameId, Joint, JointLimits, JointType, Model, ModelBuilder, ModelElement, ModelError,
 };
 #[cfg(feature = "std")]
 pub use scalar::DoubleDouble;

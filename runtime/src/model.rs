@@ -237,6 +237,20 @@ pub struct Model<T: Real> {
     pub groups: Vec<Group>,
     /// For each body, the group it belongs to.
     group_of: Vec<Option<usize>>,
+    /// The URDF links fixed to the world (not on any moving body): frames whose pose never changes.
+    pub world_links: Vec<String>,
+    /// Pose of each of `world_links` in the world.
+    pub world_link_placements: Vec<Transform<T>>,
+}
+
+/// A frame of the model: a URDF link, on a moving body or fixed to the world (CONTRACT §2: a frame's
+/// placement is its link frame). Find one by name with [`Model::frame`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct FrameId {
+    /// The body the link rides on (`None`: fixed to the world).
+    pub body: Option<usize>,
+    /// The link's index in that body's [`Body::links`] (or in [`Model::world_links`]).
+    pub link: usize,
 }
 
 /// Errors in the structure of a model given to [`ModelBuilder`].
@@ -406,6 +420,8 @@ pub struct ModelBuilder<T: Real> {
     nv: usize,
     constraints: Vec<Constraint<T>>,
     declared_dependent: Vec<bool>,
+    world_links: Vec<String>,
+    world_link_placements: Vec<Transform<T>>,
 }
 
 impl<T: Real> Model<T> {
@@ -420,6 +436,8 @@ impl<T: Real> Model<T> {
             nv: 0,
             constraints: Vec::new(),
             declared_dependent: Vec::new(),
+            world_links: Vec::new(),
+            world_link_placements: Vec::new(),
         }
     }
 
@@ -447,6 +465,54 @@ impl<T: Real> Model<T> {
             .get(self.subtree_end[i])
             .map_or(self.nv, |j| j.v_index);
         start..end
+    }
+
+    /// The frame of the link named `name` (on a moving body or fixed to the world).
+    pub fn frame(&self, name: &str) -> Option<FrameId> {
+        for (b, body) in self.bodies.iter().enumerate() {
+            if let Some(link) = body.links.iter().position(|l| l == name) {
+                return Some(FrameId {
+                    body: Some(b),
+                    link,
+                });
+            }
+        }
+        self.world_links
+            .iter()
+            .position(|l| l == name)
+            .map(|link| FrameId { body: None, link })
+    }
+
+    /// The link name of a frame; `None` if `frame` is not one of this model's.
+    pub fn frame_name(&self, frame: FrameId) -> Option<&str> {
+        match frame.body {
+            Some(b) => self.bodies.get(b)?.links.get(frame.link),
+            None => self.world_links.get(frame.link),
+        }
+        .map(String::as_str)
+    }
+
+    /// The pose of a frame in its body's frame (in the world for a link fixed to the world); `None` if
+    /// `frame` is not one of this model's.
+    pub fn frame_in_body(&self, frame: FrameId) -> Option<&Transform<T>> {
+        match frame.body {
+            Some(b) => self.bodies.get(b)?.link_placements.get(frame.link),
+            None => self.world_link_placements.get(frame.link),
+        }
+    }
+
+    /// Every frame: each body's links in body order, then the links fixed to the world.
+    pub fn frames(&self) -> impl Iterator<Item = FrameId> + '_ {
+        self.bodies
+            .iter()
+            .enumerate()
+            .flat_map(|(b, body)| {
+                (0..body.links.len()).map(move |link| FrameId {
+                    body: Some(b),
+                    link,
+                })
+            })
+            .chain((0..self.world_links.len()).map(|link| FrameId { body: None, link }))
     }
 
     /// Index of the joint (and of its body) named `name`.
@@ -548,6 +614,12 @@ impl<T: Real> Model<T> {
             constraints: self.constraints.iter().map(|c| c.cast()).collect(),
             groups: self.groups.clone(),
             group_of: self.group_of.clone(),
+            world_links: self.world_links.clone(),
+            world_link_placements: self
+                .world_link_placements
+                .iter()
+                .map(|x| x.cast())
+                .collect(),
         }
     }
 
@@ -770,6 +842,20 @@ impl<T: Real> ModelBuilder<T> {
         self.bodies[body].link_placements = placements;
     }
 
+    /// Records the URDF links fixed to the world (frames that never move) with their poses in the world.
+    ///
+    /// # Panics
+    /// If the two lists differ in length.
+    pub fn set_world_links(&mut self, links: Vec<String>, placements: Vec<Transform<T>>) {
+        assert_eq!(
+            links.len(),
+            placements.len(),
+            "one placement per world link"
+        );
+        self.world_links = links;
+        self.world_link_placements = placements;
+    }
+
     /// Numbers the bodies depth-first (siblings in the order they were added; docs/conventions.md), assigns
     /// the coordinate indices, and checks that every joint's acceleration is determined: `D(k) > 0` at
     /// two unrelated configurations (a joint singular at both is singular everywhere but on a null set).
@@ -849,6 +935,8 @@ impl<T: Real> ModelBuilder<T> {
             constraints,
             groups: Vec::new(),
             group_of: vec![None; n],
+            world_links: self.world_links,
+            world_link_placements: self.world_link_placements,
         };
         if !model.constraints.is_empty() {
             model.groups = crate::constraints::build_groups(&model, &declared)?;

@@ -53,9 +53,9 @@ pub fn aba<'w, T: Real>(
     check_input("v", v, model.nv())?;
     check_input("tau", tau, model.nv())?;
     if model.has_constraints() {
-        return super::embedded::aba(model, ws, q, v, tau);
+        return super::embedded::aba(model, ws, q, v, tau, &[]);
     }
-    articulate(model, ws, q, v, tau);
+    articulate(model, ws, q, v, tau, &[]);
     for i in 0..model.nbodies() {
         forward_step(model, ws, i)?;
     }
@@ -117,16 +117,19 @@ pub(crate) fn forward_step<T: Real>(
     Ok(())
 }
 
-/// The velocity sweep and the backward sweep of Eq. 9: `P(k)`, `D(k)`, `𝔷(k)`, `ε(k)` for every joint.
+/// The velocity sweep and the backward sweep of Eq. 9: `P(k)`, `D(k)`, `𝔷(k)`, `ε(k)` for every joint,
+/// with the external wrenches `f_ext` in the bias forces.
 pub(crate) fn articulate<T: Real>(
     model: &Model<T>,
     ws: &mut Workspace<T>,
     q: &[T],
     v: &[T],
     tau: &[T],
+    f_ext: &[super::LinkWrench<T>],
 ) {
     velocity_sweep(model, ws, q, v);
     init_articulated(model, ws);
+    super::wrenches::subtract_wrenches(model, ws, f_ext);
     for i in (0..model.nbodies()).rev() {
         backward_step(model, ws, i, tau);
     }

@@ -75,6 +75,7 @@ pub(crate) fn aba<'w, T: Real>(
     q: &[T],
     v: &[T],
     tau: &[T],
+    f_ext: &[super::LinkWrench<T>],
 ) -> Result<&'w [T], DynamicsError> {
     constraint_kinematics(model, ws, q, v)?;
     let (kin, scratch) = ws.split_constraints();
@@ -82,6 +83,7 @@ pub(crate) fn aba<'w, T: Real>(
         embed(model, kin, g, gw, true)?;
     }
     init_articulated(model, ws);
+    super::wrenches::subtract_wrenches(model, ws, f_ext);
     for i in (0..model.nbodies()).rev() {
         match model.group_of(i) {
             None => backward_step(model, ws, i, tau),

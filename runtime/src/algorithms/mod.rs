@@ -4,24 +4,36 @@
 #[allow(unused_imports)]
 use crate::alloc_prelude::*;
 pub(crate) mod aba;
+mod centroidal;
 mod crba;
 mod embedded;
+mod frames;
 mod kinematics;
 mod minv;
 mod rnea;
 mod workspace;
+mod wrenches;
 
 pub use aba::aba;
+pub use centroidal::{
+    center_of_mass, centroidal_momentum, centroidal_momentum_matrix, centroidal_momentum_rate,
+    com_jacobian, CenterOfMass,
+};
 pub use crba::crba;
 pub(crate) use embedded::position_kinematics;
 pub use embedded::{
     constraint_kinematics, embedding_map, embedding_map_in, kkt_forward_dynamics,
     reduced_mass_matrix, reduced_mass_matrix_in,
 };
+pub use frames::{
+    forward_kinematics_acceleration, frame_classical_acceleration, frame_jacobian, frame_placement,
+    frame_velocity, Reference,
+};
 pub use kinematics::{forward_kinematics, kinetic_energy, link_poses, potential_energy};
 pub use minv::mass_matrix_inverse;
 pub use rnea::{gravity, nle, rnea, rnea_with_gravity};
 pub use workspace::{Kinematics, Workspace};
+pub use wrenches::{aba_ext, nle_ext, rnea_ext, LinkWrench};
 
 use crate::constraints::{ConstraintSet, GroupLabel};
 use crate::model::{JointType, Model};
@@ -80,6 +92,14 @@ pub enum DynamicsError {
         condition: f64,
         /// The limit in this scalar type.
         threshold: f64,
+    },
+    /// A frame given to an algorithm is not one of the model's (a [`crate::FrameId`] of another model).
+    #[error("frame {index} of the call ({frame:?}) is not a frame of this model")]
+    UnknownFrame {
+        /// Its position among the frames or wrenches of the call.
+        index: usize,
+        /// The frame.
+        frame: crate::FrameId,
     },
     /// An aggregate link's reduced inertia is not positive definite.
     #[error("{group}: the reduced inertia of the aggregate link is not positive definite")]

@@ -54,7 +54,7 @@ pub fn rnea_with_gravity<'w, T: Real>(
     check_configuration(model, q)?;
     check_input("v", v, model.nv())?;
     check_input("qdd", qdd, model.nv())?;
-    Ok(rnea_terms(model, ws, q, v, Some(qdd), gravity))
+    Ok(rnea_terms(model, ws, q, v, Some(qdd), gravity, &[]))
 }
 
 /// The generalized gravity `g(q)`: the joint forces that hold the model still at `q` against the
@@ -168,19 +168,21 @@ pub fn nle<'w, T: Real>(
 ) -> Result<&'w [T], DynamicsError> {
     check_configuration(model, q)?;
     check_input("v", v, model.nv())?;
-    Ok(rnea_terms(model, ws, q, v, None, true))
+    Ok(rnea_terms(model, ws, q, v, None, true, &[]))
 }
 
 /// The Newton–Euler sweeps; without `qdd` its terms are left out rather than multiplied by zero (no
-/// joint accelerations, no armature). Inputs are checked by the caller.
+/// joint accelerations, no armature). The environment's wrenches `f_ext` take their part of each body's
+/// force. Inputs are checked by the caller.
 #[inline(always)]
-fn rnea_terms<'w, T: Real>(
+pub(crate) fn rnea_terms<'w, T: Real>(
     model: &Model<T>,
     ws: &'w mut Workspace<T>,
     q: &[T],
     v: &[T],
     qdd: Option<&[T]>,
     gravity: bool,
+    f_ext: &[super::LinkWrench<T>],
 ) -> &'w [T] {
     velocity_sweep(model, ws, q, v);
     // Outward: α(k) = φ*(k+1,k) α(k+1) + H*(k) θ̈(k) + a(k), with the base accelerating at −g.
@@ -201,6 +203,7 @@ fn rnea_terms<'w, T: Real>(
         ws.force[i] = inertia.mul_motion(&a) + vel.cross_force(&inertia.mul_motion(vel));
         ws.acceleration[i] = a;
     }
+    super::wrenches::subtract_wrenches(model, ws, f_ext);
     // Inward: f(k) += φ(k,k−1) f(k−1);  𝒯(k) = H(k) f(k).
     for i in (0..model.nbodies()).rev() {
         let joint = &model.joints[i];

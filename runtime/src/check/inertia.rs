@@ -53,7 +53,7 @@ fn articulate_with_dependent_rigid<T: Real>(
     tau: &[T],
 ) {
     if !model.has_constraints() {
-        aba::articulate(model, ws, q, v, tau);
+        aba::articulate(model, ws, q, v, tau, &[]);
         return;
     }
     crate::algorithms::velocity_sweep(model, ws, q, v);
