@@ -53,7 +53,7 @@ pub fn center_of_mass<T: Real>(model: &Model<T>, ws: &Workspace<T>) -> CenterOfM
 /// `1/m`, or zero for a massless model (whose centre of mass is then the origin).
 fn inverse_mass<T: Real>(mass: T) -> T {
     match mass.value() {
-        Some(m) if m == 0.0 => T::zero(),
+        Some(0.0) => T::zero(),
         _ => T::one() / mass,
     }
 }
