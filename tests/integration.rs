@@ -15,6 +15,7 @@ mod bad_input;
 mod configuration;
 mod constraint_embedding;
 mod contact;
+mod contact_invariants;
 mod dynamics_oracles;
 mod energy;
 mod extremes;

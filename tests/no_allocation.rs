@@ -5,9 +5,13 @@ mod common;
 
 use common::{load_model, Rng};
 use embedyn::constraints::{complete_configuration, complete_velocity};
+use embedyn::nalgebra::{Matrix3xX, Matrix6xX, Vector3};
 use embedyn::{
-    aba, crba, difference, embedding_map_in, forward_kinematics, gravity, integrate,
-    mass_matrix_inverse, nle, random_configuration, reduced_mass_matrix_in, rnea, Workspace,
+    aba, aba_ext, center_of_mass, centroidal_momentum, centroidal_momentum_matrix,
+    centroidal_momentum_rate, com_jacobian, crba, difference, embedding_map_in, forward_kinematics,
+    forward_kinematics_acceleration, frame_classical_acceleration, frame_jacobian, frame_placement,
+    frame_velocity, gravity, integrate, mass_matrix_inverse, nle, nle_ext, random_configuration,
+    reduced_mass_matrix_in, rnea, rnea_ext, LinkWrench, Reference, Workspace,
 };
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -54,8 +58,33 @@ fn algorithm_calls_do_not_allocate() {
         let (mut q_out, mut v_out) = (vec![0.0; model.nq()], vec![0.0; model.nv()]);
         let (lower, upper) = (vec![-1.0; model.nq()], vec![1.0; model.nq()]);
         let mut draws = embedyn::random::SplitMix64::new(3);
+        // Contacts, frames and momentum: wrenches on the last two links, Jacobians in caller-owned storage.
+        let frames: Vec<embedyn::FrameId> = model.frames().collect();
+        let wrenches = [frames[frames.len() - 1], frames[frames.len() / 2]]
+            .map(|f| LinkWrench::new(f, Vector3::new(1.0, 2.0, 3.0), Vector3::new(0.1, 0.2, 0.3)));
+        let mut jacobian = Matrix6xX::zeros(model.nv());
+        let mut j_com = Matrix3xX::zeros(model.nv());
         let before = ALLOCATIONS.load(Ordering::SeqCst);
         for _ in 0..3 {
+            let _ = aba_ext(&model, &mut ws, &q, &v, &tau, &wrenches).unwrap();
+            let _ = rnea_ext(&model, &mut ws, &q, &v, &tau, &wrenches).unwrap();
+            let _ = nle_ext(&model, &mut ws, &q, &v, &wrenches).unwrap();
+            forward_kinematics_acceleration(&model, &mut ws, &q, &v, &tau).unwrap();
+            for reference in [
+                Reference::Local,
+                Reference::LocalWorldAligned,
+                Reference::World,
+            ] {
+                frame_jacobian(&model, &ws, wrenches[0].frame, reference, &mut jacobian).unwrap();
+                let _ = frame_classical_acceleration(&model, &ws, wrenches[0].frame, reference);
+                let _ = frame_velocity(&model, &ws, wrenches[0].frame, reference);
+            }
+            let _ = frame_placement(&model, &ws, wrenches[1].frame).unwrap();
+            let _ = center_of_mass(&model, &ws);
+            let _ = centroidal_momentum(&model, &ws);
+            let _ = centroidal_momentum_rate(&model, &ws);
+            com_jacobian(&model, &mut ws, &mut j_com).unwrap();
+            centroidal_momentum_matrix(&model, &mut ws, &mut jacobian).unwrap();
             integrate(&model, &q, &v, &mut q_out).unwrap();
             difference(&model, &q, &q_out, &mut v_out).unwrap();
             random_configuration(&model, &mut draws, &lower, &upper, &mut q_out).unwrap();
@@ -93,9 +122,20 @@ fn algorithm_calls_do_not_allocate() {
         complete_velocity(&model, &mut ws, &q, &mut v).unwrap();
         let tau = vec![0.2; model.nv()];
         let mut guess = q.clone();
+        let frames: Vec<embedyn::FrameId> = model.frames().collect();
+        let wrenches = [LinkWrench::new(
+            frames[1],
+            Vector3::new(1.0, 2.0, 3.0),
+            Vector3::zeros(),
+        )];
+        let mut jacobian = Matrix6xX::zeros(model.nv());
         let before = ALLOCATIONS.load(Ordering::SeqCst);
         for _ in 0..3 {
             let _ = aba(&model, &mut ws, &q, &v, &tau).unwrap();
+            let _ = aba_ext(&model, &mut ws, &q, &v, &tau, &wrenches).unwrap();
+            let _ = rnea_ext(&model, &mut ws, &q, &v, &tau, &wrenches).unwrap();
+            frame_jacobian(&model, &ws, frames[1], Reference::Local, &mut jacobian).unwrap();
+            centroidal_momentum_matrix(&model, &mut ws, &mut jacobian).unwrap();
             let _ = rnea(&model, &mut ws, &q, &v, &tau).unwrap();
             let _ = gravity(&model, &mut ws, &q).unwrap();
             let _ = nle(&model, &mut ws, &q, &v).unwrap();
