@@ -1,6 +1,12 @@
 // Pinocchio peer benchmark for embedyn.
 //
-// Usage: pinocchio_bench [--floating] [--repeats N] [--batch B] URDF...
+// Usage: pinocchio_bench [--floating] [--repeats N] [--batch B] [--frame LINK] [--wrenches A,B,…] URDF...
+//
+// With --frame: also times the frame Jacobian with its bias (computeFrameJacobian in
+// LOCAL_WORLD_ALIGNED, then forwardKinematics(q, v, 0) and getFrameClassicalAcceleration), and the
+// centre of mass and centroidal momentum (jacobianCenterOfMass, ccrba, dccrba). With --wrenches:
+// aba with a wrench on each of those links (moved into its joint's frame inside the timed call, as a
+// caller holding link-frame wrenches must).
 //
 // For every URDF: build the Pinocchio model (free-flyer root with --floating, fixed base
 // otherwise), pre-generate kStates random states, then time aba, rnea, crba and
@@ -15,6 +21,10 @@
 
 #include <pinocchio/algorithm/aba.hpp>
 #include <pinocchio/algorithm/center-of-mass.hpp>
+#include <pinocchio/algorithm/centroidal.hpp>
+#include <pinocchio/algorithm/frames.hpp>
+#include <pinocchio/algorithm/jacobian.hpp>
+#include <pinocchio/algorithm/kinematics.hpp>
 #include <pinocchio/algorithm/crba.hpp>
 #include <pinocchio/algorithm/joint-configuration.hpp>
 #include <pinocchio/algorithm/rnea.hpp>
@@ -43,6 +53,8 @@ struct Options {
   bool floating = false;
   int repeats = 1001;
   int batch = 0;  // 0: calibrate per algorithm to about kBatchTargetNs per batch
+  std::string frame;                  // --frame: time its Jacobian and bias, com and centroidal
+  std::vector<std::string> wrenches;  // --wrenches: time aba with a wrench on each of these links
   std::vector<std::string> urdfs;
 };
 
@@ -61,7 +73,7 @@ struct Stats {
 double g_checksum = 0.0;
 
 void usage(const char* argv0) {
-  std::fprintf(stderr, "usage: %s [--floating] [--repeats N] [--batch B] URDF...\n", argv0);
+  std::fprintf(stderr, "usage: %s [--floating] [--repeats N] [--batch B] [--frame LINK] [--wrenches A,B,...] URDF...\n", argv0);
 }
 
 bool parse_args(int argc, char** argv, Options& opt) {
@@ -74,6 +86,19 @@ bool parse_args(int argc, char** argv, Options& opt) {
       const int n = std::atoi(argv[++i]);
       if (n <= 0) return false;  // --batch must be explicit and positive; omit it for auto
       (arg == "--repeats" ? opt.repeats : opt.batch) = n;
+    } else if (arg == "--frame") {
+      if (i + 1 >= argc) return false;
+      opt.frame = argv[++i];
+    } else if (arg == "--wrenches") {
+      if (i + 1 >= argc) return false;
+      std::string list = argv[++i];
+      std::size_t start = 0;
+      while (start <= list.size()) {
+        const std::size_t comma = list.find(',', start);
+        const std::size_t end = comma == std::string::npos ? list.size() : comma;
+        if (end > start) opt.wrenches.push_back(list.substr(start, end - start));
+        start = end + 1;
+      }
     } else if (arg == "-h" || arg == "--help") {
       return false;
     } else if (!arg.empty() && arg[0] == '-') {
@@ -267,14 +292,81 @@ int run_one(const Options& opt, const std::string& path) {
   for (const Stats* st : {&aba, &aba_local, &rnea, &crba, &crba_world, &minv})
     cpu_wall = std::min(cpu_wall, st->cpu_wall);
 
+  // Contacts, frames and momentum (only when asked for).
+  std::string extra;
+  char buf[256];
+  if (!opt.frame.empty()) {
+    if (!model.existFrame(opt.frame)) {
+      std::fprintf(stderr, "%s: no frame %s\n", path.c_str(), opt.frame.c_str());
+      return 1;
+    }
+    const pinocchio::FrameIndex fid = model.getFrameId(opt.frame);
+    pinocchio::Data::Matrix6x J = pinocchio::Data::Matrix6x::Zero(6, nv);
+    const Eigen::VectorXd zero = Eigen::VectorXd::Zero(nv);
+    const Stats jac = time_it(opt, [&](int i, int k) {
+      pinocchio::computeFrameJacobian(model, data, s.q[i], fid, pinocchio::LOCAL_WORLD_ALIGNED, J);
+      pinocchio::forwardKinematics(model, data, s.q[i], s.v[i], zero);
+      const auto bias = pinocchio::getFrameClassicalAcceleration(model, data, fid, pinocchio::LOCAL_WORLD_ALIGNED);
+      g_checksum += J(k % 6, k % nv) + bias.linear()[k % 3];
+    });
+    const Stats jcom = time_it(opt, [&](int i, int k) {
+      pinocchio::jacobianCenterOfMass(model, data, s.q[i]);
+      g_checksum += data.Jcom(k % 3, k % nv);
+    });
+    const Stats ccrba = time_it(opt, [&](int i, int k) {
+      pinocchio::ccrba(model, data, s.q[i], s.v[i]);
+      g_checksum += data.Ag(k % 6, k % nv) + data.hg.linear()[k % 3];
+    });
+    const Stats dccrba = time_it(opt, [&](int i, int k) {
+      pinocchio::dccrba(model, data, s.q[i], s.v[i]);
+      g_checksum += (data.dAg * s.v[i])[k % 6];
+    });
+    report_stats(stem, "frame_jac", jac);
+    report_stats(stem, "jcom", jcom);
+    report_stats(stem, "ccrba", ccrba);
+    report_stats(stem, "dccrba", dccrba);
+    std::snprintf(buf, sizeof buf,
+                  ", \"frame\": \"%s\", \"frame_jacobian_bias\": %.1f, \"com_jacobian\": %.1f, "
+                  "\"ccrba\": %.1f, \"dccrba\": %.1f",
+                  opt.frame.c_str(), jac.median, jcom.median, ccrba.median, dccrba.median);
+    extra += buf;
+  }
+  if (!opt.wrenches.empty()) {
+    std::vector<pinocchio::FrameIndex> fids;
+    for (const auto& name : opt.wrenches) {
+      if (!model.existFrame(name)) {
+        std::fprintf(stderr, "%s: no frame %s\n", path.c_str(), name.c_str());
+        return 1;
+      }
+      fids.push_back(model.getFrameId(name));
+    }
+    // One link-frame wrench per state and link (random, fixed before timing).
+    std::vector<std::vector<pinocchio::Force>> link_wrenches(kStates);
+    for (auto& w : link_wrenches)
+      for (std::size_t l = 0; l < fids.size(); ++l) w.push_back(pinocchio::Force(Eigen::Matrix<double, 6, 1>::Random() * 20.0));
+    PINOCCHIO_ALIGNED_STD_VECTOR(pinocchio::Force) fext(model.njoints, pinocchio::Force::Zero());
+    const Stats aba_fext = time_it(opt, [&](int i, int k) {
+      for (auto& f : fext) f.setZero();
+      for (std::size_t l = 0; l < fids.size(); ++l) {
+        const auto& frame = model.frames[fids[l]];
+        fext[frame.parentJoint] += frame.placement.act(link_wrenches[i][l]);
+      }
+      pinocchio::aba(model, data, s.q[i], s.v[i], s.tau[i], fext, Convention::WORLD);
+      g_checksum += data.ddq[k % nv];
+    });
+    report_stats(stem, "aba_fext", aba_fext);
+    std::snprintf(buf, sizeof buf, ", \"aba_fext\": %.1f, \"wrench_links\": %zu", aba_fext.median, fids.size());
+    extra += buf;
+  }
+
   std::printf(
       "{\"model\": \"%s\", \"floating\": %s, \"nq\": %d, \"nv\": %d, \"aba\": %.1f, \"rnea\": %.1f, "
       "\"crba\": %.1f, \"minv\": %.1f, \"aba_convention\": \"WORLD\", \"aba_local\": %.1f, "
       "\"crba_world\": %.1f, \"cpu_wall_min\": %.2f, \"repeats\": %d, \"batch_aba\": %d, "
-      "\"pinocchio\": \"%s\"}\n",
+      "\"pinocchio\": \"%s\"%s}\n",
       stem.c_str(), opt.floating ? "true" : "false", model.nq, nv, aba.median, rnea.median,
       crba.median, minv.median, aba_local.median, crba_world.median, cpu_wall, opt.repeats, aba.batch,
-      kPinocchioVersion);
+      kPinocchioVersion, extra.c_str());
   std::fflush(stdout);
   return 0;
 }
