@@ -344,7 +344,7 @@ int run_one(const Options& opt, const std::string& path) {
     std::vector<std::vector<pinocchio::Force>> link_wrenches(kStates);
     for (auto& w : link_wrenches)
       for (std::size_t l = 0; l < fids.size(); ++l) w.push_back(pinocchio::Force(Eigen::Matrix<double, 6, 1>::Random() * 20.0));
-    PINOCCHIO_ALIGNED_STD_VECTOR(pinocchio::Force) fext(model.njoints, pinocchio::Force::Zero());
+    std::vector<pinocchio::Force> fext(model.njoints, pinocchio::Force::Zero());
     const Stats aba_fext = time_it(opt, [&](int i, int k) {
       for (auto& f : fext) f.setZero();
       for (std::size_t l = 0; l < fids.size(); ++l) {
