@@ -63,9 +63,6 @@ pub type Request = [(&'static str, usize)];
 /// The name of the external wrenches' field.
 pub const F_EXT: &str = "f_ext";
 
-/// The longest part of an unknown link's name kept for the message (the message shortens it further).
-const MAX_KEPT_NAME_BYTES: usize = 1024;
-
 /// What a command reads besides the required fields of its [`Request`].
 #[derive(Default)]
 pub struct Extras<'a> {
@@ -127,8 +124,7 @@ enum Problem {
     },
     /// `f_ext` is not an object.
     NotWrenches,
-    /// `f_ext` names a link the model does not have (its name, cut at [`MAX_KEPT_NAME_BYTES`], and the
-    /// model's links with a close name).
+    /// `f_ext` names a link the model does not have (its name and the model's links with a close name).
     UnknownLink {
         link: String,
         suggestions: Vec<String>,
@@ -705,7 +701,7 @@ impl<'de> Visitor<'de> for WrenchesSeed<'_> {
     });
 }
 
-/// A key of `f_ext`: a link of the model (its frame index) or another name (kept, cut, for the message).
+/// A key of `f_ext`: a link of the model (its frame index) or another name (kept for the message).
 enum LinkKey {
     Known(usize),
     Unknown(String),
@@ -728,13 +724,8 @@ impl<'de> Visitor<'de> for LinkSeed<'_> {
     fn visit_str<E>(self, key: &str) -> Result<LinkKey, E> {
         Ok(match self.0.index.get(key) {
             Some(&frame) => LinkKey::Known(frame),
-            None => {
-                let mut end = key.len().min(MAX_KEPT_NAME_BYTES);
-                while !key.is_char_boundary(end) {
-                    end -= 1;
-                }
-                LinkKey::Unknown(key[..end].to_string())
-            }
+            // Kept whole for the message (which shortens it): one copy, once, as the read stops there.
+            None => LinkKey::Unknown(key.to_string()),
         })
     }
 }
