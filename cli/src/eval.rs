@@ -1,17 +1,90 @@
-//! `embedyn eval`: ABA, RNEA, generalized gravity, nonlinear effects, CRBA, `integrate` or `difference` on
+//! `embedyn eval`: ABA, RNEA, generalized gravity, nonlinear effects (the three with external wrenches),
+//! CRBA, `integrate`, `difference`, a frame's Jacobian, the centre of mass or the centroidal momentum on
 //! every sample.
 
 use super::runner::RowShape;
-use super::samples::Samples;
-use super::{Algo, CliError, Engine, Scalar, StateProblem};
+use super::samples::{Extras, Samples, Wrench, F_EXT};
+use super::{
+    Algo, CliError, Engine, EvalAlgo, InternalError, Reference, SampleProblem, Scalar,
+    StateProblem, WrenchPartProblem,
+};
 use embedyn_codegen::{Loaded, ModelOptions};
 use embedyn_runtime::constraints::{constraint_violation, singularity_threshold};
-use embedyn_runtime::nalgebra;
+use embedyn_runtime::nalgebra::{self, DMatrix, Matrix3xX, Matrix6xX, Vector3};
 use embedyn_runtime::{
-    aba, crba, difference, embedding_map, gravity, integrate, nle, reduced_mass_matrix, rnea,
-    DynamicsError, JointType, Model, Real, Workspace,
+    aba, aba_ext, center_of_mass, centroidal_momentum, centroidal_momentum_matrix,
+    centroidal_momentum_rate, com_jacobian, crba, difference, embedding_map, forward_kinematics,
+    forward_kinematics_acceleration, frame_classical_acceleration, frame_jacobian, gravity,
+    integrate, nle, nle_ext, reduced_mass_matrix, rnea, rnea_ext, DynamicsError, FrameId,
+    JointType, LinkWrench, Model, Real, Workspace,
 };
 use serde::Serialize;
+use std::ops::Range;
+
+/// What `eval` is asked: the algorithm and, for `jacobian`, the frame and the reference.
+pub struct Query {
+    algo: EvalAlgo,
+    frame: Option<String>,
+    reference: Reference,
+}
+
+impl Query {
+    /// The query, if the options fit the algorithm: `--frame` for `jacobian` and for nothing else,
+    /// `--reference` only with it (usage errors).
+    pub fn new(
+        algo: EvalAlgo,
+        frame: Option<String>,
+        reference: Option<Reference>,
+    ) -> Result<Query, CliError> {
+        let bad = |option, message: String| CliError::BadOption { option, message };
+        match (algo, &frame, reference) {
+            (EvalAlgo::Jacobian, None, _) => Err(bad(
+                "--frame",
+                "`--algo jacobian` needs the frame: --frame LINK (a link of the model file; `embedyn info` lists them under `frames`)".into(),
+            )),
+            (EvalAlgo::Jacobian, Some(_), _) => Ok(()),
+            (other, Some(_), _) => Err(bad(
+                "--frame",
+                format!("only `--algo jacobian` takes a frame, not `--algo {}`", other.name()),
+            )),
+            (other, None, Some(_)) => Err(bad(
+                "--reference",
+                format!("only `--algo jacobian` takes a reference, not `--algo {}`", other.name()),
+            )),
+            (_, None, None) => Ok(()),
+        }?;
+        Ok(Query {
+            algo,
+            frame,
+            reference: reference.unwrap_or_default(),
+        })
+    }
+
+    /// The frame of `--frame` in `model` (a usage error if the model has no such link).
+    fn frame<T: Real>(&self, model: &Model<T>) -> Result<Option<FrameId>, CliError> {
+        let Some(name) = &self.frame else {
+            return Ok(None);
+        };
+        match model.frame(name) {
+            Some(frame) => Ok(Some(frame)),
+            None => {
+                let names = model.frames().filter_map(|f| model.frame_name(f));
+                let suggestions = super::suggest::close_names(name, names);
+                Err(CliError::BadOption {
+                    option: "--frame",
+                    message: format!(
+                        "the model has no link `{}`{}",
+                        embedyn_codegen::shortened(name),
+                        match suggestions.is_empty() {
+                            true => " (`embedyn info` lists the links under `frames`)".to_string(),
+                            false => super::suggest::did_you_mean(&suggestions),
+                        }
+                    ),
+                })
+            }
+        }
+    }
+}
 
 /// What `eval` prints: `{"joints": [names], "samples": [...]}`, one output per input sample.
 #[derive(Serialize)]
@@ -41,6 +114,68 @@ enum Output {
     Integrated { q: Vec<f64> },
     /// `difference`: `q1 ⊖ q`.
     Difference { v: Vec<f64> },
+    /// `jacobian`: rows linear then angular, columns in `v` order; the bias with `v`; `J X` for a model
+    /// with constraints.
+    Jacobian {
+        #[serde(rename = "J_linear")]
+        j_linear: Vec<Vec<f64>>,
+        #[serde(rename = "J_angular")]
+        j_angular: Vec<Vec<f64>>,
+        #[serde(skip_serializing_if = "Option::is_none")]
+        bias_linear: Option<Vec<f64>>,
+        #[serde(skip_serializing_if = "Option::is_none")]
+        bias_angular: Option<Vec<f64>>,
+        #[serde(
+            rename = "J_linear_independent",
+            skip_serializing_if = "Option::is_none"
+        )]
+        j_linear_independent: Option<Vec<Vec<f64>>>,
+        #[serde(
+            rename = "J_angular_independent",
+            skip_serializing_if = "Option::is_none"
+        )]
+        j_angular_independent: Option<Vec<Vec<f64>>>,
+    },
+    /// `com`: the centre of mass, its Jacobian, its velocity with `v`, `J_com X` for a model with
+    /// constraints.
+    Com {
+        com: Vec<f64>,
+        #[serde(rename = "J_com")]
+        j_com: Vec<Vec<f64>>,
+        #[serde(skip_serializing_if = "Option::is_none")]
+        vcom: Option<Vec<f64>>,
+        #[serde(rename = "J_com_independent", skip_serializing_if = "Option::is_none")]
+        j_com_independent: Option<Vec<Vec<f64>>>,
+    },
+    /// `centroidal`: `A_g` (rows linear then angular), `h_g = A_g v`, `dh_g = Ȧ_g v` (linear then angular),
+    /// `A_g X` for a model with constraints.
+    Centroidal {
+        #[serde(rename = "A_g")]
+        a_g: Vec<Vec<f64>>,
+        h_g: Vec<f64>,
+        dh_g: Vec<f64>,
+        #[serde(rename = "A_g_independent", skip_serializing_if = "Option::is_none")]
+        a_g_independent: Option<Vec<Vec<f64>>>,
+    },
+}
+
+/// Whether the algorithm's samples may carry external wrenches (`f_ext`).
+fn takes_wrenches(algo: EvalAlgo) -> bool {
+    matches!(algo, EvalAlgo::Dynamics(Algo::Aba | Algo::Rnea | Algo::Nle))
+}
+
+/// What the generated engine cannot evaluate yet: the frame and centroidal algorithms, and samples with
+/// external wrenches (their generated functions are being written). The one place to change when they
+/// exist.
+fn not_generated_yet(algo: EvalAlgo, samples: &Samples) -> Option<CliError> {
+    let what = match algo {
+        EvalAlgo::Dynamics(_) if samples.has_wrenches() => {
+            format!("`{F_EXT}` (external wrenches)")
+        }
+        EvalAlgo::Dynamics(_) => return None,
+        other => format!("`--algo {}`", other.name()),
+    };
+    Some(CliError::NotGenerated { what })
 }
 
 /// Whether the algorithm works on the configuration space (`integrate`, `difference`): on the spanning
@@ -72,7 +207,7 @@ impl Evaluated {
 pub fn eval(
     loaded: &Loaded,
     options: &ModelOptions,
-    algo: Algo,
+    query: &Query,
     engine: Engine,
     scalar: Scalar,
     input: &str,
@@ -81,27 +216,46 @@ pub fn eval(
     // Consistency with the constraints is judged in f64 whatever the scalar (1e-9 is below f32's
     // resolution of typical angles).
     let model64 = loaded.model::<f64>(options)?;
+    let frame = query.frame(&model64)?;
     // Only the fields the algorithm uses are read, at the lengths the model needs.
     // The sample's fields are the function's inputs (its descriptor's).
-    let nv = model64.nv();
+    let (nq, nv) = (model64.nq(), model64.nv());
     let dims = embedyn_codegen::algorithm::Dims::of(&model64);
-    let request: Vec<(&'static str, usize)> = algo
-        .spec()
-        .inputs
-        .iter()
-        .map(|input| (input.name, input.len.len(&dims)))
+    let (request, optional): (Vec<(&'static str, usize)>, &[&'static str]) = match query.algo {
+        EvalAlgo::Dynamics(algo) => (
+            algo.spec()
+                .inputs
+                .iter()
+                .map(|input| (input.name, input.len.len(&dims)))
+                .collect(),
+            &[],
+        ),
+        EvalAlgo::Jacobian | EvalAlgo::Com => (vec![("q", nq), ("v", nv)], &["v"]),
+        EvalAlgo::Centroidal => (vec![("q", nq), ("v", nv)], &[]),
+    };
+    let links: Vec<&str> = model64
+        .frames()
+        .filter_map(|f| model64.frame_name(f))
         .collect();
-    let samples = Samples::parse(input, &request)?;
-    if model64.has_constraints() && !on_configuration_space(algo) {
+    let extras = Extras {
+        optional,
+        links: takes_wrenches(query.algo).then_some(&links[..]),
+    };
+    let samples = Samples::parse_with(input, &request, &extras)?;
+    let on_configurations = matches!(
+        query.algo,
+        EvalAlgo::Dynamics(a) if on_configuration_space(a)
+    );
+    if model64.has_constraints() && !on_configurations {
         let mut ws = Workspace::new(&model64);
         let zero = vec![0.0; nv];
         for i in 0..samples.len() {
             let q = samples.vector(i, "q")?;
             // `v` must satisfy the velocity constraints where the algorithm reads one (`nle` too).
-            let v = if reads_velocity(algo) {
-                samples.vector(i, "v")?
-            } else {
-                &zero[..]
+            let v = match query.algo {
+                EvalAlgo::Dynamics(a) if reads_velocity(a) => samples.vector(i, "v")?,
+                EvalAlgo::Dynamics(_) => &zero[..],
+                _ => samples.optional_vector(i, "v")?.unwrap_or(&zero[..]),
             };
             check_consistent(&model64, &mut ws, q, v, i)?;
         }
@@ -109,6 +263,14 @@ pub fn eval(
     if engine == Engine::Generated {
         // Before anything is compiled.
         samples.check_all()?;
+        if let Some(refusal) = not_generated_yet(query.algo, &samples) {
+            return Err(refusal);
+        }
+        let EvalAlgo::Dynamics(algo) = query.algo else {
+            return Err(CliError::NotGenerated {
+                what: format!("`--algo {}`", query.algo.name()),
+            });
+        };
         return eval_generated(
             loaded,
             options,
@@ -120,8 +282,8 @@ pub fn eval(
         );
     }
     match scalar {
-        Scalar::F64 => eval_in::<f64>(&model64, algo, &samples),
-        Scalar::F32 => eval_in::<f32>(&loaded.model(options)?, algo, &samples),
+        Scalar::F64 => eval_in::<f64>(&model64, query, frame, &samples),
+        Scalar::F32 => eval_in::<f32>(&loaded.model(options)?, query, frame, &samples),
     }
 }
 
@@ -340,13 +502,25 @@ pub(super) fn independent_indices<T: Real>(model: &Model<T>) -> Vec<usize> {
 
 fn eval_in<T: Real>(
     model: &Model<T>,
-    algo: Algo,
+    query: &Query,
+    frame: Option<FrameId>,
     samples: &Samples,
 ) -> Result<Evaluated, CliError> {
     let mut ws = Workspace::new(model);
     let independent = independent_indices(model);
     let pick = |x: &[f64]| -> Vec<f64> { independent.iter().map(|&i| x[i]).collect() };
+    let frames: Vec<FrameId> = model.frames().collect();
     let mut out = Vec::with_capacity(samples.len());
+    let algo = match query.algo {
+        EvalAlgo::Dynamics(algo) => algo,
+        other => {
+            let mut kinematics = Kinematics::new(model, query.reference, frame);
+            for i in 0..samples.len() {
+                out.push(kinematics.sample(other, samples, i)?);
+            }
+            return Ok(Evaluated::new(model, out));
+        }
+    };
     for i in 0..samples.len() {
         let at = |e: DynamicsError| CliError::Dynamics {
             sample: i,
@@ -360,19 +534,34 @@ fn eval_in<T: Real>(
             Algo::Aba => {
                 let v = v()?;
                 let tau = cast::<T>(samples.vector(i, "tau")?);
-                let qdd = finite(aba(model, &mut ws, &q, &v, &tau).map_err(at)?, i, "qdd")?;
+                let f_ext = wrenches(model, &frames, samples.wrenches(i)?, i)?;
+                let qdd = match f_ext.is_empty() {
+                    true => aba(model, &mut ws, &q, &v, &tau),
+                    false => aba_ext(model, &mut ws, &q, &v, &tau, &f_ext),
+                };
+                let qdd = finite(qdd.map_err(at)?, i, "qdd")?;
                 Output::Aba {
                     qdd_independent: pick(&qdd),
                     qdd,
                 }
             }
             a if gives_torques(a) => {
+                let f_ext = match a {
+                    Algo::Rnea | Algo::Nle => wrenches(model, &frames, samples.wrenches(i)?, i)?,
+                    _ => Vec::new(),
+                };
                 let tau = match a {
                     Algo::Rnea => {
                         let qdd = cast::<T>(samples.vector(i, "qdd")?);
-                        rnea(model, &mut ws, &q, &v()?, &qdd)
+                        match f_ext.is_empty() {
+                            true => rnea(model, &mut ws, &q, &v()?, &qdd),
+                            false => rnea_ext(model, &mut ws, &q, &v()?, &qdd, &f_ext),
+                        }
                     }
-                    Algo::Nle => nle(model, &mut ws, &q, &v()?),
+                    Algo::Nle => match f_ext.is_empty() {
+                        true => nle(model, &mut ws, &q, &v()?),
+                        false => nle_ext(model, &mut ws, &q, &v()?, &f_ext),
+                    },
                     Algo::Gravity => gravity(model, &mut ws, &q),
                     other => return Err(not_evaluated(other)),
                 };
@@ -427,6 +616,217 @@ fn eval_in<T: Real>(
         out.push(value);
     }
     Ok(Evaluated::new(model, out))
+}
+
+/// A sample's wrenches in the scalar `T`, on the model's frames (`frames`, the order the samples were
+/// read with); a value finite in f64 but not in `T` is refused naming the link and the entry.
+fn wrenches<T: Real>(
+    model: &Model<T>,
+    frames: &[FrameId],
+    given: &[Wrench],
+    sample: usize,
+) -> Result<Vec<LinkWrench<T>>, CliError> {
+    let mut out = Vec::with_capacity(given.len());
+    for w in given {
+        let frame = *frames
+            .get(w.frame)
+            .ok_or(InternalError::SampleNotInInput { sample })?;
+        let mut parts = [Vector3::zeros(); 2];
+        for ((part, x), v) in ["force", "torque"]
+            .into_iter()
+            .zip([w.force, w.torque])
+            .zip(&mut parts)
+        {
+            for (k, &value) in x.iter().enumerate() {
+                let converted = T::from_f64(value);
+                if !converted.to_f64().is_finite() {
+                    return Err(CliError::Sample {
+                        sample,
+                        field: F_EXT.to_string(),
+                        problem: SampleProblem::WrenchPart {
+                            link: model.frame_name(frame).unwrap_or_default().to_string(),
+                            part,
+                            problem: WrenchPartProblem::NotFinite {
+                                index: k,
+                                shown: format!(
+                                    "{value:e} ({} in this scalar type)",
+                                    converted.to_f64()
+                                ),
+                            },
+                        },
+                    });
+                }
+                v[k] = converted;
+            }
+        }
+        out.push(LinkWrench::new(frame, parts[0], parts[1]));
+    }
+    Ok(out)
+}
+
+/// The frame, centre-of-mass and centroidal algorithms on one model, with their scratch.
+struct Kinematics<'m, T: Real> {
+    model: &'m Model<T>,
+    ws: Workspace<T>,
+    reference: Reference,
+    frame: Option<FrameId>,
+    zeros: Vec<T>,
+    j6: Matrix6xX<T>,
+    j3: Matrix3xX<T>,
+}
+
+impl<'m, T: Real> Kinematics<'m, T> {
+    fn new(model: &'m Model<T>, reference: Reference, frame: Option<FrameId>) -> Self {
+        let nv = model.nv();
+        Kinematics {
+            model,
+            ws: Workspace::new(model),
+            reference,
+            frame,
+            zeros: vec![T::zero(); nv],
+            j6: Matrix6xX::zeros(nv),
+            j3: Matrix3xX::zeros(nv),
+        }
+    }
+
+    /// `algo` (`jacobian`, `com` or `centroidal`) on sample `i`.
+    fn sample(&mut self, algo: EvalAlgo, samples: &Samples, i: usize) -> Result<Output, CliError> {
+        let model = self.model;
+        let at = |e: DynamicsError| CliError::Dynamics {
+            sample: i,
+            error: e,
+        };
+        let q = samples.vector(i, "q")?;
+        check_quaternions(model, q, i)?;
+        let q = cast::<T>(q);
+        let v = samples.optional_vector(i, "v")?.map(cast::<T>);
+        // X first: it leaves position kinematics of its own in the workspace.
+        let x = match model.has_constraints() {
+            true => Some(embedding_map(model, &mut self.ws, &q).map_err(at)?),
+            false => None,
+        };
+        let ws = &mut self.ws;
+        let v_or_zero = v.as_deref().unwrap_or(&self.zeros);
+        match (&v, algo) {
+            // The velocity-product accelerations (qdd = 0) for the biases.
+            (Some(v), EvalAlgo::Jacobian | EvalAlgo::Centroidal) => {
+                forward_kinematics_acceleration(model, ws, &q, v, &self.zeros).map_err(at)?
+            }
+            _ => forward_kinematics(model, ws, &q, v_or_zero).map_err(at)?,
+        }
+        let x = x.as_ref();
+        Ok(match algo {
+            EvalAlgo::Jacobian => {
+                let frame = self.frame.ok_or(InternalError::FieldNotRead {
+                    field: "--frame".into(),
+                })?;
+                let j = &mut self.j6;
+                frame_jacobian(model, ws, frame, self.reference, j).map_err(at)?;
+                let bias = match v {
+                    Some(_) => Some(
+                        frame_classical_acceleration(model, ws, frame, self.reference)
+                            .map_err(at)?,
+                    ),
+                    None => None,
+                };
+                let get = |r, c| j[(r, c)];
+                let independent = |rows, name| {
+                    x.map(|x| matrix_rows(get, rows, j.ncols(), Some(x), i, name))
+                        .transpose()
+                };
+                Output::Jacobian {
+                    j_linear: matrix_rows(get, 0..3, j.ncols(), None, i, "J_linear")?,
+                    j_angular: matrix_rows(get, 3..6, j.ncols(), None, i, "J_angular")?,
+                    bias_linear: bias
+                        .map(|b| finite(b.linear.as_slice(), i, "bias_linear"))
+                        .transpose()?,
+                    bias_angular: bias
+                        .map(|b| finite(b.angular.as_slice(), i, "bias_angular"))
+                        .transpose()?,
+                    j_linear_independent: independent(0..3, "J_linear_independent")?,
+                    j_angular_independent: independent(3..6, "J_angular_independent")?,
+                }
+            }
+            EvalAlgo::Com => {
+                let c = center_of_mass(model, ws);
+                let j = &mut self.j3;
+                let com = com_jacobian(model, ws, j).map_err(at)?;
+                let get = |r, c| j[(r, c)];
+                Output::Com {
+                    com: finite(com.as_slice(), i, "com")?,
+                    j_com: matrix_rows(get, 0..3, j.ncols(), None, i, "J_com")?,
+                    vcom: v
+                        .map(|_| finite(c.vcom.as_slice(), i, "vcom"))
+                        .transpose()?,
+                    j_com_independent: x
+                        .map(|x| matrix_rows(get, 0..3, j.ncols(), Some(x), i, "J_com_independent"))
+                        .transpose()?,
+                }
+            }
+            EvalAlgo::Centroidal => {
+                let a = &mut self.j6;
+                centroidal_momentum_matrix(model, ws, a).map_err(at)?;
+                let h = centroidal_momentum(model, ws);
+                let dh = centroidal_momentum_rate(model, ws);
+                let linear_angular = |f: &embedyn_runtime::Force<T>| -> Vec<T> {
+                    f.linear.iter().chain(f.angular.iter()).copied().collect()
+                };
+                let get = |r, c| a[(r, c)];
+                Output::Centroidal {
+                    a_g: matrix_rows(get, 0..6, a.ncols(), None, i, "A_g")?,
+                    h_g: finite(&linear_angular(&h), i, "h_g")?,
+                    dh_g: finite(&linear_angular(&dh), i, "dh_g")?,
+                    a_g_independent: x
+                        .map(|x| matrix_rows(get, 0..6, a.ncols(), Some(x), i, "A_g_independent"))
+                        .transpose()?,
+                }
+            }
+            EvalAlgo::Dynamics(other) => return Err(not_evaluated(other)),
+        })
+    }
+}
+
+/// Rows `rows` of a matrix with `ncols` columns (entry `(r, c)` is `get(r, c)`), times `x` when given, as
+/// f64 rows; an entry that is not finite is an error naming `name` and the entry (row-major index).
+fn matrix_rows<T: Real>(
+    get: impl Fn(usize, usize) -> T,
+    rows: Range<usize>,
+    ncols: usize,
+    x: Option<&DMatrix<T>>,
+    sample: usize,
+    name: &'static str,
+) -> Result<Vec<Vec<f64>>, CliError> {
+    let width = x.map_or(ncols, |x| x.ncols());
+    let entry = |r: usize, k: usize| -> T {
+        match x {
+            None => get(r, k),
+            Some(x) => (0..ncols).fold(T::zero(), |sum, c| sum + get(r, c) * x[(c, k)]),
+        }
+    };
+    let mut out = Vec::with_capacity(rows.len());
+    for (n, r) in rows.enumerate() {
+        let row: Vec<T> = (0..width).map(|k| entry(r, k)).collect();
+        out.push(finite(&row, sample, name).map_err(|e| match e {
+            CliError::State {
+                sample,
+                problem:
+                    StateProblem::NotFinite {
+                        output,
+                        index,
+                        value,
+                    },
+            } => CliError::State {
+                sample,
+                problem: StateProblem::NotFinite {
+                    output,
+                    index: n * width + index,
+                    value,
+                },
+            },
+            other => other,
+        })?);
+    }
+    Ok(out)
 }
 
 /// docs/conventions.md: `q` and `v` must satisfy the constraints to 1e-9 (`embedyn complete` makes them so).

@@ -16,6 +16,7 @@ pub mod plot;
 mod runner;
 mod samples;
 mod sampling;
+mod suggest;
 pub mod tradeoff;
 
 use clap::{Parser, Subcommand, ValueEnum};
@@ -50,7 +51,7 @@ pub fn main() -> ExitCode {
         Ok(Ok(Printed::Completed(document))) => output::json_document(&document),
         Ok(Err(e)) => {
             output::note(&format!("error: {e}"));
-            ExitCode::from(output::FAILURE)
+            ExitCode::from(e.exit_status())
         }
         Err(_) => {
             output::note("error: internal error in embedyn (a bug; please report it with the command and the model)");
@@ -245,7 +246,7 @@ pub enum Command {
         model: PathBuf,
         /// The algorithm to evaluate.
         #[arg(long, value_parser = algo_parser())]
-        algo: Algo,
+        algo: EvalAlgo,
         /// Which engine evaluates it.
         #[arg(long, value_enum, default_value = "interpreted")]
         engine: Engine,
@@ -258,6 +259,13 @@ pub enum Command {
         /// JSON input: `{"samples": [...]}`; stdin when absent.
         #[arg(long)]
         input: Option<PathBuf>,
+        /// `--algo jacobian`: the frame, a link of the model file (`info` lists them under `frames`).
+        #[arg(long, value_name = "LINK")]
+        frame: Option<String>,
+        /// `--algo jacobian`: where the Jacobian and its bias are expressed (default
+        /// local_world_aligned: world axes at the frame's origin).
+        #[arg(long, value_name = "local|local_world_aligned|world", value_parser = parse_reference)]
+        reference: Option<Reference>,
         /// `--engine generated`: refuse generated code whose compilation is estimated to need more memory
         /// than this (MB).
         #[arg(long, value_name = "MB", default_value_t = embedyn_codegen::DEFAULT_COMPILE_MEMORY_MB)]
@@ -265,18 +273,100 @@ pub enum Command {
     },
 }
 
-/// An algorithm `embedyn eval --algo` evaluates: one whose descriptor has a command-line entry
-/// ([`embedyn_codegen::algorithm::ALGORITHMS`]).
+/// An algorithm of the generated code; `embedyn eval --algo` evaluates those whose descriptor has a
+/// command-line entry ([`embedyn_codegen::algorithm::ALGORITHMS`]).
 pub use embedyn_codegen::Algorithm as Algo;
 
-/// `--algo`'s values, with their help, from the algorithms' descriptors.
-fn algo_parser() -> impl clap::builder::TypedValueParser<Value = Algo> {
-    let values = Algo::offered_by_cli().map(|a| {
-        let help = a.spec().cli.map_or("", |c| c.help);
-        clap::builder::PossibleValue::new(a.name()).help(help)
-    });
+pub use embedyn_runtime::Reference;
+
+/// What `embedyn eval --algo` evaluates: an algorithm with a generated counterpart (its descriptor's), or
+/// one of the frame and centroidal quantities the interpreted engine computes (CONTRACT §3).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum EvalAlgo {
+    /// An algorithm of the descriptors (`aba`, `rnea`, `crba`, …).
+    Dynamics(Algo),
+    /// `jacobian`: a frame's Jacobian and, with `v`, its bias.
+    Jacobian,
+    /// `com`: the centre of mass, its Jacobian and, with `v`, its velocity.
+    Com,
+    /// `centroidal`: the centroidal momentum matrix, momentum and bias.
+    Centroidal,
+}
+
+impl From<Algo> for EvalAlgo {
+    fn from(algo: Algo) -> Self {
+        EvalAlgo::Dynamics(algo)
+    }
+}
+
+impl EvalAlgo {
+    /// The algorithms of the interpreted engine only, with their `--algo` help. (Should the descriptors
+    /// offer one of these names, this entry is the one `--algo` means.)
+    const INTERPRETED_ONLY: [(EvalAlgo, &'static str, &'static str); 3] = [
+        (
+            EvalAlgo::Jacobian,
+            "jacobian",
+            "A frame's Jacobian (--frame LINK, --reference) and, with v, its bias",
+        ),
+        (
+            EvalAlgo::Com,
+            "com",
+            "Centre of mass, its Jacobian and, with v, its velocity",
+        ),
+        (
+            EvalAlgo::Centroidal,
+            "centroidal",
+            "Centroidal momentum matrix A_g, momentum h_g and bias dh_g",
+        ),
+    ];
+
+    /// The `--algo` value.
+    pub fn name(self) -> &'static str {
+        match self {
+            EvalAlgo::Dynamics(a) => a.name(),
+            other => Self::INTERPRETED_ONLY
+                .iter()
+                .find(|(a, _, _)| *a == other)
+                .map_or("", |&(_, name, _)| name),
+        }
+    }
+
+    /// The algorithm named `name` on the command line.
+    pub fn from_name(name: &str) -> Option<EvalAlgo> {
+        Self::INTERPRETED_ONLY
+            .iter()
+            .find(|(_, n, _)| *n == name)
+            .map(|&(a, _, _)| a)
+            .or_else(|| {
+                Algo::offered_by_cli()
+                    .find(|a| a.name() == name)
+                    .map(EvalAlgo::Dynamics)
+            })
+    }
+}
+
+/// `--algo`'s values, with their help: the algorithms' descriptors, then the interpreted-only ones.
+fn algo_parser() -> impl clap::builder::TypedValueParser<Value = EvalAlgo> {
+    let only = EvalAlgo::INTERPRETED_ONLY;
+    let values = Algo::offered_by_cli()
+        .filter(move |a| only.iter().all(|&(_, name, _)| name != a.name()))
+        .map(|a| {
+            let help = a.spec().cli.map_or("", |c| c.help);
+            clap::builder::PossibleValue::new(a.name()).help(help)
+        })
+        .chain(
+            only.iter()
+                .map(|&(_, name, help)| clap::builder::PossibleValue::new(name).help(help)),
+        );
     use clap::builder::TypedValueParser;
-    clap::builder::PossibleValuesParser::new(values).try_map(|name: String| Algo::from_name(&name))
+    clap::builder::PossibleValuesParser::new(values)
+        .try_map(|name: String| EvalAlgo::from_name(&name).ok_or(UnknownAlgorithm { name }))
+}
+
+/// `local`, `local_world_aligned` or `world`.
+fn parse_reference(text: &str) -> Result<Reference, String> {
+    Reference::from_name(text)
+        .ok_or_else(|| format!("expected local, local_world_aligned or world, got \"{text}\""))
 }
 
 /// `generate --only`'s help: the function names and the defaults, from the algorithms' descriptors.
@@ -390,10 +480,38 @@ pub enum CliError {
         /// The algorithm asked for.
         algorithm: Algo,
     },
+    /// An option that does not fit the others or the model (`--frame` without `--algo jacobian`, a
+    /// frame the model does not have): a usage error, exit status 2.
+    #[error("{option}: {message}")]
+    BadOption {
+        /// The option.
+        option: &'static str,
+        /// What is wrong with it.
+        message: String,
+    },
+    /// What the generated engine does not evaluate yet (`what`: the algorithm, or external wrenches).
+    #[error("{what} is not available with --engine generated yet; use --engine interpreted")]
+    NotGenerated {
+        /// What was asked for.
+        what: String,
+    },
     /// A broken invariant of embedyn itself.
     #[error("internal error: {0} (a bug)")]
     Internal(#[from] InternalError),
 }
+
+impl CliError {
+    /// The exit status of the error (docs/command-line.md): 2 for a usage error, 1 otherwise.
+    pub fn exit_status(&self) -> u8 {
+        match self {
+            CliError::BadOption { .. } => USAGE_ERROR,
+            _ => output::FAILURE,
+        }
+    }
+}
+
+/// The exit status of a usage error (as clap's).
+pub const USAGE_ERROR: u8 = 2;
 
 /// What is wrong with the input document as a whole.
 #[derive(Debug, thiserror::Error)]
@@ -528,7 +646,59 @@ pub enum SampleProblem {
         /// The entry as written.
         shown: String,
     },
+    /// `f_ext` is not an object of links to wrenches.
+    NotWrenches,
+    /// `f_ext` names a link the model does not have.
+    UnknownLink {
+        /// The name given.
+        link: String,
+        /// The model's links with a close name.
+        suggestions: Vec<String>,
+    },
+    /// `f_ext` names a link twice.
+    DuplicateLink {
+        /// The link.
+        link: String,
+    },
+    /// A link's wrench is not an object `{"force", "torque"}`.
+    WrenchNotObject {
+        /// The link.
+        link: String,
+    },
+    /// A link's `force` or `torque`.
+    WrenchPart {
+        /// The link.
+        link: String,
+        /// `force` or `torque`.
+        part: &'static str,
+        /// What is wrong with it.
+        problem: WrenchPartProblem,
+    },
 }
+
+/// What is wrong with the `force` or `torque` of a wrench.
+#[derive(Clone, Debug, PartialEq)]
+pub enum WrenchPartProblem {
+    /// Absent.
+    Missing,
+    /// Not an array.
+    NotArray,
+    /// Not three entries.
+    Length {
+        /// The entries given.
+        got: usize,
+    },
+    /// Entry `index` is not a finite number (`shown` as written).
+    NotFinite {
+        /// The entry.
+        index: usize,
+        /// The entry as written.
+        shown: String,
+    },
+}
+
+/// `{"LINK": {"force": [fx, fy, fz], "torque": [tx, ty, tz]}, …}`, as messages show it.
+const WRENCHES_SHAPE: &str = r#"{"LINK": {"force": [fx, fy, fz], "torque": [tx, ty, tz]}, …}"#;
 
 fn field_problem(field: &str, problem: &SampleProblem) -> String {
     match problem {
@@ -539,6 +709,45 @@ fn field_problem(field: &str, problem: &SampleProblem) -> String {
         }
         SampleProblem::NotFinite { index, shown } => {
             format!("field `{field}`[{index}] is not a finite number: {shown}")
+        }
+        SampleProblem::NotWrenches => {
+            format!("field `{field}` must be an object {WRENCHES_SHAPE}")
+        }
+        SampleProblem::UnknownLink { link, suggestions } => format!(
+            "field `{field}`: the model has no link `{}`{}",
+            embedyn_codegen::shortened(link),
+            match suggestions.is_empty() {
+                true => " (`embedyn info` lists the links under `frames`)".to_string(),
+                false => suggest::did_you_mean(suggestions),
+            }
+        ),
+        SampleProblem::DuplicateLink { link } => format!(
+            "field `{field}`: link `{}` is given twice (one wrench per link: add them up)",
+            embedyn_codegen::shortened(link)
+        ),
+        SampleProblem::WrenchNotObject { link } => format!(
+            "field `{field}`: link `{}`: the wrench must be an object {{\"force\": [fx, fy, fz], \"torque\": [tx, ty, tz]}}",
+            embedyn_codegen::shortened(link)
+        ),
+        SampleProblem::WrenchPart {
+            link,
+            part,
+            problem,
+        } => {
+            let what = match problem {
+                WrenchPartProblem::Missing => format!("missing `{part}`"),
+                WrenchPartProblem::NotArray => format!("`{part}` must be an array of 3 numbers"),
+                WrenchPartProblem::Length { got } => {
+                    format!("`{part}` has {got} entries, it needs 3")
+                }
+                WrenchPartProblem::NotFinite { index, shown } => {
+                    format!("`{part}`[{index}] is not a finite number: {shown}")
+                }
+            };
+            format!(
+                "field `{field}`: link `{}`: {what}",
+                embedyn_codegen::shortened(link)
+            )
         }
     }
 }
@@ -665,14 +874,17 @@ pub fn run(cli: Cli) -> Result<Printed, CliError> {
             scalar,
             scene,
             input,
+            frame,
+            reference,
             max_compile_memory,
         } => {
+            let query = eval::Query::new(algo, frame, reference)?;
             let loaded = load_reporting(&model)?;
             let text = read_input(input.as_deref())?;
             eval::eval(
                 &loaded,
                 &scene.options_for(&loaded),
-                algo,
+                &query,
                 engine,
                 scalar,
                 &text,
@@ -688,11 +900,20 @@ pub fn run(cli: Cli) -> Result<Printed, CliError> {
 pub fn eval_interpreted(
     loaded: &Loaded,
     options: &ModelOptions,
-    algo: Algo,
+    algo: impl Into<EvalAlgo>,
     scalar: Scalar,
     input: &str,
 ) -> Result<serde_json::Value, CliError> {
-    let document = eval::eval(loaded, options, algo, Engine::Interpreted, scalar, input, 0)?;
+    let query = eval::Query::new(algo.into(), None, None)?;
+    let document = eval::eval(
+        loaded,
+        options,
+        &query,
+        Engine::Interpreted,
+        scalar,
+        input,
+        0,
+    )?;
     as_value(&document)
 }
 

@@ -8,9 +8,16 @@
 //! command reaches that sample; the samples after it are only checked to be valid JSON (the command
 //! cannot succeed any more, and storing them could cost more than their text), so invalid JSON anywhere
 //! is still reported as such.
+//!
+//! A command may also read optional fields (absent: `None`, not an error) and external wrenches, `"f_ext":
+//! {"LINK": {"force": [3], "torque": [3]}, …}` (CONTRACT §2), each link looked up among the model's frames
+//! as its key is read and each wrench stored as 6 numbers and the frame's index: memory stays a few bytes
+//! per byte of text, and a link given twice in one sample is refused (a JSON object's repeated key would
+//! otherwise silently replace the first wrench; two wrenches on a link are added up by the caller).
 
-use super::{CliError, InputError, InternalError, SampleProblem};
+use super::{CliError, InputError, InternalError, SampleProblem, WrenchPartProblem};
 use serde::de::{self, DeserializeSeed, IgnoredAny, MapAccess, SeqAccess, Visitor};
+use std::collections::HashMap;
 use std::fmt;
 
 /// The visitor methods of every JSON scalar (`bool`, numbers, strings, `null`), each running `$body` with
@@ -53,9 +60,43 @@ macro_rules! forward_scalars {
 /// The fields a command reads from every sample: names and the lengths the model needs.
 pub type Request = [(&'static str, usize)];
 
+/// The name of the external wrenches' field.
+pub const F_EXT: &str = "f_ext";
+
+/// What a command reads besides the required fields of its [`Request`].
+#[derive(Default)]
+pub struct Extras<'a> {
+    /// Fields of the request that a sample may leave out ([`Samples::optional_vector`]).
+    pub optional: &'a [&'static str],
+    /// The model's frames (link names, in frame order) when the samples may carry `f_ext`.
+    pub links: Option<&'a [&'a str]>,
+}
+
+/// One external wrench of a sample: the frame's index in the list given to [`Samples::parse_with`],
+/// force and torque in the link's frame, about its origin (CONTRACT §2).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Wrench {
+    /// Index of the link among the frames given.
+    pub frame: usize,
+    /// Force (N).
+    pub force: [f64; 3],
+    /// Torque (N·m).
+    pub torque: [f64; 3],
+}
+
 /// The samples of an input: `len()` samples, each with the requested fields.
 pub struct Samples {
     request: Vec<(&'static str, usize)>,
+    /// Whether each requested field may be absent.
+    optional: Vec<bool>,
+    /// For every sample and requested field (sample after sample): an optional field that is absent.
+    absent: Vec<bool>,
+    /// Whether `f_ext` is read (its problems are recorded as field index `request.len()`).
+    reads_wrenches: bool,
+    /// Where each sample's wrenches start in `wrenches`.
+    wrench_starts: Vec<usize>,
+    /// All samples' wrenches, sample after sample.
+    wrenches: Vec<Wrench>,
     /// Where each requested field starts within a sample's numbers.
     offsets: Vec<usize>,
     /// The sum of the requested lengths: each sample's share of `numbers`.
@@ -81,11 +122,67 @@ enum Problem {
         index: usize,
         shown: String,
     },
+    /// `f_ext` is not an object.
+    NotWrenches,
+    /// `f_ext` names a link the model does not have (its name and the model's links with a close name).
+    UnknownLink {
+        link: String,
+        suggestions: Vec<String>,
+    },
+    /// `f_ext` names a link twice.
+    DuplicateLink(String),
+    /// A link's wrench is not an object.
+    WrenchNotObject(String),
+    /// A link's `force` or `torque`.
+    WrenchPart {
+        link: String,
+        part: &'static str,
+        problem: WrenchPartProblem,
+    },
+}
+
+impl Problem {
+    /// The problem as the command reports it (`len`: the entries the field needs).
+    fn reported(&self, len: usize) -> SampleProblem {
+        match self {
+            Problem::Missing => SampleProblem::Missing,
+            Problem::NotArray => SampleProblem::NotArray,
+            Problem::Short(got) => SampleProblem::Length {
+                got: *got,
+                expected: len,
+            },
+            Problem::NotFinite { index, shown } => SampleProblem::NotFinite {
+                index: *index,
+                shown: shown.clone(),
+            },
+            Problem::NotWrenches => SampleProblem::NotWrenches,
+            Problem::UnknownLink { link, suggestions } => SampleProblem::UnknownLink {
+                link: link.clone(),
+                suggestions: suggestions.clone(),
+            },
+            Problem::DuplicateLink(link) => SampleProblem::DuplicateLink { link: link.clone() },
+            Problem::WrenchNotObject(link) => SampleProblem::WrenchNotObject { link: link.clone() },
+            Problem::WrenchPart {
+                link,
+                part,
+                problem,
+            } => SampleProblem::WrenchPart {
+                link: link.clone(),
+                part,
+                problem: problem.clone(),
+            },
+        }
+    }
 }
 
 impl Samples {
     /// Reads `text`, keeping the fields of `request` of every sample.
     pub fn parse(text: &str, request: &Request) -> Result<Self, CliError> {
+        Self::parse_with(text, request, &Extras::default())
+    }
+
+    /// [`Samples::parse`], with optional fields and external wrenches as `extras` says.
+    pub fn parse_with(text: &str, request: &Request, extras: &Extras) -> Result<Self, CliError> {
         let offsets = request
             .iter()
             .scan(0, |at, &(_, len)| {
@@ -102,10 +199,28 @@ impl Samples {
                 count: 0,
                 numbers: Vec::new(),
                 problems: Vec::new(),
+                optional: request
+                    .iter()
+                    .map(|(name, _)| extras.optional.contains(name))
+                    .collect(),
+                absent: Vec::new(),
+                reads_wrenches: extras.links.is_some(),
+                wrench_starts: Vec::new(),
+                wrenches: Vec::new(),
             },
             root: Root::NoSamples,
             stopped: false,
             refusal: None,
+            links: extras.links.map(|names| LinkTable {
+                index: names
+                    .iter()
+                    .enumerate()
+                    .map(|(k, &n)| (n.to_string(), k))
+                    .collect(),
+                names: names.iter().map(|n| n.to_string()).collect(),
+                stamps: vec![0; names.len()],
+                stamp: 0,
+            }),
         };
         let mut deserializer = serde_json::Deserializer::from_str(text);
         let parsed = RootSeed(&mut reader)
@@ -135,10 +250,63 @@ impl Samples {
     pub fn check_all(&self) -> Result<(), CliError> {
         for index in 0..self.count {
             for &(name, _) in &self.request {
-                self.vector(index, name)?;
+                self.optional_vector(index, name)?;
+            }
+            if self.reads_wrenches {
+                self.wrenches(index)?;
             }
         }
         Ok(())
+    }
+
+    /// Field `name` of sample `index` as [`Samples::vector`] gives it, `None` if it is an optional field
+    /// the sample leaves out.
+    pub fn optional_vector(&self, index: usize, name: &str) -> Result<Option<&[f64]>, CliError> {
+        let stride = self.request.len();
+        let field = self.request.iter().position(|&(n, _)| n == name);
+        match field {
+            Some(f) if self.optional[f] && self.absent.get(index * stride + f) == Some(&true) => {
+                Ok(None)
+            }
+            _ => self.vector(index, name).map(Some),
+        }
+    }
+
+    /// Whether any sample carries at least one external wrench.
+    pub fn has_wrenches(&self) -> bool {
+        !self.wrenches.is_empty()
+    }
+
+    /// The external wrenches of sample `index` (none if it has no `f_ext`).
+    pub fn wrenches(&self, index: usize) -> Result<&[Wrench], CliError> {
+        if !self.reads_wrenches {
+            return Err(InternalError::FieldNotRead {
+                field: F_EXT.to_string(),
+            }
+            .into());
+        }
+        let field = self.request.len();
+        let problem = self
+            .problems
+            .iter()
+            .find(|&&(s, f, _)| (s, f) == (index, field));
+        if let Some((_, _, problem)) = problem {
+            return Err(CliError::Sample {
+                sample: index,
+                field: F_EXT.to_string(),
+                problem: problem.reported(0),
+            });
+        }
+        let (Some(&start), end) = (
+            self.wrench_starts.get(index),
+            self.wrench_starts
+                .get(index + 1)
+                .copied()
+                .unwrap_or(self.wrenches.len()),
+        ) else {
+            return Err(InternalError::SampleNotInInput { sample: index }.into());
+        };
+        Ok(&self.wrenches[start..end])
     }
 
     /// Field `name` (one of the request) of sample `index` as exactly the requested number of finite
@@ -159,18 +327,7 @@ impl Samples {
             return Err(CliError::Sample {
                 sample: index,
                 field: name.to_string(),
-                problem: match problem {
-                    Problem::Missing => SampleProblem::Missing,
-                    Problem::NotArray => SampleProblem::NotArray,
-                    Problem::Short(got) => SampleProblem::Length {
-                        got: *got,
-                        expected: len,
-                    },
-                    Problem::NotFinite { index, shown } => SampleProblem::NotFinite {
-                        index: *index,
-                        shown: shown.clone(),
-                    },
-                },
+                problem: problem.reported(len),
             });
         }
         let start = index * self.stride + self.offsets[field];
@@ -195,6 +352,17 @@ struct Reader {
     /// A sample with a problem has been read: the rest is skipped.
     stopped: bool,
     refusal: Option<InputError>,
+    /// The model's links, when `f_ext` is read.
+    links: Option<LinkTable>,
+}
+
+/// The model's links by name, and which of them the `f_ext` being read has named.
+struct LinkTable {
+    index: HashMap<String, usize>,
+    names: Vec<String>,
+    /// `stamps[k] == stamp`: link `k` is named in the current `f_ext` object.
+    stamps: Vec<u64>,
+    stamp: u64,
 }
 
 impl Reader {
@@ -247,6 +415,9 @@ impl<'de> DeserializeSeed<'de> for SamplesSeed<'_> {
         samples.count = 0;
         samples.numbers.clear();
         samples.problems.clear();
+        samples.absent.clear();
+        samples.wrench_starts.clear();
+        samples.wrenches.clear();
         self.0.stopped = false;
         self.0.root = Root::NotArray;
         d.deserialize_any(self)
@@ -284,17 +455,25 @@ impl SampleSeed<'_> {
         samples.count += 1;
         let end = samples.numbers.len() + samples.stride;
         samples.numbers.resize(end, 0.0);
+        let end = samples.absent.len() + samples.request.len();
+        samples.absent.resize(end, false);
+        samples.wrench_starts.push(samples.wrenches.len());
         index
     }
 
     /// Records every requested field not in `seen` as missing; after a sample with a problem the read
     /// stops keeping samples.
     fn end(&mut self, index: usize, seen: &[bool]) {
-        let problems = &mut self.0.samples.problems;
+        let samples = &mut self.0.samples;
+        let stride = samples.request.len();
         for (field, _) in seen.iter().enumerate().filter(|(_, &seen)| !seen) {
-            problems.push((index, field, Problem::Missing));
+            if samples.optional[field] {
+                samples.absent[index * stride + field] = true;
+            } else {
+                samples.problems.push((index, field, Problem::Missing));
+            }
         }
-        self.0.stopped = !problems.is_empty();
+        self.0.stopped = !samples.problems.is_empty();
     }
 }
 
@@ -312,10 +491,20 @@ impl<'de> Visitor<'de> for SampleSeed<'_> {
     }
     fn visit_map<A: MapAccess<'de>>(mut self, mut map: A) -> Result<(), A::Error> {
         let index = self.begin();
-        let names: Vec<&'static str> = self.0.samples.request.iter().map(|&(n, _)| n).collect();
-        let mut seen = vec![false; names.len()];
+        let mut names: Vec<&'static str> = self.0.samples.request.iter().map(|&(n, _)| n).collect();
+        let fields = names.len();
+        if self.0.links.is_some() {
+            names.push(F_EXT);
+        }
+        let mut seen = vec![false; fields];
         while let Some(key) = map.next_key_seed(NameSeed(&names))? {
             match key {
+                Some(field) if field == fields => {
+                    map.next_value_seed(WrenchesSeed {
+                        reader: &mut *self.0,
+                        sample: index,
+                    })?;
+                }
                 Some(field) => {
                     seen[field] = true;
                     map.next_value_seed(FieldSeed {
@@ -418,6 +607,240 @@ impl<'de> Visitor<'de> for FieldSeed<'_> {
         this.record(Some(Problem::NotArray));
         Ok(())
     });
+}
+
+/// A sample's `f_ext`: an object of link names to wrenches. The first problem is recorded and the rest
+/// of the object skipped.
+struct WrenchesSeed<'a> {
+    reader: &'a mut Reader,
+    sample: usize,
+}
+
+impl WrenchesSeed<'_> {
+    /// Replaces what is recorded about this sample's `f_ext` (a repeated key replaces the earlier
+    /// value, as for any field).
+    fn record(&mut self, problem: Option<Problem>) {
+        let (sample, field) = (self.sample, self.reader.samples.request.len());
+        let problems = &mut self.reader.samples.problems;
+        problems.retain(|&(s, f, _)| (s, f) != (sample, field));
+        if let Some(problem) = problem {
+            problems.push((sample, field, problem));
+        }
+    }
+
+    /// Forgets this sample's wrenches read so far.
+    fn clear(&mut self) {
+        let samples = &mut self.reader.samples;
+        let start = samples.wrench_starts[self.sample];
+        samples.wrenches.truncate(start);
+    }
+}
+
+impl<'de> DeserializeSeed<'de> for WrenchesSeed<'_> {
+    type Value = ();
+    fn deserialize<D: de::Deserializer<'de>>(self, d: D) -> Result<(), D::Error> {
+        d.deserialize_any(self)
+    }
+}
+
+impl<'de> Visitor<'de> for WrenchesSeed<'_> {
+    type Value = ();
+    fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        f.write_str("external wrenches")
+    }
+    fn visit_map<A: MapAccess<'de>>(mut self, mut map: A) -> Result<(), A::Error> {
+        self.clear();
+        self.record(None);
+        let Some(links) = self.reader.links.as_mut() else {
+            return skip_map(map);
+        };
+        links.stamp += 1;
+        while let Some(key) = map.next_key_seed(LinkSeed(&*links))? {
+            let problem = match key {
+                LinkKey::Known(frame) if links.stamps[frame] == links.stamp => {
+                    map.next_value::<IgnoredAny>()?;
+                    Problem::DuplicateLink(links.names[frame].clone())
+                }
+                LinkKey::Known(frame) => {
+                    links.stamps[frame] = links.stamp;
+                    match map.next_value_seed(WrenchSeed)? {
+                        Ok((force, torque)) => {
+                            self.reader.samples.wrenches.push(Wrench {
+                                frame,
+                                force,
+                                torque,
+                            });
+                            continue;
+                        }
+                        Err(problem) => problem.on(&links.names[frame]),
+                    }
+                }
+                LinkKey::Unknown(link) => {
+                    map.next_value::<IgnoredAny>()?;
+                    let suggestions =
+                        crate::suggest::close_names(&link, links.names.iter().map(String::as_str));
+                    Problem::UnknownLink { link, suggestions }
+                }
+            };
+            self.clear();
+            self.record(Some(problem));
+            return skip_map(map);
+        }
+        Ok(())
+    }
+    fn visit_seq<A: SeqAccess<'de>>(mut self, seq: A) -> Result<(), A::Error> {
+        skip_seq(seq)?;
+        self.clear();
+        self.record(Some(Problem::NotWrenches));
+        Ok(())
+    }
+    forward_scalars!(|mut this| {
+        this.clear();
+        this.record(Some(Problem::NotWrenches));
+        Ok(())
+    });
+}
+
+/// A key of `f_ext`: a link of the model (its frame index) or another name (kept for the message).
+enum LinkKey {
+    Known(usize),
+    Unknown(String),
+}
+
+struct LinkSeed<'a>(&'a LinkTable);
+
+impl<'de> DeserializeSeed<'de> for LinkSeed<'_> {
+    type Value = LinkKey;
+    fn deserialize<D: de::Deserializer<'de>>(self, d: D) -> Result<LinkKey, D::Error> {
+        d.deserialize_str(self)
+    }
+}
+
+impl<'de> Visitor<'de> for LinkSeed<'_> {
+    type Value = LinkKey;
+    fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        f.write_str("a link name")
+    }
+    fn visit_str<E>(self, key: &str) -> Result<LinkKey, E> {
+        Ok(match self.0.index.get(key) {
+            Some(&frame) => LinkKey::Known(frame),
+            // Kept whole for the message (which shortens it): one copy, once, as the read stops there.
+            None => LinkKey::Unknown(key.to_string()),
+        })
+    }
+}
+
+/// What is wrong with one link's wrench (the link is added by [`WrenchProblem::on`]).
+enum WrenchProblem {
+    NotObject,
+    Part(&'static str, WrenchPartProblem),
+}
+
+impl WrenchProblem {
+    fn on(self, link: &str) -> Problem {
+        match self {
+            WrenchProblem::NotObject => Problem::WrenchNotObject(link.to_string()),
+            WrenchProblem::Part(part, problem) => Problem::WrenchPart {
+                link: link.to_string(),
+                part,
+                problem,
+            },
+        }
+    }
+}
+
+type WrenchRead = Result<([f64; 3], [f64; 3]), WrenchProblem>;
+
+/// One link's wrench: `{"force": [3], "torque": [3]}`, both required, other keys ignored (a repeated
+/// key replaces the earlier value).
+struct WrenchSeed;
+
+const WRENCH_PARTS: [&str; 2] = ["force", "torque"];
+
+impl<'de> DeserializeSeed<'de> for WrenchSeed {
+    type Value = WrenchRead;
+    fn deserialize<D: de::Deserializer<'de>>(self, d: D) -> Result<WrenchRead, D::Error> {
+        d.deserialize_any(self)
+    }
+}
+
+impl<'de> Visitor<'de> for WrenchSeed {
+    type Value = WrenchRead;
+    fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        f.write_str("a wrench")
+    }
+    fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<WrenchRead, A::Error> {
+        let mut parts: [Option<Result<[f64; 3], WrenchPartProblem>>; 2] = [None, None];
+        while let Some(key) = map.next_key_seed(NameSeed(&WRENCH_PARTS))? {
+            match key {
+                Some(k) => parts[k] = Some(map.next_value_seed(Vector3Seed)?),
+                None => map.next_value::<IgnoredAny>().map(drop)?,
+            }
+        }
+        let [force, torque] = parts;
+        let part = |k: usize, p: Option<Result<[f64; 3], WrenchPartProblem>>| match p {
+            None => Err(WrenchProblem::Part(
+                WRENCH_PARTS[k],
+                WrenchPartProblem::Missing,
+            )),
+            Some(Err(problem)) => Err(WrenchProblem::Part(WRENCH_PARTS[k], problem)),
+            Some(Ok(x)) => Ok(x),
+        };
+        Ok(part(0, force).and_then(|f| Ok((f, part(1, torque)?))))
+    }
+    fn visit_seq<A: SeqAccess<'de>>(self, seq: A) -> Result<WrenchRead, A::Error> {
+        skip_seq(seq)?;
+        Ok(Err(WrenchProblem::NotObject))
+    }
+    forward_scalars!(|_this| { Ok(Err(WrenchProblem::NotObject)) });
+}
+
+/// A force or torque: exactly three finite numbers (more are counted, not stored).
+struct Vector3Seed;
+
+impl<'de> DeserializeSeed<'de> for Vector3Seed {
+    type Value = Result<[f64; 3], WrenchPartProblem>;
+    fn deserialize<D: de::Deserializer<'de>>(self, d: D) -> Result<Self::Value, D::Error> {
+        d.deserialize_any(self)
+    }
+}
+
+impl<'de> Visitor<'de> for Vector3Seed {
+    type Value = Result<[f64; 3], WrenchPartProblem>;
+    fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        f.write_str("three numbers")
+    }
+    fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Self::Value, A::Error> {
+        let mut x = [0.0; 3];
+        let mut count = 0usize;
+        let mut first_bad = None;
+        while let Some(entry) = seq.next_element::<Entry>()? {
+            match entry {
+                Entry::Number(value) if value.is_finite() => {
+                    if let Some(slot) = x.get_mut(count) {
+                        *slot = value;
+                    }
+                }
+                Entry::Number(value) => {
+                    first_bad.get_or_insert_with(|| (count, value.to_string()));
+                }
+                Entry::Other(shown) => {
+                    first_bad.get_or_insert((count, shown));
+                }
+            }
+            count += 1;
+        }
+        Ok(match first_bad {
+            _ if count != 3 => Err(WrenchPartProblem::Length { got: count }),
+            Some((index, shown)) => Err(WrenchPartProblem::NotFinite { index, shown }),
+            None => Ok(x),
+        })
+    }
+    fn visit_map<A: MapAccess<'de>>(self, map: A) -> Result<Self::Value, A::Error> {
+        skip_map(map)?;
+        Ok(Err(WrenchPartProblem::NotArray))
+    }
+    forward_scalars!(|_this| { Ok(Err(WrenchPartProblem::NotArray)) });
 }
 
 /// One entry of a requested field: a number, or anything else as it is shown in a message (a nested

@@ -3,6 +3,7 @@
 
 mod cli;
 mod configuration;
+mod contact;
 mod edges;
 mod scale;
 mod scene;
