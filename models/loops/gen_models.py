@@ -398,6 +398,90 @@ def singular_four_bar():
     return m
 
 
+# ---------------------------------------------------------------------------------------------
+# 11: floating-base quadruped whose knees are driven through four-bar linkages
+# ---------------------------------------------------------------------------------------------
+# Each leg is drawn in the x-z plane of its thigh frame: the thigh frame sits on the hip-flexion axis
+# with x along the thigh (towards the knee); at q = 0 the thigh points down and back (psi 2.4, 0.83 rad
+# behind the vertical) and the shank down and forward (knee at -1.6 relative to the thigh, shank psi
+# 0.8), so the foot is 8.5 mm behind the hip and 0.292 m below it. The knee four-bar has the thigh as
+# ground: a crank pivoting near the hip, a rod along the back of the thigh, and a lever on the shank
+# behind the knee. Crank 0.035 m and lever 0.04 m are nearly parallel at q = 0 (close to, but not, a
+# parallelogram), so the knee follows the crank with a ratio near 0.9 and both transmission angles are
+# near 90 degrees.
+
+QK_HIP_X, QK_HIP_Y = 0.19, 0.05  # hip-abduction axes on the trunk at (+-0.19, +-0.05, 0)
+QK_HIP_LINK_Y = 0.08  # hip-flexion axis offset (outwards) on the hip link
+QK_THIGH, QK_SHANK = 0.21, 0.21
+QK_PSI_THIGH = 2.4  # thigh x axis in the hip-link frame at q = 0: down and back
+QK_KNEE0 = -1.6  # shank frame relative to the thigh frame at q = 0 (a bent knee)
+QK_C0 = (0.03, -0.005)  # knee crank pivot (x, z) in the thigh frame
+QK_LCRANK = 0.035
+QK_PSI_CRANK = 1.5  # crank direction in the thigh frame at q = 0: towards the back of the thigh
+QK_LEVER = (-0.04, 0.004)  # rod pin on the shank, (x, z) in the shank frame (behind the knee)
+
+
+def quadruped_knee_geometry():
+    p = along(QK_C0, QK_PSI_CRANK, QK_LCRANK)  # crank tip in the thigh frame
+    c, s = math.cos(QK_KNEE0), math.sin(QK_KNEE0)
+    lx, lz = QK_LEVER
+    qpt = (QK_THIGH + lx * c + lz * s, -lx * s + lz * c)  # lever pin in the thigh frame
+    d = sub(qpt, p)
+    return p, qpt, norm(d), ang(d)
+
+
+def quadruped_loop_knees():
+    _p, _q, lrod, psi_rod = quadruped_knee_geometry()
+    psi_shank = QK_PSI_THIGH + QK_KNEE0
+    m = Model("quadruped_loop_knees", (
+        "  quadruped_loop_knees: a floating-base quadruped whose knees are driven through four-bar\n"
+        "  linkages. A floating joint from the massless link world to trunk; legs FL, FR, HL, HR (the right\n"
+        "  legs mirror the left ones through the x-z plane), each: hip_abduction (x), hip_flexion (y), and a\n"
+        "  knee four-bar with the thigh as ground: knee_crank_joint (y, on the thigh near the hip; the\n"
+        "  actuated input), knee_rod_joint, and the shank's knee joint, closed by the loop knee_linkage\n"
+        "  between the rod end and a lever on the shank behind the knee. The foot (the contact point) is\n"
+        "  fixed to the shank tip, its frame aligned with the trunk at q = 0. At q = 0 the legs stand with\n"
+        "  bent knees: each foot is 0.292 m below its hip. Independent per leg: hip_abduction, hip_flexion,\n"
+        "  knee_crank_joint; dependent: knee_rod_joint, knee.\n"
+        "  Spanning joints in depth-first order: floating_base, then per leg (FL_, FR_, HL_, HR_)\n"
+        "  hip_abduction, hip_flexion, knee_crank_joint, knee_rod_joint, knee.\n"
+        "  nq = 7 + 20, nv = 6 + 20, independent nv = 6 + 12. Total mass 12 kg.\n"
+    ))
+    m.link("world", comment="world frame: no inertial")
+    m.link("trunk", mass=6.0, com=(0.01, 0.001, -0.005), inertia=(0.0215, 0.07, 0.081, 1e-4, 8e-4, -5e-5))
+    m.joint("floating_base", "floating", "world", "trunk")
+    bodies = [
+        ("hip", 0.45, (0.004, 0.045, 0), (2.9e-4, 4.1e-4, 3.3e-4, -5e-6, 2e-6, 3e-6)),
+        ("thigh", 0.6, (0.055, -0.015, 0.004), (4.1e-4, 2.3e-3, 2.24e-3, 1e-5, 6e-5, -8e-6)),
+        ("knee_crank", 0.05, (0.012, 0, 0), (3e-6, 9e-6, 8e-6, 0, 1e-7, 0)),
+        ("knee_rod", 0.04, (lrod / 2.0, 0, 0), (6e-6, 1.5e-4, 1.5e-4, 0, 0, 0)),
+        ("shank", 0.3, (0.08, 0, 0.002), (1.2e-4, 1.3e-3, 1.28e-3, 2e-6, -3e-5, 1e-6)),
+        ("foot", 0.06, (0, 0, 0), (9.6e-6, 9.5e-6, 9.7e-6, 0, 0, 0)),
+    ]
+    for leg, sx, sy in (("FL", 1.0, 1.0), ("FR", 1.0, -1.0), ("HL", -1.0, 1.0), ("HR", -1.0, -1.0)):
+        s = leg + "_"
+        for (n, mass, com, inertia) in bodies:
+            if sy < 0:
+                com, inertia = mirror_y(com, inertia)
+            m.link(s + n, mass=mass, com=com, inertia=inertia)
+        m.joint(s + "hip_abduction", "revolute", "trunk", s + "hip", (sx * QK_HIP_X, sy * QK_HIP_Y, 0), (0, 0, 0),
+                (1, 0, 0))
+        m.joint(s + "hip_flexion", "revolute", s + "hip", s + "thigh", (0, sy * QK_HIP_LINK_Y, 0),
+                (0, QK_PSI_THIGH, 0), Y)
+        m.joint(s + "knee_crank_joint", "revolute", s + "thigh", s + "knee_crank", (QK_C0[0], 0, QK_C0[1]),
+                (0, QK_PSI_CRANK, 0), Y, independent=True)
+        m.joint(s + "knee_rod_joint", "revolute", s + "knee_crank", s + "knee_rod", (QK_LCRANK, 0, 0),
+                (0, psi_rod - QK_PSI_CRANK, 0), Y, independent=False)
+        m.joint(s + "knee", "revolute", s + "thigh", s + "shank", (QK_THIGH, 0, 0), (0, QK_KNEE0, 0), Y,
+                independent=False)
+        m.joint(s + "foot_joint", "fixed", s + "shank", s + "foot", (QK_SHANK, 0, 0), (0, -psi_shank, 0),
+                comment="contact point at the shank tip; foot frame aligned with the trunk at q = 0")
+        m.loop(s + "knee_linkage", "revolute", s + "knee_rod", (lrod, 0, 0), (0, -psi_rod, 0),
+               s + "shank", (QK_LEVER[0], 0, QK_LEVER[1]), (0, -QK_KNEE0, 0), Y,
+               comment="rod end = shank lever pin; cut frames aligned with the thigh at q = 0")
+    return m
+
+
 MODELS = [
     ("four_bar_internal.urdf", lambda: four_bar(False)),
     ("four_bar_terminal.urdf", lambda: four_bar(True)),
@@ -408,6 +492,7 @@ MODELS = [
     ("parallel_gripper.urdf", parallel_gripper),
     ("biped_floating.urdf", biped_floating),
     ("singular_four_bar.urdf", singular_four_bar),
+    ("quadruped_loop_knees.urdf", quadruped_loop_knees),
 ]
 
 
