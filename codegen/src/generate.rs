@@ -812,7 +812,7 @@ fn generate_algorithm(
         let inputs: Vec<Vec<Sym>> = (0u8..)
             .zip(spec.inputs)
             .map(|(arg, i)| {
-                (0..i.len.len(&dims))
+                (0..i.len.len(&dims) * i.columns.unwrap_or(1))
                     .map(|k| named_input(arg, i, k))
                     .collect()
             })
@@ -979,6 +979,85 @@ pub fn generation_model(loaded: &Loaded, options: &ModelOptions) -> Result<Model
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn quadruped() -> Loaded {
+        crate::load(concat!(env!("CARGO_MANIFEST_DIR"), "/../models/quadruped.urdf").as_ref())
+            .unwrap()
+    }
+
+    #[test]
+    fn links_named_at_generation_time_are_checked_and_generate_their_functions() {
+        let loaded = quadruped();
+        let with_links = |wrenches: &[&str], frames: &[&str], only: Option<Vec<Algorithm>>| {
+            GenerateOptions {
+                f32: false,
+                links: LinkOptions {
+                    wrenches: wrenches.iter().map(|s| s.to_string()).collect(),
+                    frames: frames.iter().map(|s| s.to_string()).collect(),
+                    reference: Reference::World,
+                },
+                ..GenerateOptions::default()
+            }
+            .with_requested(only, &[])
+        };
+        // An unknown link: named, with the closest names.
+        let e = generate_source(&loaded, &with_links(&["FL_fot"], &[], None))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains(
+                "--wrenches / wrenches(…): there is no link \"FL_fot\" (did you mean \"FL_foot\"?)"
+            ),
+            "{e}"
+        );
+        let e = generate_source(&loaded, &with_links(&[], &["elbow"], None))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("there is no link \"elbow\" (`embedyn info` lists"),
+            "{e}"
+        );
+        // A function of links asked for without links.
+        let e = generate_source(
+            &loaded,
+            &with_links(&[], &[], Some(vec![Algorithm::NleExt])),
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.contains(
+                "`nle_ext` is generated for links named at generation time, and none is named"
+            ),
+            "{e}"
+        );
+        // Without `only`: aba_ext, rnea_ext and one frame function per link (each link once).
+        let text = generate_source(
+            &loaded,
+            &with_links(
+                &["FL_foot", "imu", "FL_foot"],
+                &["trunk", "FL_foot", "trunk"],
+                None,
+            ),
+        )
+        .unwrap();
+        for f in [
+            "pub fn aba(",
+            "pub fn aba_ext(",
+            "pub fn rnea_ext(",
+            "pub fn frame_trunk(",
+            "pub fn frame_fl_foot(",
+            "f_ext: &[[S; 6]; 2]",
+            "pub const WRENCH_LINKS: [&str; 2] = [\"FL_foot\", \"imu\"];",
+            "pub const IMU: usize = 1;",
+            "reference `world`",
+        ] {
+            assert!(text.contains(f), "{f}");
+        }
+        assert!(!text.contains("pub fn nle_ext("));
+        // Without links nothing of them is generated: `aba` as before.
+        let plain = generate_source(&loaded, &with_links(&[], &[], None)).unwrap();
+        assert!(!plain.contains("WRENCH_LINKS") && !plain.contains("f_ext"));
+    }
 
     #[test]
     fn requested_functions_are_merged_alike_for_the_macro_and_the_command_line() {
