@@ -65,17 +65,22 @@ impl Measure for f64 {
 }
 
 type FrameFn = fn(&[f64], &[f64], &mut [f64; 12], &mut [f64], &mut [f64; 6]);
+type AbaExtFn = fn(&[f64], &[f64], &[f64], &[[f64; 6]], &mut [f64]) -> Option<f64>;
+type RneaExtFn = fn(&[f64], &[f64], &[f64], &[[f64; 6]], &mut [f64]);
+type NleExtFn = fn(&[f64], &[f64], &[[f64; 6]], &mut [f64]);
+type ComFn = fn(&[f64], &[f64], &mut [f64; 3], &mut [f64; 3], &mut [f64]);
+type CentroidalFn = fn(&[f64], &[f64], &mut [f64; 6], &mut [f64], &mut [f64; 6]);
 
 /// One module's generated functions over slices (matrices row-major).
 struct Generated {
     wrench_links: &'static [&'static str],
     reference: Reference,
-    aba_ext: fn(&[f64], &[f64], &[f64], &[[f64; 6]], &mut [f64]) -> Option<f64>,
-    rnea_ext: fn(&[f64], &[f64], &[f64], &[[f64; 6]], &mut [f64]),
-    nle_ext: Option<fn(&[f64], &[f64], &[[f64; 6]], &mut [f64])>,
+    aba_ext: AbaExtFn,
+    rnea_ext: RneaExtFn,
+    nle_ext: Option<NleExtFn>,
     frames: Vec<(&'static str, FrameFn)>,
-    com: fn(&[f64], &[f64], &mut [f64; 3], &mut [f64; 3], &mut [f64]),
-    centroidal: fn(&[f64], &[f64], &mut [f64; 6], &mut [f64], &mut [f64; 6]),
+    com: ComFn,
+    centroidal: CentroidalFn,
 }
 
 macro_rules! generated {

@@ -1016,7 +1016,7 @@ pub const ALGORITHMS: &[AlgorithmSpec] = &[
         readme_note_with_constraints: None,
         cli: None,
         growth: Growth::Linear,
-        predicted_operations: |c| 120.0 * c.nv + 20.0 * c.links,
+        predicted_operations: |c| 200.0 * c.nv + 20.0 * c.links,
         trace: |model, ws, inputs, _| {
             forward_kinematics(model, ws, &inputs[0], &inputs[1])?;
             let c = center_of_mass(model, ws);
@@ -1075,7 +1075,7 @@ pub const ALGORITHMS: &[AlgorithmSpec] = &[
         readme_note_with_constraints: None,
         cli: None,
         growth: Growth::Linear,
-        predicted_operations: |c| 300.0 * c.nv + 40.0 * c.links,
+        predicted_operations: |c| 600.0 * c.nv + 40.0 * c.links,
         trace: |model, ws, inputs, _| {
             let nv = model.nv();
             forward_kinematics_acceleration(
