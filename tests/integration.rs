@@ -23,6 +23,7 @@ mod fuzz_corpus;
 mod fuzz_findings;
 mod generated;
 mod generated_chain;
+mod generated_contact;
 mod gravity_nle;
 mod limits;
 mod loop_simulation;

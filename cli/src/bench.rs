@@ -113,7 +113,15 @@ pub fn bench(
         time(&mut || {
             k = (k + 1) % st.len();
             let (q, v, x) = &st[k];
-            black_box(run(model, ws, &[black_box(q), v, x]).is_ok());
+            black_box(
+                run(
+                    model,
+                    ws,
+                    &[black_box(q), v, x],
+                    &embedyn_codegen::algorithm::Links::NONE,
+                )
+                .is_ok(),
+            );
         })
     };
     let timed: Vec<Algorithm> = Algorithm::timed_by_bench().collect();

@@ -205,6 +205,18 @@ pub enum Command {
         /// Refuse code that rustc is estimated to need more than this many MB of memory to compile.
         #[arg(long, value_name = "MB", default_value_t = embedyn_codegen::DEFAULT_COMPILE_MEMORY_MB)]
         max_compile_memory: u64,
+        /// Links that take external wrenches, comma-separated: `aba_ext` and `rnea_ext` (and `nle_ext`
+        /// with `--only`) take one row `[fx, fy, fz, tx, ty, tz]` of `f_ext` per link, in this order, in
+        /// the link's frame about its origin.
+        #[arg(long, value_delimiter = ',', value_name = "LINK,...")]
+        wrenches: Vec<String>,
+        /// Links that get a function `frame_<link>` each, comma-separated: world pose, 6 × nv Jacobian and
+        /// bias (classical acceleration at qdd = 0).
+        #[arg(long, value_delimiter = ',', value_name = "LINK,...")]
+        frames: Vec<String>,
+        /// Where the frame functions express their Jacobian and bias (Pinocchio's references).
+        #[arg(long, value_parser = ["local", "local_world_aligned", "world"], default_value = "local_world_aligned")]
+        reference: String,
     },
     /// Time every algorithm for each engine and scalar (median ns per call, in-process, pre-generated
     /// random states).
@@ -824,6 +836,9 @@ pub fn run(cli: Cli) -> Result<Printed, CliError> {
             only,
             scalar,
             max_compile_memory,
+            wrenches,
+            frames,
+            reference,
         } => {
             let loaded = load_reporting(&model)?;
             let options = embedyn_codegen::GenerateOptions {
@@ -831,6 +846,14 @@ pub fn run(cli: Cli) -> Result<Printed, CliError> {
                 f64: scalar != Some(Scalar::F32),
                 f32: scalar != Some(Scalar::F64),
                 max_compile_memory_mb: Some(max_compile_memory),
+                links: embedyn_codegen::LinkOptions {
+                    // Link names are data: taken exactly as given.
+                    wrenches,
+                    frames,
+                    // The parser admits only the three names.
+                    reference: embedyn_codegen::Reference::from_name(&reference)
+                        .unwrap_or_default(),
+                },
                 ..Default::default()
             };
             let only = only

@@ -7,9 +7,13 @@
 
 use crate::trace::Sym;
 use embedyn_runtime::constraints::{completion_step, constraint_condition};
+use embedyn_runtime::nalgebra::{Matrix3xX, Matrix6xX, Vector3};
 use embedyn_runtime::{
-    aba, crba, difference, embedding_map_in, forward_kinematics, gravity, integrate, link_poses,
-    mass_matrix_inverse, nle, reduced_mass_matrix_in, rnea, DynamicsError, Model, Workspace,
+    aba, aba_ext, center_of_mass, centroidal_momentum, centroidal_momentum_matrix,
+    centroidal_momentum_rate, com_jacobian, crba, difference, embedding_map_in, forward_kinematics,
+    forward_kinematics_acceleration, frame_classical_acceleration, frame_jacobian, frame_placement,
+    gravity, integrate, link_poses, mass_matrix_inverse, nle, nle_ext, reduced_mass_matrix_in,
+    rnea, rnea_ext, DynamicsError, FrameId, LinkWrench, Model, Real, Reference, Workspace,
 };
 
 /// The algorithms code can be generated for; [`Algorithm::spec`] describes each.
@@ -39,6 +43,18 @@ pub enum Algorithm {
     Integrate,
     /// `difference`: `q1 ⊖ q`, the velocity that `integrate` takes from `q` to `q1`.
     Difference,
+    /// `aba_ext`: forward dynamics with the wrenches of the links named at generation time.
+    AbaExt,
+    /// `rnea_ext`: inverse dynamics with the wrenches of the links named at generation time.
+    RneaExt,
+    /// `nle_ext`: the nonlinear effects with the wrenches of the links named at generation time.
+    NleExt,
+    /// `frame_<link>`: pose, Jacobian and bias of one link named at generation time.
+    Frame,
+    /// `com`: centre of mass, its velocity and Jacobian.
+    Com,
+    /// `centroidal`: centroidal momentum, its matrix and its bias rate.
+    Centroidal,
 }
 
 /// A length of an argument or an output, in the model's terms.
@@ -52,6 +68,8 @@ pub enum Dim {
     Ni,
     /// `FRAMES.len()`, the links on moving bodies.
     Frames,
+    /// `WRENCH_LINKS.len()`, the links named at generation time to take external wrenches.
+    WrenchLinks,
     /// A fixed length.
     Fixed(usize),
 }
@@ -67,6 +85,8 @@ pub struct Dims {
     pub ni: usize,
     /// Number of links on moving bodies.
     pub frames: usize,
+    /// Number of links named to take external wrenches (0 unless the generator sets it).
+    pub wrench_links: usize,
 }
 
 impl Dims {
@@ -77,6 +97,7 @@ impl Dims {
             nv: model.nv(),
             ni: model.independent_nv(),
             frames: model.bodies.iter().map(|b| b.links.len()).sum(),
+            wrench_links: 0,
         }
     }
 }
@@ -89,6 +110,7 @@ impl Dim {
             Dim::Nv => dims.nv,
             Dim::Ni => dims.ni,
             Dim::Frames => dims.frames,
+            Dim::WrenchLinks => dims.wrench_links,
             Dim::Fixed(n) => n,
         }
     }
@@ -100,18 +122,21 @@ impl Dim {
             Dim::Nv => "NV".into(),
             Dim::Ni => "NI".into(),
             Dim::Frames => "FRAMES.len()".into(),
+            Dim::WrenchLinks => "WRENCH_LINKS.len()".into(),
             Dim::Fixed(n) => n.to_string(),
         }
     }
 }
 
-/// One argument of a generated function: `name: &[S; len]`.
+/// One argument of a generated function: `name: &[S; len]`, or `name: &[[S; columns]; len]`.
 #[derive(Clone, Copy, Debug)]
 pub struct InputSpec {
     /// The argument's name.
     pub name: &'static str,
-    /// Its length.
+    /// Its length (its number of rows when it has `columns`).
     pub len: Dim,
+    /// The length of each row of a matrix argument (`f_ext`: 6); `None` for a vector.
+    pub columns: Option<usize>,
     /// Physical units of the entries.
     pub unit: &'static str,
 }
@@ -157,6 +182,44 @@ pub enum WhenGenerated {
     WithConstraints,
     /// When asked for by name (its own option of the macro and of `embedyn generate`, `--minv`).
     OnRequest,
+    /// When the links its [`Parameter`] reads are named (`wrenches(…)`: `aba_ext`, `rnea_ext`;
+    /// `frames(…)`: one `frame_<link>` per link).
+    WithLinks,
+}
+
+/// What a function is generated for beyond the model: links named at generation time.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Parameter {
+    /// Nothing: one function per model, named as the algorithm.
+    None,
+    /// The links that take external wrenches (macro `wrenches(…)`, `embedyn generate --wrenches`), in the
+    /// order named (`WRENCH_LINKS`): the input `f_ext` has one row `[fx, fy, fz, tx, ty, tz]` per link, in
+    /// that link's frame about its origin. Other links take none and cost nothing.
+    WrenchLinks,
+    /// One link (macro `frames(…)`, `--frames`): one function per link named, `frame_<link>` (the link's
+    /// name through the sanitizer, as the index constants spell it, in snake_case), in the reference
+    /// chosen (`reference = …`, `--reference`; default `local_world_aligned`).
+    Frame,
+}
+
+/// The links a function is generated for, found on the model (see [`Parameter`]).
+#[derive(Clone, Copy, Debug)]
+pub struct Links<'a> {
+    /// The frames whose wrenches `f_ext` holds, in its row order.
+    pub wrenches: &'a [FrameId],
+    /// The frame of a `frame_<link>` function.
+    pub frame: Option<FrameId>,
+    /// Where a frame function expresses its Jacobian and bias.
+    pub reference: Reference,
+}
+
+impl Links<'_> {
+    /// No links: what a function of [`Parameter::None`] is traced with.
+    pub const NONE: Links<'static> = Links {
+        wrenches: &[],
+        frame: None,
+        reference: Reference::LocalWorldAligned,
+    };
 }
 
 /// How fast a function's code grows with the model (for the size guard's advice).
@@ -202,13 +265,15 @@ pub struct CliSpec {
     pub timed: bool,
 }
 
-/// Runs an algorithm on the traced scalar (inputs in the order of [`AlgorithmSpec::inputs`]).
+/// Runs an algorithm on the traced scalar (inputs in the order of [`AlgorithmSpec::inputs`], matrices
+/// row-major) for the links of its [`Parameter`].
 pub type TraceFn =
-    fn(&Model<Sym>, &mut Workspace<Sym>, &[Vec<Sym>]) -> Result<Traced, DynamicsError>;
+    fn(&Model<Sym>, &mut Workspace<Sym>, &[Vec<Sym>], &Links) -> Result<Traced, DynamicsError>;
 
-/// Runs the interpreted solver's algorithm in f64 (inputs in the order of [`AlgorithmSpec::inputs`]).
+/// Runs the interpreted solver's algorithm in f64 (inputs in the order of [`AlgorithmSpec::inputs`],
+/// matrices row-major) for the links of its [`Parameter`].
 pub type InterpretedFn =
-    fn(&Model<f64>, &mut Workspace<f64>, &[&[f64]]) -> Result<(), DynamicsError>;
+    fn(&Model<f64>, &mut Workspace<f64>, &[&[f64]], &Links) -> Result<(), DynamicsError>;
 
 /// Everything about one algorithm.
 pub struct AlgorithmSpec {
@@ -236,6 +301,8 @@ pub struct AlgorithmSpec {
     pub needs_constraints: bool,
     /// When it is generated without `only(…)`.
     pub generated: WhenGenerated,
+    /// The links named at generation time it is generated for.
+    pub parameter: Parameter,
     /// The standalone crate's README: the note after the signature, for a tree and, when it differs, for
     /// a model with constraints.
     pub readme_note: &'static str,
@@ -256,27 +323,38 @@ pub struct AlgorithmSpec {
 const Q: InputSpec = InputSpec {
     name: "q",
     len: Dim::Nq,
+    columns: None,
     unit: "rad or m; a floating joint's [x y z qx qy qz qw]",
 };
 const V: InputSpec = InputSpec {
     name: "v",
     len: Dim::Nv,
+    columns: None,
     unit: "rad/s or m/s",
 };
 const TAU: InputSpec = InputSpec {
     name: "tau",
     len: Dim::Nv,
+    columns: None,
     unit: "N·m or N",
 };
 const QDD: InputSpec = InputSpec {
     name: "qdd",
     len: Dim::Nv,
+    columns: None,
     unit: "rad/s² or m/s²",
 };
 const Q1: InputSpec = InputSpec {
     name: "q1",
     len: Dim::Nq,
+    columns: None,
     unit: "rad or m; a floating joint's [x y z qx qy qz qw]",
+};
+const F_EXT: InputSpec = InputSpec {
+    name: "f_ext",
+    len: Dim::WrenchLinks,
+    columns: Some(6),
+    unit: "N (force), N·m (torque); each row in its link's frame, about its origin",
 };
 const MASS_UNIT: &str = "kg·m², kg·m or kg";
 
@@ -299,12 +377,13 @@ pub const ALGORITHMS: &[AlgorithmSpec] = &[
         returns: Returns::Nothing,
         needs_constraints: false,
         generated: WhenGenerated::ByDefault,
+        parameter: Parameter::None,
         readme_note: " — the world pose of each link in `FRAMES`: rotation row-major, then the origin",
         readme_note_with_constraints: None,
         cli: None,
         growth: Growth::Linear,
         predicted_operations: |c| 40.0 * (c.nv + c.links),
-        trace: |model, ws, inputs| {
+        trace: |model, ws, inputs, _| {
             let zeros = vec![Sym::Const(0.0); model.nv()];
             forward_kinematics(model, ws, &inputs[0], &zeros)?;
             let mut values = Vec::new();
@@ -321,7 +400,7 @@ pub const ALGORITHMS: &[AlgorithmSpec] = &[
                 returned: None,
             })
         },
-        interpreted: |model, ws, inputs| {
+        interpreted: |model, ws, inputs, _| {
             forward_kinematics(model, ws, inputs[0], &vec![0.0; model.nv()])
         },
     },
@@ -342,6 +421,7 @@ pub const ALGORITHMS: &[AlgorithmSpec] = &[
         returns: Returns::SingularityMeasure,
         needs_constraints: false,
         generated: WhenGenerated::ByDefault,
+        parameter: Parameter::None,
         readme_note: "",
         readme_note_with_constraints: Some(" — returns the singularity measure cond₁(Y1): where it is not below `SINGULARITY_THRESHOLD` (or is NaN) the configuration is at or too near a singular one and `qdd` is meaningless (the interpreted solver refuses there)"),
         cli: Some(CliSpec {
@@ -351,14 +431,14 @@ pub const ALGORITHMS: &[AlgorithmSpec] = &[
         }),
         growth: Growth::Linear,
         predicted_operations: |c| 440.0 * c.nv,
-        trace: |model, ws, inputs| {
+        trace: |model, ws, inputs, _| {
             let qdd = aba(model, ws, &inputs[0], &inputs[1], &inputs[2])?.to_vec();
             Ok(Traced {
                 outputs: vec![qdd],
                 returned: model.has_constraints().then(|| constraint_condition(ws)),
             })
         },
-        interpreted: |model, ws, inputs| {
+        interpreted: |model, ws, inputs, _| {
             aba(model, ws, inputs[0], inputs[1], inputs[2]).map(|_| ())
         },
     },
@@ -379,6 +459,7 @@ pub const ALGORITHMS: &[AlgorithmSpec] = &[
         returns: Returns::Nothing,
         needs_constraints: false,
         generated: WhenGenerated::ByDefault,
+        parameter: Parameter::None,
         readme_note: "",
         readme_note_with_constraints: None,
         cli: Some(CliSpec {
@@ -388,14 +469,14 @@ pub const ALGORITHMS: &[AlgorithmSpec] = &[
         }),
         growth: Growth::Linear,
         predicted_operations: |c| 215.0 * c.nv,
-        trace: |model, ws, inputs| {
+        trace: |model, ws, inputs, _| {
             let tau = rnea(model, ws, &inputs[0], &inputs[1], &inputs[2])?.to_vec();
             Ok(Traced {
                 outputs: vec![tau],
                 returned: None,
             })
         },
-        interpreted: |model, ws, inputs| {
+        interpreted: |model, ws, inputs, _| {
             rnea(model, ws, inputs[0], inputs[1], inputs[2]).map(|_| ())
         },
     },
@@ -416,6 +497,7 @@ pub const ALGORITHMS: &[AlgorithmSpec] = &[
         returns: Returns::Nothing,
         needs_constraints: false,
         generated: WhenGenerated::OnRequest,
+        parameter: Parameter::None,
         readme_note: " — the generalized gravity `g(q)`",
         readme_note_with_constraints: Some(" — the generalized gravity `g(q)` on the spanning tree's joints; `Xᵀ τ` acts on the independent coordinates"),
         cli: Some(CliSpec {
@@ -425,14 +507,14 @@ pub const ALGORITHMS: &[AlgorithmSpec] = &[
         }),
         growth: Growth::Linear,
         predicted_operations: |c| 100.0 * c.nv,
-        trace: |model, ws, inputs| {
+        trace: |model, ws, inputs, _| {
             let tau = gravity(model, ws, &inputs[0])?.to_vec();
             Ok(Traced {
                 outputs: vec![tau],
                 returned: None,
             })
         },
-        interpreted: |model, ws, inputs| gravity(model, ws, inputs[0]).map(|_| ()),
+        interpreted: |model, ws, inputs, _| gravity(model, ws, inputs[0]).map(|_| ()),
     },
     AlgorithmSpec {
         algorithm: Algorithm::Nle,
@@ -451,6 +533,7 @@ pub const ALGORITHMS: &[AlgorithmSpec] = &[
         returns: Returns::Nothing,
         needs_constraints: false,
         generated: WhenGenerated::OnRequest,
+        parameter: Parameter::None,
         readme_note: " — the nonlinear effects `C(q, v) v + g(q)`",
         readme_note_with_constraints: Some(" — the nonlinear effects `C(q, v) v + g(q)` on the spanning tree's joints, for a `v` on the velocity constraints; `Xᵀ τ` acts on the independent coordinates"),
         cli: Some(CliSpec {
@@ -460,14 +543,14 @@ pub const ALGORITHMS: &[AlgorithmSpec] = &[
         }),
         growth: Growth::Linear,
         predicted_operations: |c| 215.0 * c.nv,
-        trace: |model, ws, inputs| {
+        trace: |model, ws, inputs, _| {
             let tau = nle(model, ws, &inputs[0], &inputs[1])?.to_vec();
             Ok(Traced {
                 outputs: vec![tau],
                 returned: None,
             })
         },
-        interpreted: |model, ws, inputs| nle(model, ws, inputs[0], inputs[1]).map(|_| ()),
+        interpreted: |model, ws, inputs, _| nle(model, ws, inputs[0], inputs[1]).map(|_| ()),
     },
     AlgorithmSpec {
         algorithm: Algorithm::Crba,
@@ -486,6 +569,7 @@ pub const ALGORITHMS: &[AlgorithmSpec] = &[
         returns: Returns::Nothing,
         needs_constraints: false,
         generated: WhenGenerated::ByDefault,
+        parameter: Parameter::None,
         readme_note: "",
         readme_note_with_constraints: None,
         cli: Some(CliSpec {
@@ -495,14 +579,14 @@ pub const ALGORITHMS: &[AlgorithmSpec] = &[
         }),
         growth: Growth::Quadratic,
         predicted_operations: |c| c.crba,
-        trace: |model, ws, inputs| {
+        trace: |model, ws, inputs, _| {
             let m = crba(model, ws, &inputs[0])?;
             Ok(Traced {
                 outputs: vec![row_major(m)],
                 returned: None,
             })
         },
-        interpreted: |model, ws, inputs| crba(model, ws, inputs[0]).map(|_| ()),
+        interpreted: |model, ws, inputs, _| crba(model, ws, inputs[0]).map(|_| ()),
     },
     AlgorithmSpec {
         algorithm: Algorithm::Minv,
@@ -521,19 +605,20 @@ pub const ALGORITHMS: &[AlgorithmSpec] = &[
         returns: Returns::Nothing,
         needs_constraints: false,
         generated: WhenGenerated::OnRequest,
+        parameter: Parameter::None,
         readme_note: "",
         readme_note_with_constraints: None,
         cli: None,
         growth: Growth::Quadratic,
         predicted_operations: |c| 38.0 * c.nv * c.nv + 170.0 * c.nv,
-        trace: |model, ws, inputs| {
+        trace: |model, ws, inputs, _| {
             let m_inv = mass_matrix_inverse(model, ws, &inputs[0])?;
             Ok(Traced {
                 outputs: vec![row_major(m_inv)],
                 returned: None,
             })
         },
-        interpreted: |model, ws, inputs| mass_matrix_inverse(model, ws, inputs[0]).map(|_| ()),
+        interpreted: |model, ws, inputs, _| mass_matrix_inverse(model, ws, inputs[0]).map(|_| ()),
     },
     AlgorithmSpec {
         algorithm: Algorithm::Complete,
@@ -552,12 +637,13 @@ pub const ALGORITHMS: &[AlgorithmSpec] = &[
         returns: Returns::Residual,
         needs_constraints: true,
         generated: WhenGenerated::WithConstraints,
+        parameter: Parameter::None,
         readme_note: "",
         readme_note_with_constraints: None,
         cli: None,
         growth: Growth::Linear,
         predicted_operations: |c| 100.0 * c.nv,
-        trace: |model, ws, inputs| {
+        trace: |model, ws, inputs, _| {
             let mut q_out = inputs[0].clone();
             let residual = completion_step(model, ws, &mut q_out)?;
             Ok(Traced {
@@ -565,7 +651,7 @@ pub const ALGORITHMS: &[AlgorithmSpec] = &[
                 returned: Some(residual),
             })
         },
-        interpreted: |model, ws, inputs| {
+        interpreted: |model, ws, inputs, _| {
             completion_step(model, ws, &mut inputs[0].to_vec()).map(|_| ())
         },
     },
@@ -586,19 +672,20 @@ pub const ALGORITHMS: &[AlgorithmSpec] = &[
         returns: Returns::SingularityMeasure,
         needs_constraints: true,
         generated: WhenGenerated::WithConstraints,
+        parameter: Parameter::None,
         readme_note: " — `v = X v_independent`; returns the singularity measure, as `aba` does",
         readme_note_with_constraints: None,
         cli: None,
         growth: Growth::Linear,
         predicted_operations: |c| 50.0 * c.nv + 2.0 * c.nv * c.ni,
-        trace: |model, ws, inputs| {
+        trace: |model, ws, inputs, _| {
             let x = row_major(embedding_map_in(model, ws, &inputs[0])?);
             Ok(Traced {
                 outputs: vec![x],
                 returned: Some(constraint_condition(ws)),
             })
         },
-        interpreted: |model, ws, inputs| embedding_map_in(model, ws, inputs[0]).map(|_| ()),
+        interpreted: |model, ws, inputs, _| embedding_map_in(model, ws, inputs[0]).map(|_| ()),
     },
     AlgorithmSpec {
         algorithm: Algorithm::CrbaIndependent,
@@ -617,19 +704,20 @@ pub const ALGORITHMS: &[AlgorithmSpec] = &[
         returns: Returns::SingularityMeasure,
         needs_constraints: true,
         generated: WhenGenerated::WithConstraints,
+        parameter: Parameter::None,
         readme_note: " — the mass matrix over the independent coordinates, `Xᵀ M X`",
         readme_note_with_constraints: None,
         cli: None,
         growth: Growth::Quadratic,
         predicted_operations: |c| 1.25 * c.crba + 2.0 * c.nv * c.ni,
-        trace: |model, ws, inputs| {
+        trace: |model, ws, inputs, _| {
             let m = row_major(reduced_mass_matrix_in(model, ws, &inputs[0])?);
             Ok(Traced {
                 outputs: vec![m],
                 returned: Some(constraint_condition(ws)),
             })
         },
-        interpreted: |model, ws, inputs| {
+        interpreted: |model, ws, inputs, _| {
             reduced_mass_matrix_in(model, ws, inputs[0]).map(|_| ())
         },
     },
@@ -650,6 +738,7 @@ pub const ALGORITHMS: &[AlgorithmSpec] = &[
         returns: Returns::Nothing,
         needs_constraints: false,
         generated: WhenGenerated::OnRequest,
+        parameter: Parameter::None,
         readme_note: " — `q ⊕ v`: a floating joint moves by the SE(3) exponential of its body-frame twist",
         readme_note_with_constraints: None,
         cli: Some(CliSpec {
@@ -659,7 +748,7 @@ pub const ALGORITHMS: &[AlgorithmSpec] = &[
         }),
         growth: Growth::Linear,
         predicted_operations: |c| 20.0 * c.nv + 200.0,
-        trace: |model, _ws, inputs| {
+        trace: |model, _ws, inputs, _| {
             let mut q_out = vec![Sym::Const(0.0); model.nq()];
             integrate(model, &inputs[0], &inputs[1], &mut q_out)?;
             Ok(Traced {
@@ -667,7 +756,7 @@ pub const ALGORITHMS: &[AlgorithmSpec] = &[
                 returned: None,
             })
         },
-        interpreted: |model, _ws, inputs| {
+        interpreted: |model, _ws, inputs, _| {
             integrate(model, inputs[0], inputs[1], &mut vec![0.0; model.nq()])
         },
     },
@@ -688,6 +777,7 @@ pub const ALGORITHMS: &[AlgorithmSpec] = &[
         returns: Returns::Nothing,
         needs_constraints: false,
         generated: WhenGenerated::OnRequest,
+        parameter: Parameter::None,
         readme_note: " — `q1 ⊖ q`, the `v` of least rotation with `integrate(q, v) = q1`",
         readme_note_with_constraints: None,
         cli: Some(CliSpec {
@@ -697,7 +787,7 @@ pub const ALGORITHMS: &[AlgorithmSpec] = &[
         }),
         growth: Growth::Linear,
         predicted_operations: |c| 20.0 * c.nv + 300.0,
-        trace: |model, _ws, inputs| {
+        trace: |model, _ws, inputs, _| {
             let mut v = vec![Sym::Const(0.0); model.nv()];
             difference(model, &inputs[0], &inputs[1], &mut v)?;
             Ok(Traced {
@@ -705,11 +795,357 @@ pub const ALGORITHMS: &[AlgorithmSpec] = &[
                 returned: None,
             })
         },
-        interpreted: |model, _ws, inputs| {
+        interpreted: |model, _ws, inputs, _| {
             difference(model, inputs[0], inputs[1], &mut vec![0.0; model.nv()])
         },
     },
+    AlgorithmSpec {
+        algorithm: Algorithm::AbaExt,
+        name: "aba_ext",
+        traced_name: "aba_ext",
+        wrapper: None,
+        summary: "`aba` with the wrenches `f_ext` of the links named at generation time (`wrenches(…)`, `--wrenches`)",
+        doc: "Forward dynamics with external wrenches: `qdd = M(q)⁻¹ (τ + Σ Jᵀ f − C(q, v) − g(q))` (the articulated-body algorithm, unrolled). Row `k` of `f_ext` is the wrench `[fx, fy, fz, tx, ty, tz]` (N, N·m) the environment applies to link `WRENCH_LINKS[k]` (index constants in `wrench`), in that link's own frame, about its origin; links not in `WRENCH_LINKS` take none and cost nothing.",
+        doc_with_constraints: Some("Forward dynamics with external wrenches and constraint embedding: `qdd` over all spanning coordinates (the articulated-body algorithm with each aggregate link inline, unrolled). Row `k` of `f_ext` is the wrench `[fx, fy, fz, tx, ty, tz]` (N, N·m) the environment applies to link `WRENCH_LINKS[k]` (index constants in `wrench`), in that link's own frame, about its origin; like `tau`, only the wrenches' projection onto the independent coordinates acts. Returns the singularity measure, the largest condition number cond₁(Y1) over the loops: where it is not below `SINGULARITY_THRESHOLD` (`!(cond < SINGULARITY_THRESHOLD)`, which also catches NaN) the configuration is at or too near a singular one (a toggle) and `qdd` is meaningless — the interpreted solver refuses there."),
+        inputs: &[Q, V, TAU, F_EXT],
+        outputs: &[OutputSpec {
+            name: "qdd",
+            shape: Shape::Vector(Dim::Nv),
+            unit: "rad/s² or m/s²",
+        }],
+        returns: Returns::SingularityMeasure,
+        needs_constraints: false,
+        generated: WhenGenerated::WithLinks,
+        parameter: Parameter::WrenchLinks,
+        readme_note: " — `aba` with row `k` of `f_ext` the wrench `[fx, fy, fz, tx, ty, tz]` on link `WRENCH_LINKS[k]`, in its frame about its origin",
+        readme_note_with_constraints: Some(" — `aba` with row `k` of `f_ext` the wrench `[fx, fy, fz, tx, ty, tz]` on link `WRENCH_LINKS[k]`, in its frame about its origin; returns the singularity measure, as `aba` does"),
+        cli: None,
+        growth: Growth::Linear,
+        predicted_operations: |c| 440.0 * c.nv + 40.0 * c.links,
+        trace: |model, ws, inputs, links| {
+            let f_ext = link_wrenches(links.wrenches, &inputs[3]);
+            let qdd = aba_ext(model, ws, &inputs[0], &inputs[1], &inputs[2], &f_ext)?.to_vec();
+            Ok(Traced {
+                outputs: vec![qdd],
+                returned: model.has_constraints().then(|| constraint_condition(ws)),
+            })
+        },
+        interpreted: |model, ws, inputs, links| {
+            let f_ext = link_wrenches(links.wrenches, inputs[3]);
+            aba_ext(model, ws, inputs[0], inputs[1], inputs[2], &f_ext).map(|_| ())
+        },
+    },
+    AlgorithmSpec {
+        algorithm: Algorithm::RneaExt,
+        name: "rnea_ext",
+        traced_name: "rnea_ext",
+        wrapper: None,
+        summary: "`rnea` with the wrenches `f_ext` of the links named at generation time",
+        doc: "Inverse dynamics with external wrenches: `τ = M(q) qdd + C(q, v) + g(q) − Σ Jᵀ f` (recursive Newton–Euler, unrolled): the joint forces that give `qdd` while the environment applies `f_ext`. Row `k` of `f_ext` is the wrench `[fx, fy, fz, tx, ty, tz]` (N, N·m) on link `WRENCH_LINKS[k]` (index constants in `wrench`), in that link's own frame, about its origin.",
+        doc_with_constraints: None,
+        inputs: &[Q, V, QDD, F_EXT],
+        outputs: &[OutputSpec {
+            name: "tau",
+            shape: Shape::Vector(Dim::Nv),
+            unit: "N·m or N",
+        }],
+        returns: Returns::Nothing,
+        needs_constraints: false,
+        generated: WhenGenerated::WithLinks,
+        parameter: Parameter::WrenchLinks,
+        readme_note: " — `rnea` less the joint forces of the wrenches `f_ext` (rows as in `aba_ext`)",
+        readme_note_with_constraints: None,
+        cli: None,
+        growth: Growth::Linear,
+        predicted_operations: |c| 215.0 * c.nv + 40.0 * c.links,
+        trace: |model, ws, inputs, links| {
+            let f_ext = link_wrenches(links.wrenches, &inputs[3]);
+            let tau = rnea_ext(model, ws, &inputs[0], &inputs[1], &inputs[2], &f_ext)?.to_vec();
+            Ok(Traced {
+                outputs: vec![tau],
+                returned: None,
+            })
+        },
+        interpreted: |model, ws, inputs, links| {
+            let f_ext = link_wrenches(links.wrenches, inputs[3]);
+            rnea_ext(model, ws, inputs[0], inputs[1], inputs[2], &f_ext).map(|_| ())
+        },
+    },
+    AlgorithmSpec {
+        algorithm: Algorithm::NleExt,
+        name: "nle_ext",
+        traced_name: "nle_ext",
+        wrapper: None,
+        summary: "`nle` with the wrenches `f_ext` of the links named at generation time (only when asked for)",
+        doc: "Nonlinear effects with external wrenches: `τ = C(q, v) v + g(q) − Σ Jᵀ f` (recursive Newton–Euler at `qdd = 0`, unrolled: no armature). Row `k` of `f_ext` is the wrench `[fx, fy, fz, tx, ty, tz]` (N, N·m) on link `WRENCH_LINKS[k]` (index constants in `wrench`), in that link's own frame, about its origin.",
+        doc_with_constraints: None,
+        inputs: &[Q, V, F_EXT],
+        outputs: &[OutputSpec {
+            name: "tau",
+            shape: Shape::Vector(Dim::Nv),
+            unit: "N·m or N",
+        }],
+        returns: Returns::Nothing,
+        needs_constraints: false,
+        generated: WhenGenerated::OnRequest,
+        parameter: Parameter::WrenchLinks,
+        readme_note: " — `nle` less the joint forces of the wrenches `f_ext` (rows as in `aba_ext`)",
+        readme_note_with_constraints: None,
+        cli: None,
+        growth: Growth::Linear,
+        predicted_operations: |c| 215.0 * c.nv + 40.0 * c.links,
+        trace: |model, ws, inputs, links| {
+            let f_ext = link_wrenches(links.wrenches, &inputs[2]);
+            let tau = nle_ext(model, ws, &inputs[0], &inputs[1], &f_ext)?.to_vec();
+            Ok(Traced {
+                outputs: vec![tau],
+                returned: None,
+            })
+        },
+        interpreted: |model, ws, inputs, links| {
+            let f_ext = link_wrenches(links.wrenches, inputs[2]);
+            nle_ext(model, ws, inputs[0], inputs[1], &f_ext).map(|_| ())
+        },
+    },
+    AlgorithmSpec {
+        algorithm: Algorithm::Frame,
+        name: "frame",
+        traced_name: "frame",
+        wrapper: None,
+        summary: "one per link named at generation time (`frames(…)`, `--frames`): its world pose, 6 × `NV` Jacobian and bias `J̇ v` (classical acceleration at `qdd = 0`) in the chosen reference",
+        doc: "Kinematics of one link: `pose` its world pose `[r00, r01, r02, r10, r11, r12, r20, r21, r22, x, y, z]` (as `kinematics` writes it: the rotation row-major, then the origin); `jacobian` its 6 × `NV` Jacobian, rows linear then angular (the frame's velocity is `jacobian · v`); `bias` its classical acceleration at `qdd = 0`, `[linear; angular]`, without gravity (the acceleration is `jacobian · qdd + bias`; Pinocchio's `getFrameClassicalAcceleration`). Jacobian and bias are in the reference below (Pinocchio's: `local` the link's axes and origin; `local_world_aligned` the world's axes at the link's origin, where `bias = J̇ v`; `world` the world's axes and origin).",
+        doc_with_constraints: Some("Kinematics of one link: `pose` its world pose `[r00, r01, r02, r10, r11, r12, r20, r21, r22, x, y, z]` (as `kinematics` writes it: the rotation row-major, then the origin); `jacobian` its 6 × `NV` Jacobian over the spanning tree's coordinates, rows linear then angular (`jacobian · X`, with `X` from `embedding`, is the Jacobian over the independent ones); `bias` its classical acceleration at `qdd = 0`, `[linear; angular]`, without gravity, for a `v` on the velocity constraints. Jacobian and bias are in the reference below (Pinocchio's: `local` the link's axes and origin; `local_world_aligned` the world's axes at the link's origin, where `bias = J̇ v`; `world` the world's axes and origin)."),
+        inputs: &[Q, V],
+        outputs: &[
+            OutputSpec {
+                name: "pose",
+                shape: Shape::Vector(Dim::Fixed(12)),
+                unit: "1 (rotation), m (origin)",
+            },
+            OutputSpec {
+                name: "jacobian",
+                shape: Shape::Matrix(Dim::Fixed(6), Dim::Nv),
+                unit: "m/rad or 1 (linear rows), rad/rad or rad/m (angular rows)",
+            },
+            OutputSpec {
+                name: "bias",
+                shape: Shape::Vector(Dim::Fixed(6)),
+                unit: "m/s², rad/s²",
+            },
+        ],
+        returns: Returns::Nothing,
+        needs_constraints: false,
+        generated: WhenGenerated::WithLinks,
+        parameter: Parameter::Frame,
+        readme_note: " — one per link named at generation time: world pose (as `kinematics`), 6 × `NV` Jacobian (rows linear then angular) and bias `[linear; angular]` (classical acceleration at `qdd = 0`) in the reference each function's doc names",
+        readme_note_with_constraints: None,
+        cli: None,
+        growth: Growth::Linear,
+        predicted_operations: |c| 150.0 * c.nv + 200.0,
+        trace: |model, ws, inputs, links| {
+            let nv = model.nv();
+            let frame = the_frame(links)?;
+            forward_kinematics_acceleration(
+                model,
+                ws,
+                &inputs[0],
+                &inputs[1],
+                &vec![Sym::Const(0.0); nv],
+            )?;
+            let x = frame_placement(model, ws, frame)?;
+            let mut pose = Vec::with_capacity(12);
+            for r in 0..3 {
+                for c in 0..3 {
+                    pose.push(x.rotation[(r, c)]);
+                }
+            }
+            pose.extend(x.translation.iter().copied());
+            let mut jacobian = Matrix6xX::from_element(nv, Sym::Const(0.0));
+            frame_jacobian(model, ws, frame, links.reference, &mut jacobian)?;
+            let bias = frame_classical_acceleration(model, ws, frame, links.reference)?;
+            Ok(Traced {
+                outputs: vec![
+                    pose,
+                    row_major6(&jacobian),
+                    linear_angular(&bias.linear, &bias.angular),
+                ],
+                returned: None,
+            })
+        },
+        interpreted: |model, ws, inputs, links| {
+            let frame = the_frame(links)?;
+            let zeros = vec![0.0; model.nv()];
+            forward_kinematics_acceleration(model, ws, inputs[0], inputs[1], &zeros)?;
+            frame_placement(model, ws, frame)?;
+            let mut jacobian = Matrix6xX::zeros(model.nv());
+            frame_jacobian(model, ws, frame, links.reference, &mut jacobian)?;
+            frame_classical_acceleration(model, ws, frame, links.reference).map(|_| ())
+        },
+    },
+    AlgorithmSpec {
+        algorithm: Algorithm::Com,
+        name: "com",
+        traced_name: "com",
+        wrapper: None,
+        summary: "centre of mass, its velocity and its 3 × `NV` Jacobian (only when asked for)",
+        doc: "The centre of mass of the bodies that joints move (links fixed to the world are left out, as in Pinocchio) in the world, `com`; its velocity `vcom`; and its 3 × `NV` Jacobian `j_com` (`vcom = j_com · v`; Pinocchio's `jacobianCenterOfMass`).",
+        doc_with_constraints: Some("The centre of mass of the bodies that joints move (links fixed to the world are left out, as in Pinocchio) in the world, `com`; its velocity `vcom` (for a `v` on the velocity constraints); and its 3 × `NV` Jacobian `j_com` over the spanning tree's coordinates (`vcom = j_com · v`; `j_com · X` over the independent ones)."),
+        inputs: &[Q, V],
+        outputs: &[
+            OutputSpec {
+                name: "com",
+                shape: Shape::Vector(Dim::Fixed(3)),
+                unit: "m",
+            },
+            OutputSpec {
+                name: "vcom",
+                shape: Shape::Vector(Dim::Fixed(3)),
+                unit: "m/s",
+            },
+            OutputSpec {
+                name: "j_com",
+                shape: Shape::Matrix(Dim::Fixed(3), Dim::Nv),
+                unit: "m/rad or 1",
+            },
+        ],
+        returns: Returns::Nothing,
+        needs_constraints: false,
+        generated: WhenGenerated::OnRequest,
+        parameter: Parameter::None,
+        readme_note: " — centre of mass in the world, its velocity and its 3 × `NV` Jacobian",
+        readme_note_with_constraints: None,
+        cli: None,
+        growth: Growth::Linear,
+        predicted_operations: |c| 200.0 * c.nv + 20.0 * c.links,
+        trace: |model, ws, inputs, _| {
+            forward_kinematics(model, ws, &inputs[0], &inputs[1])?;
+            let c = center_of_mass(model, ws);
+            let mut j_com = Matrix3xX::from_element(model.nv(), Sym::Const(0.0));
+            com_jacobian(model, ws, &mut j_com)?;
+            let j_com = (0..3)
+                .flat_map(|r| (0..model.nv()).map(move |k| (r, k)))
+                .map(|(r, k)| j_com[(r, k)])
+                .collect();
+            Ok(Traced {
+                outputs: vec![
+                    c.com.iter().copied().collect(),
+                    c.vcom.iter().copied().collect(),
+                    j_com,
+                ],
+                returned: None,
+            })
+        },
+        interpreted: |model, ws, inputs, _| {
+            forward_kinematics(model, ws, inputs[0], inputs[1])?;
+            center_of_mass(model, ws);
+            com_jacobian(model, ws, &mut Matrix3xX::zeros(model.nv())).map(|_| ())
+        },
+    },
+    AlgorithmSpec {
+        algorithm: Algorithm::Centroidal,
+        name: "centroidal",
+        traced_name: "centroidal",
+        wrapper: None,
+        summary: "centroidal momentum `h_g`, its matrix `A_g` (6 × `NV`) and `Ȧ_g v`, rows linear then angular (only when asked for)",
+        doc: "Centroidal momentum (Orin and Goswami; Pinocchio's `ccrba`): `h_g = A_g v`, the linear momentum and the angular momentum about the centre of mass in world axes, `[linear; angular]`; the centroidal momentum matrix `a_g` (6 × `NV`, rows linear then angular); and `dh_g = Ȧ_g v`, the rate of `h_g` at `qdd = 0` (`ḣ_g = A_g qdd + Ȧ_g v`; without gravity), `[linear; angular]`.",
+        doc_with_constraints: Some("Centroidal momentum (Orin and Goswami; Pinocchio's `ccrba`): `h_g = A_g v`, the linear momentum and the angular momentum about the centre of mass in world axes, `[linear; angular]`, for a `v` on the velocity constraints; the centroidal momentum matrix `a_g` (6 × `NV` over the spanning tree's coordinates, rows linear then angular; `a_g · X` over the independent ones); and `dh_g = Ȧ_g v`, the rate of `h_g` at `qdd = 0` (without gravity), `[linear; angular]`."),
+        inputs: &[Q, V],
+        outputs: &[
+            OutputSpec {
+                name: "h_g",
+                shape: Shape::Vector(Dim::Fixed(6)),
+                unit: "kg·m/s (linear), kg·m²/s (angular)",
+            },
+            OutputSpec {
+                name: "a_g",
+                shape: Shape::Matrix(Dim::Fixed(6), Dim::Nv),
+                unit: "kg·m or kg (linear rows), kg·m² or kg·m (angular rows)",
+            },
+            OutputSpec {
+                name: "dh_g",
+                shape: Shape::Vector(Dim::Fixed(6)),
+                unit: "N (linear), N·m (angular)",
+            },
+        ],
+        returns: Returns::Nothing,
+        needs_constraints: false,
+        generated: WhenGenerated::OnRequest,
+        parameter: Parameter::None,
+        readme_note: " — centroidal momentum `h_g`, the matrix `A_g` and `Ȧ_g v`, rows linear then angular (world axes, about the centre of mass)",
+        readme_note_with_constraints: None,
+        cli: None,
+        growth: Growth::Linear,
+        predicted_operations: |c| 600.0 * c.nv + 40.0 * c.links,
+        trace: |model, ws, inputs, _| {
+            let nv = model.nv();
+            forward_kinematics_acceleration(
+                model,
+                ws,
+                &inputs[0],
+                &inputs[1],
+                &vec![Sym::Const(0.0); nv],
+            )?;
+            let mut a_g = Matrix6xX::from_element(nv, Sym::Const(0.0));
+            centroidal_momentum_matrix(model, ws, &mut a_g)?;
+            let h = centroidal_momentum(model, ws);
+            let dh = centroidal_momentum_rate(model, ws);
+            Ok(Traced {
+                outputs: vec![
+                    linear_angular(&h.linear, &h.angular),
+                    row_major6(&a_g),
+                    linear_angular(&dh.linear, &dh.angular),
+                ],
+                returned: None,
+            })
+        },
+        interpreted: |model, ws, inputs, _| {
+            let zeros = vec![0.0; model.nv()];
+            forward_kinematics_acceleration(model, ws, inputs[0], inputs[1], &zeros)?;
+            centroidal_momentum_matrix(model, ws, &mut Matrix6xX::zeros(model.nv()))?;
+            centroidal_momentum(model, ws);
+            centroidal_momentum_rate(model, ws);
+            Ok(())
+        },
+    },
 ];
+
+/// The wrenches of `f_ext`'s rows (`[fx, fy, fz, tx, ty, tz]`, row-major) on `frames`, in order.
+fn link_wrenches<T: Real>(frames: &[FrameId], f_ext: &[T]) -> Vec<LinkWrench<T>> {
+    frames
+        .iter()
+        .zip(f_ext.chunks_exact(6))
+        .map(|(&frame, w)| {
+            LinkWrench::new(
+                frame,
+                Vector3::new(w[0], w[1], w[2]),
+                Vector3::new(w[3], w[4], w[5]),
+            )
+        })
+        .collect()
+}
+
+/// The frame a frame function is generated for (the generator always gives one).
+fn the_frame(links: &Links) -> Result<FrameId, DynamicsError> {
+    links.frame.ok_or(DynamicsError::UnknownFrame {
+        index: 0,
+        frame: FrameId {
+            body: None,
+            link: usize::MAX,
+        },
+    })
+}
+
+/// A 6-row matrix's entries row-major.
+fn row_major6(m: &Matrix6xX<Sym>) -> Vec<Sym> {
+    (0..6)
+        .flat_map(|r| (0..m.ncols()).map(move |c| m[(r, c)]))
+        .collect()
+}
+
+/// `[linear; angular]`.
+fn linear_angular(linear: &Vector3<Sym>, angular: &Vector3<Sym>) -> Vec<Sym> {
+    linear.iter().chain(angular.iter()).copied().collect()
+}
 
 /// A matrix's entries row-major.
 fn row_major(m: &embedyn_runtime::nalgebra::DMatrix<Sym>) -> Vec<Sym> {
@@ -724,7 +1160,7 @@ const _: () = {
         assert!(ALGORITHMS[i].algorithm as usize == i);
         i += 1;
     }
-    assert!(Algorithm::Difference as usize + 1 == ALGORITHMS.len());
+    assert!(Algorithm::Centroidal as usize + 1 == ALGORITHMS.len());
 };
 
 impl Algorithm {
@@ -823,10 +1259,10 @@ impl AlgorithmSpec {
     /// The signature as the standalone crate's README shows it, with its note:
     /// `aba(q: &[S; NQ], v: &[S; NV], tau: &[S; NV], qdd: &mut [S; NV])`.
     pub fn readme_line(&self, constrained: bool) -> String {
-        let inputs = self
-            .inputs
-            .iter()
-            .map(|i| format!("{}: &[S; {}]", i.name, i.len.code()));
+        let inputs = self.inputs.iter().map(|i| match i.columns {
+            None => format!("{}: &[S; {}]", i.name, i.len.code()),
+            Some(c) => format!("{}: &[[S; {c}]; {}]", i.name, i.len.code()),
+        });
         let outputs = self.outputs.iter().map(|o| match o.shape {
             Shape::Vector(n) => format!("{}: &mut [S; {}]", o.name, n.code()),
             Shape::Matrix(rows, cols) => {
@@ -845,9 +1281,18 @@ impl AlgorithmSpec {
         };
         format!(
             "- `{}({}){returned}`{note}\n",
-            self.name,
+            self.shown_name(),
             arguments.join(", ")
         )
+    }
+
+    /// The function's name as documentation shows it: the name, or for a function generated per link
+    /// `frame_<link>`.
+    pub fn shown_name(&self) -> String {
+        match self.parameter {
+            Parameter::Frame => format!("{}_<link>", self.name),
+            Parameter::None | Parameter::WrenchLinks => self.name.to_string(),
+        }
     }
 }
 
@@ -931,7 +1376,7 @@ mod tests {
         let rows = documented_functions();
         let mut described = Vec::new();
         for spec in ALGORITHMS {
-            let signature = documented_signature(spec.name, spec);
+            let signature = documented_signature(&spec.shown_name(), spec);
             let row = rows.iter().find(|r| r.signature == signature);
             assert_eq!(
                 row,
@@ -1001,6 +1446,17 @@ mod tests {
                 "{}",
                 spec.name
             );
+            // A function of wrenches reads `f_ext` (and only those do); one generated with links
+            // has links to be generated for.
+            assert_eq!(
+                spec.parameter == Parameter::WrenchLinks,
+                spec.inputs.iter().any(|i| i.len == Dim::WrenchLinks),
+                "{}",
+                spec.name
+            );
+            if spec.generated == WhenGenerated::WithLinks {
+                assert_ne!(spec.parameter, Parameter::None, "{}", spec.name);
+            }
         }
     }
 
@@ -1019,7 +1475,7 @@ mod tests {
         let e = Algorithm::from_name("abba").unwrap_err().to_string();
         assert_eq!(
             e,
-            "unknown function `abba` (expected kinematics, aba, rnea, gravity, nle, crba, minv, complete, embedding, crba_independent, integrate, difference)"
+            "unknown function `abba` (expected kinematics, aba, rnea, gravity, nle, crba, minv, complete, embedding, crba_independent, integrate, difference, aba_ext, rnea_ext, nle_ext, frame, com, centroidal)"
         );
     }
 

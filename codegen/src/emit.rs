@@ -9,10 +9,58 @@ use quote::{format_ident, quote};
 use std::cmp::Reverse;
 use std::collections::{BinaryHeap, HashMap, HashSet};
 
-/// One argument of a generated function: `name: &[S; len]`.
+/// One argument of a generated function: `name: &[S; len]`, or with `columns` a matrix
+/// `name: &[[S; columns]; len]` whose entries are numbered row-major.
 pub struct Arg {
     pub name: &'static str,
     pub len: usize,
+    pub columns: Option<usize>,
+}
+
+impl Arg {
+    /// The parameter's type: `&[S; 7]` or `&[[S; 6]; 4]`.
+    pub(crate) fn type_text(&self) -> String {
+        match self.columns {
+            None => format!("&[S; {}]", self.len),
+            Some(c) => format!("&[[S; {c}]; {}]", self.len),
+        }
+    }
+
+    /// Reading entry `index` (row-major for a matrix): `q[3]`, `f_ext[1][2]`.
+    pub(crate) fn entry_text(&self, index: u32) -> String {
+        let i = index as usize;
+        match self.columns {
+            None => format!("{}[{i}]", self.name),
+            Some(c) => format!("{}[{}][{}]", self.name, i / c, i % c),
+        }
+    }
+
+    fn tokens(&self) -> TokenStream {
+        let id = format_ident!("{}", self.name);
+        let len = num(self.len);
+        match self.columns {
+            None => quote!(#id: &[S; #len]),
+            Some(c) => {
+                let c = num(c);
+                quote!(#id: &[[S; #c]; #len])
+            }
+        }
+    }
+
+    fn entry(&self, index: u32) -> TokenStream {
+        let id = format_ident!("{}", self.name);
+        let i = index as usize;
+        match self.columns {
+            None => {
+                let i = num(i);
+                quote!(#id[#i])
+            }
+            Some(c) => {
+                let (r, c) = (num(i / c), num(i % c));
+                quote!(#id[#r][#c])
+            }
+        }
+    }
 }
 
 /// The outputs of a generated function: a vector `&mut [S; n]` or a matrix `&mut [[S; cols]; rows]`
@@ -298,14 +346,7 @@ pub fn function(
             }
         }
     }
-    let scalar_args: Vec<TokenStream> = args
-        .iter()
-        .map(|a| {
-            let id = format_ident!("{}", a.name);
-            let len = num(a.len);
-            quote!(#id: &[S; #len])
-        })
-        .collect();
+    let scalar_args: Vec<TokenStream> = args.iter().map(Arg::tokens).collect();
     let arg_names: Vec<Ident> = args.iter().map(|a| format_ident!("{}", a.name)).collect();
     let nslots = num(slot.len().max(1));
 
@@ -342,9 +383,8 @@ pub fn function(
             let id = node_ident(&names, m);
             match nodes[m as usize] {
                 Op::Input { arg, index } => {
-                    let a = &arg_names[arg as usize];
-                    let i = num(index as usize);
-                    stmts.push(quote!(let #id: S = #a[#i];));
+                    let entry = args[arg as usize].entry(index);
+                    stmts.push(quote!(let #id: S = #entry;));
                 }
                 _ => {
                     let k = num(slot[&m]);
@@ -472,7 +512,7 @@ pub fn function(
         match o {
             Output::Return(v) => {
                 ret_type = quote!(-> S);
-                let val = value_tokens(v, split, &slot, &operand, nodes, &arg_names);
+                let val = value_tokens(v, split, &slot, &operand, nodes, args);
                 ret_value = quote!(#val);
             }
             Output::Vector {
@@ -484,7 +524,7 @@ pub fn function(
                 out_params.push(quote!(#id: &mut [S; #n]));
                 for (i, v) in values.iter().enumerate() {
                     let i = num(i);
-                    let val = value_tokens(v, split, &slot, &operand, nodes, &arg_names);
+                    let val = value_tokens(v, split, &slot, &operand, nodes, args);
                     out_stmts.push(quote!(#id[#i] = #val;));
                 }
             }
@@ -505,7 +545,7 @@ pub fn function(
                             &slot,
                             &operand,
                             nodes,
-                            &arg_names,
+                            args,
                         );
                         let (r, c) = (num(r), num(c));
                         out_stmts.push(quote!(#id[#r][#c] = #val;));
@@ -570,7 +610,7 @@ fn value_tokens(
     slot: &HashMap<u32, usize>,
     operand: &dyn Fn(&Sym) -> TokenStream,
     nodes: &[Op],
-    args: &[Ident],
+    args: &[Arg],
 ) -> TokenStream {
     match v {
         // An input passed straight through to an output.
@@ -578,9 +618,7 @@ fn value_tokens(
             let Op::Input { arg, index } = nodes[*n as usize] else {
                 unreachable!()
             };
-            let a = &args[arg as usize];
-            let i = num(index as usize);
-            quote!(#a[#i])
+            args[arg as usize].entry(index)
         }
         Sym::Node(n) if split => {
             let k = num(slot[n]);

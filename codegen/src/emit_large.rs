@@ -250,7 +250,7 @@ pub(crate) fn function_text(
     let arg_names: Vec<&str> = args.iter().map(|a| a.name).collect();
     let mut params: Vec<String> = args
         .iter()
-        .map(|a| format!("{}: &[S; {}]", a.name, a.len))
+        .map(|a| format!("{}: {}", a.name, a.type_text()))
         .collect();
     let mut call_args: Vec<String> = arg_names.iter().map(|a| a.to_string()).collect();
     for out in outputs {
@@ -300,7 +300,7 @@ pub(crate) fn function_text(
             slot: &slot,
             destinations: &destinations,
             outputs,
-            arg_names: &arg_names,
+            args,
             batched: &batched,
             angles,
             sin_of,
@@ -343,7 +343,7 @@ pub(crate) fn function_text(
         match v {
             Sym::Const(x) => Some(float_text(*x)),
             Sym::Node(n) => match nodes[*n as usize] {
-                Op::Input { arg, index } => Some(format!("{}[{index}]", arg_names[arg as usize])),
+                Op::Input { arg, index } => Some(args[arg as usize].entry_text(index)),
                 _ => None,
             },
         }
@@ -485,7 +485,7 @@ struct Part<'a> {
     slot: &'a HashMap<u32, usize>,
     destinations: &'a HashMap<u32, Vec<Destination>>,
     outputs: &'a [Output],
-    arg_names: &'a [&'a str],
+    args: &'a [Arg],
     batched: &'a std::collections::HashSet<u32>,
     angles: &'a [Sym],
     sin_of: &'a HashMap<Sym, u32>,
@@ -678,7 +678,7 @@ impl Part<'_> {
     /// Reading a value that is not computed in this part: an input, a batched sine, or a slot.
     fn access(&self, m: u32) -> String {
         match self.nodes[m as usize] {
-            Op::Input { arg, index } => format!("{}[{index}]", self.arg_names[arg as usize]),
+            Op::Input { arg, index } => self.args[arg as usize].entry_text(index),
             Op::Sin(a) | Op::Cos(a) if self.batched.contains(&m) && self.is_local(m) => {
                 let k = self
                     .angles

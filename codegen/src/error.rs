@@ -501,6 +501,14 @@ pub enum LoadErrorKind {
         /// The name given.
         joint: String,
     },
+    /// `--wrenches` or `--frames` names a link the model does not have.
+    #[error("there is no link \"{link}\"{hint}")]
+    UnknownLinkNamed {
+        /// The name given.
+        link: String,
+        /// The closest link names, as ` (did you mean "lf_foot"?)`.
+        hint: String,
+    },
     /// `--lock` on a joint that has not exactly one coordinate.
     #[error("only a joint of one coordinate (revolute, continuous or prismatic) can be locked, and this joint is {kind}")]
     LockNotOneDof {
@@ -599,6 +607,12 @@ pub enum LoadErrorKind {
     /// A function that exists only for models with constraints, asked for a tree.
     #[error("`{}` exists only for a model with loops, couplings or mimic joints; this one is a tree", .function.name())]
     NeedsConstraints {
+        /// The function.
+        function: Algorithm,
+    },
+    /// A function generated for links named at generation time, asked for without any.
+    #[error("`{}` is generated for links named at generation time, and none is named: {}", .function.name(), links_option(*.function))]
+    NeedsLinks {
         /// The function.
         function: Algorithm,
     },
@@ -733,6 +747,7 @@ impl LoadErrorKind {
             | K::UnknownMimicTarget { joint: a }
             | K::FixedDriver { joint: a }
             | K::LockUnknownJoint { joint: a }
+            | K::UnknownLinkNamed { link: a, .. }
             | K::LockedJointInConstraint { name: a, .. }
             | K::ConstraintNameTaken { name: a, .. }
             | K::MergedInertiaOverflow { body_link: a } => shorten(a),
@@ -927,5 +942,15 @@ impl fmt::Display for Warning {
             }
         }
         write!(f, "warning: {}: {}", self.location, Printable(&message))
+    }
+}
+
+/// How the links of `function` are named (for [`LoadErrorKind::NeedsLinks`]).
+fn links_option(function: Algorithm) -> &'static str {
+    match function.spec().parameter {
+        crate::algorithm::Parameter::Frame => {
+            "name them with `frames(link, …)` (robot!) or `--frames LINK,…` (embedyn generate)"
+        }
+        _ => "name the links that take wrenches with `wrenches(link, …)` (robot!) or `--wrenches LINK,…` (embedyn generate)",
     }
 }

@@ -5,7 +5,7 @@
 //! once per scalar type.
 
 pub use crate::algorithm::Algorithm;
-use crate::algorithm::{Dims, Shape, WhenGenerated};
+use crate::algorithm::{Dims, Links, Parameter, Shape, WhenGenerated};
 use crate::emit::{function, Arg, Code, Emitted, Output};
 use crate::error::{DescriptorMismatch, Shared};
 use crate::names::{code_span, shown};
@@ -14,7 +14,7 @@ use crate::trace::{input, record, snap, Sym};
 use crate::value_names::Owners;
 use crate::{build_model, LoadError, LoadErrorKind, Loaded, Location, ModelOptions};
 use embedyn_runtime::constraints::{singularity_threshold, COMPLETION_MAX_STEPS};
-use embedyn_runtime::{Model, Real, Workspace};
+use embedyn_runtime::{FrameId, Model, Real, Reference, Workspace};
 
 use proc_macro2::TokenStream;
 use quote::{format_ident, quote};
@@ -41,6 +41,34 @@ pub struct GenerateOptions {
     /// compile (checked before tracing from the model and after tracing from the code, always before
     /// anything is formatted or written; see `size.rs`). `None`: no limit.
     pub max_compile_memory_mb: Option<u64>,
+    /// Links named at generation time: those whose wrenches `aba_ext`, `rnea_ext` and `nle_ext` take,
+    /// and those that get a frame function each.
+    pub links: LinkOptions,
+}
+
+/// Links named at generation time, by name (macro `wrenches(…)`, `frames(…)`, `reference = …`;
+/// `embedyn generate --wrenches`, `--frames`, `--reference`). A name the model has no link of is an
+/// error naming it and the closest link names; a name given twice counts once.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct LinkOptions {
+    /// The links that take external wrenches, in the order of `f_ext`'s rows (`WRENCH_LINKS`): without
+    /// `only(…)`, naming any generates `aba_ext` and `rnea_ext`.
+    pub wrenches: Vec<String>,
+    /// The links that get a function `frame_<link>` each (pose, Jacobian, bias).
+    pub frames: Vec<String>,
+    /// Where the frame functions express their Jacobian and bias (default `local_world_aligned`).
+    pub reference: Reference,
+}
+
+impl LinkOptions {
+    /// Whether the links `parameter` reads are named.
+    fn named(&self, parameter: Parameter) -> bool {
+        match parameter {
+            Parameter::None => true,
+            Parameter::WrenchLinks => !self.wrenches.is_empty(),
+            Parameter::Frame => !self.frames.is_empty(),
+        }
+    }
 }
 
 impl Default for GenerateOptions {
@@ -53,6 +81,7 @@ impl Default for GenerateOptions {
             helpers: quote!(::embedyn::codegen_support),
             exact: false,
             max_compile_memory_mb: Some(crate::size::DEFAULT_COMPILE_MEMORY_MB),
+            links: LinkOptions::default(),
         }
     }
 }
@@ -79,10 +108,18 @@ impl GenerateOptions {
         self
     }
 
-    /// The functions generated for a model with or without constraints: `algorithms`, and for a model
-    /// with constraints (unless `exact`) also those generated with constraints (`complete`, …).
+    /// The functions generated for a model with or without constraints: `algorithms`; unless `exact`,
+    /// also those of the links named (`aba_ext` and `rnea_ext` for wrenches, the frame functions for
+    /// frames) and for a model with constraints those generated with constraints (`complete`, …).
     pub fn generated_algorithms(&self, constrained: bool) -> Vec<Algorithm> {
         let mut algorithms = self.algorithms.clone();
+        if !self.exact {
+            for extra in Algorithm::generated(WhenGenerated::WithLinks) {
+                if self.links.named(extra.spec().parameter) && !algorithms.contains(&extra) {
+                    algorithms.push(extra);
+                }
+            }
+        }
         if constrained && !self.exact {
             for extra in Algorithm::generated(WhenGenerated::WithConstraints) {
                 if !algorithms.contains(&extra) {
@@ -118,6 +155,68 @@ fn located_at_robot(loaded: &Loaded, kind: LoadErrorKind) -> LoadError {
         ),
         kind,
     )
+}
+
+/// One generated function: an algorithm, and for a frame function its link.
+struct Instance<'a> {
+    algorithm: Algorithm,
+    /// The generated function's name (`aba`, `complete_step`, `frame_lf_foot`).
+    name: String,
+    /// The link of a frame function, as the model names it.
+    link: Option<&'a str>,
+    /// Its frame.
+    frame: Option<FrameId>,
+}
+
+/// The names of the frame functions of `links` (each named once, in order): `frame_` and the link's
+/// constant ([`crate::names::constants`]) in snake_case, `frame_lf_foot`.
+pub fn frame_function_names(links: &[&str]) -> Vec<String> {
+    crate::names::constants(links, "link")
+        .into_iter()
+        .map(|c| format!("frame_{}", c.to_ascii_lowercase()))
+        .collect()
+}
+
+/// The frames of the links `names` (each once, in the order first named); a name of no link of the
+/// model is an error at `option` naming it and the closest link names.
+fn resolve_links(
+    loaded: &Loaded,
+    model: &Model<f64>,
+    names: &[String],
+    option: &'static str,
+) -> Result<Vec<(String, FrameId)>, LoadError> {
+    let mut links: Vec<(String, FrameId)> = Vec::new();
+    for name in names {
+        if links.iter().any(|(n, _)| n == name) {
+            continue;
+        }
+        let Some(frame) = model.frame(name) else {
+            let known: Vec<&str> = model.frames().filter_map(|f| model.frame_name(f)).collect();
+            let closest = crate::names::closest(name, known.iter().copied());
+            return Err(LoadError::at(
+                Location::new(&loaded.robot.source, None, option),
+                LoadErrorKind::UnknownLinkNamed {
+                    link: name.clone(),
+                    hint: link_hint(&closest),
+                },
+            ));
+        };
+        links.push((name.clone(), frame));
+    }
+    Ok(links)
+}
+
+/// ` (did you mean "lf_foot"?)`, or where no link name is close, where the names are listed.
+fn link_hint(closest: &[&str]) -> String {
+    let quoted: Vec<String> = closest
+        .iter()
+        .map(|n| format!("\"{}\"", shown(n)))
+        .collect();
+    match quoted.split_last() {
+        None => " (`embedyn info` lists the model's links as `frames`)".to_string(),
+        Some((last, [])) => format!(" (did you mean {last}?)"),
+        Some((last, rest)) => format!(" (did you mean {} or {last}?)", rest.join(", ")),
+    }
 }
 
 /// The generated items before they are joined into a file or a token stream: the constants at the top
@@ -274,6 +373,28 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
             LoadErrorKind::NeedsConstraints { function: *a },
         ));
     }
+    let wrench_links = resolve_links(
+        loaded,
+        &model64,
+        &options.links.wrenches,
+        "--wrenches / wrenches(…)",
+    )?;
+    let frame_links = resolve_links(
+        loaded,
+        &model64,
+        &options.links.frames,
+        "--frames / frames(…)",
+    )?;
+    let algorithms = options.generated_algorithms(model64.has_constraints());
+    if let Some(a) = algorithms
+        .iter()
+        .find(|a| !options.links.named(a.spec().parameter))
+    {
+        return Err(located_at_robot(
+            loaded,
+            LoadErrorKind::NeedsLinks { function: *a },
+        ));
+    }
     let model: Model<Sym> = snapped(&model64).cast();
     let (nq, nv) = (model.nq(), model.nv());
     let names: Vec<&str> = model.joints.iter().map(|j| j.name.as_str()).collect();
@@ -281,13 +402,52 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
         .into_iter()
         .filter_map(|(enabled, scalar)| enabled.then_some(scalar))
         .collect();
-    let algorithms = options.generated_algorithms(model.has_constraints());
+    // One function per algorithm, and per link named for a frame function.
+    let frame_names: Vec<&str> = frame_links.iter().map(|(name, _)| name.as_str()).collect();
+    let frame_functions = frame_function_names(&frame_names);
+    let mut instances = Vec::new();
+    for &algo in &algorithms {
+        match algo.spec().parameter {
+            Parameter::Frame => {
+                for ((link, frame), ident) in frame_links.iter().zip(&frame_functions) {
+                    instances.push(Instance {
+                        algorithm: algo,
+                        name: ident.clone(),
+                        link: Some(link.as_str()),
+                        frame: Some(*frame),
+                    });
+                }
+            }
+            Parameter::None | Parameter::WrenchLinks => instances.push(Instance {
+                algorithm: algo,
+                name: algo.spec().traced_name.to_string(),
+                link: None,
+                frame: None,
+            }),
+        }
+    }
+    let wrench_frames: Vec<FrameId> = wrench_links.iter().map(|(_, f)| *f).collect();
+    let wrench_names: Vec<&str> = wrench_links.iter().map(|(n, _)| n.as_str()).collect();
     let mut functions = Vec::new();
     if !scalars.is_empty() {
+        let instance_algorithms: Vec<Algorithm> = instances.iter().map(|i| i.algorithm).collect();
         let mut sizes =
-            check_size_before_tracing(loaded, &model64, &algorithms, &scalars, options)?;
-        for (k, &algo) in algorithms.iter().enumerate() {
-            let function = generate_algorithm(loaded, &model, algo, &options.helpers)?;
+            check_size_before_tracing(loaded, &model64, &instance_algorithms, &scalars, options)?;
+        for (k, instance) in instances.iter().enumerate() {
+            let algo = instance.algorithm;
+            let links = Links {
+                wrenches: &wrench_frames,
+                frame: instance.frame,
+                reference: options.links.reference,
+            };
+            let function = generate_algorithm(
+                loaded,
+                &model,
+                instance,
+                &links,
+                &wrench_names,
+                &options.helpers,
+            )?;
             // Constants are folded in f64; the f32 module writes them as f32 literals.
             if options.f32 && function.largest_constant > f64::from(f32::MAX) {
                 return Err(located_at_robot(
@@ -390,9 +550,31 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
             "Index in `FRAMES` of link",
         ),
     ];
+    let wrench_items = if wrench_names.is_empty() {
+        quote!()
+    } else {
+        let k = proc_macro2::Literal::usize_unsuffixed(wrench_names.len());
+        let index = index_module(
+            "wrench",
+            "Row in `f_ext` (of `aba_ext`, `rnea_ext`, `nle_ext`) and index in `WRENCH_LINKS` of each link named to take an external wrench, by name (spelled as in `frames`).",
+            &wrench_names,
+            "link",
+            |i| i,
+            "Row in `f_ext` of the wrench on link",
+        );
+        quote! {
+            /// The links whose external wrenches `f_ext` holds (`aba_ext`, `rnea_ext`, `nle_ext`), in the
+            /// order of its rows: row `k` is `[fx, fy, fz, tx, ty, tz]` (N, N·m) on link `WRENCH_LINKS[k]`,
+            /// in that link's frame, about its origin.
+            #[allow(dead_code)]
+            pub const WRENCH_LINKS: [&str; #k] = [#(#wrench_names),*];
+            #index
+        }
+    };
     let header = quote! {
         #header
         #(#indices)*
+        #wrench_items
     };
     Ok(Generated {
         header,
@@ -566,19 +748,34 @@ pub(crate) fn complete_loop() -> TokenStream {
 /// Components of a joint's coordinates in the names of generated code (a floating joint has 7).
 const COORDINATE: [&str; 7] = ["0", "1", "2", "3", "4", "5", "6"];
 
+/// Names of the entries of a wrench row, for the names of `f_ext`'s values (`lf_foot_f_ext_fx`).
+const WRENCH_COMPONENT: [&str; 6] = ["fx", "fy", "fz", "tx", "ty", "tz"];
+
 fn generate_algorithm(
     loaded: &Loaded,
     model: &Model<Sym>,
-    algo: Algorithm,
+    instance: &Instance,
+    links: &Links,
+    wrench_names: &[&str],
     helpers: &TokenStream,
 ) -> Result<Emitted, LoadError> {
+    let algo = instance.algorithm;
     let spec = algo.spec();
-    let dims = Dims::of(model);
+    let dims = Dims {
+        wrench_links: links.wrenches.len(),
+        ..Dims::of(model)
+    };
     let constrained = model.has_constraints();
     // Inputs are named after their joints: `knee_q`, `knee_v`, `base_q_3` (a joint with several
     // coordinates), so that generated code reads `let knee_q = q[2];`.
     let named_input = |arg: u8, spec_input: &crate::algorithm::InputSpec, i: usize| -> Sym {
         let value = input(arg, i);
+        if spec_input.len == crate::algorithm::Dim::WrenchLinks {
+            return match wrench_names.get(i / 6) {
+                Some(link) => value.named(link, spec_input.name, WRENCH_COMPONENT[i % 6]),
+                None => value,
+            };
+        }
         let positions = spec_input.len == crate::algorithm::Dim::Nq;
         let range = |j: &embedyn_runtime::Joint<Sym>| {
             if positions {
@@ -615,17 +812,25 @@ fn generate_algorithm(
         let inputs: Vec<Vec<Sym>> = (0u8..)
             .zip(spec.inputs)
             .map(|(arg, i)| {
-                (0..i.len.len(&dims))
+                (0..i.len.len(&dims) * i.columns.unwrap_or(1))
                     .map(|k| named_input(arg, i, k))
                     .collect()
             })
             .collect();
-        (spec.trace)(model, &mut ws, &inputs)
+        (spec.trace)(model, &mut ws, &inputs, links)
     });
     let traced = traced.map_err(fail)?;
+    let bodies: Vec<&str> = model.bodies.iter().map(|b| b.name.as_str()).collect();
     let owners = Owners::new(
         model.joints.iter().map(|j| j.name.as_str()),
-        model.bodies.iter().map(|b| b.name.as_str()),
+        bodies.iter().copied(),
+    )
+    .with_links(
+        model.frames().filter_map(|f| {
+            let b = f.body?;
+            Some((model.frame_name(f)?, b))
+        }),
+        &bodies,
     );
     // The descriptor and the traced algorithm must agree on what the function returns and writes.
     let mismatch = |problem: DescriptorMismatch| {
@@ -676,12 +881,21 @@ fn generate_algorithm(
         .map(|i| Arg {
             name: i.name,
             len: i.len.len(&dims),
+            columns: i.columns,
         })
         .collect();
-    let doc = spec.doc(constrained);
+    let doc = match instance.link {
+        Some(link) => format!(
+            "{}\n\nLink {}; reference `{}`.",
+            spec.doc(constrained),
+            code_span(link),
+            links.reference.as_str()
+        ),
+        None => spec.doc(constrained).to_string(),
+    };
     let mut emitted = function(
-        spec.traced_name,
-        doc,
+        &instance.name,
+        &doc,
         &args,
         &outputs,
         &tape,
@@ -765,6 +979,85 @@ pub fn generation_model(loaded: &Loaded, options: &ModelOptions) -> Result<Model
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn quadruped() -> Loaded {
+        crate::load(concat!(env!("CARGO_MANIFEST_DIR"), "/../models/quadruped.urdf").as_ref())
+            .unwrap()
+    }
+
+    #[test]
+    fn links_named_at_generation_time_are_checked_and_generate_their_functions() {
+        let loaded = quadruped();
+        let with_links = |wrenches: &[&str], frames: &[&str], only: Option<Vec<Algorithm>>| {
+            GenerateOptions {
+                f32: false,
+                links: LinkOptions {
+                    wrenches: wrenches.iter().map(|s| s.to_string()).collect(),
+                    frames: frames.iter().map(|s| s.to_string()).collect(),
+                    reference: Reference::World,
+                },
+                ..GenerateOptions::default()
+            }
+            .with_requested(only, &[])
+        };
+        // An unknown link: named, with the closest names.
+        let e = generate_source(&loaded, &with_links(&["FL_fot"], &[], None))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains(
+                "--wrenches / wrenches(…): there is no link \"FL_fot\" (did you mean \"FL_foot\"?)"
+            ),
+            "{e}"
+        );
+        let e = generate_source(&loaded, &with_links(&[], &["elbow"], None))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("there is no link \"elbow\" (`embedyn info` lists"),
+            "{e}"
+        );
+        // A function of links asked for without links.
+        let e = generate_source(
+            &loaded,
+            &with_links(&[], &[], Some(vec![Algorithm::NleExt])),
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.contains(
+                "`nle_ext` is generated for links named at generation time, and none is named"
+            ),
+            "{e}"
+        );
+        // Without `only`: aba_ext, rnea_ext and one frame function per link (each link once).
+        let text = generate_source(
+            &loaded,
+            &with_links(
+                &["FL_foot", "imu", "FL_foot"],
+                &["trunk", "FL_foot", "trunk"],
+                None,
+            ),
+        )
+        .unwrap();
+        for f in [
+            "pub fn aba(",
+            "pub fn aba_ext(",
+            "pub fn rnea_ext(",
+            "pub fn frame_trunk(",
+            "pub fn frame_fl_foot(",
+            "f_ext: &[[S; 6]; 2]",
+            "pub const WRENCH_LINKS: [&str; 2] = [\"FL_foot\", \"imu\"];",
+            "pub const IMU: usize = 1;",
+            "reference `world`",
+        ] {
+            assert!(text.contains(f), "{f}");
+        }
+        assert!(!text.contains("pub fn nle_ext("));
+        // Without links nothing of them is generated: `aba` as before.
+        let plain = generate_source(&loaded, &with_links(&[], &[], None)).unwrap();
+        assert!(!plain.contains("WRENCH_LINKS") && !plain.contains("f_ext"));
+    }
 
     #[test]
     fn requested_functions_are_merged_alike_for_the_macro_and_the_command_line() {

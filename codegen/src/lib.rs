@@ -35,6 +35,8 @@ mod xml_text;
 pub use algorithm::UnknownAlgorithm;
 pub use assemble::{build_model, inertial_about_link, ModelOptions, ROOT_JOINT};
 pub use bounded_read::ReadError;
+/// Where frame functions express their Jacobian and bias (`reference = …`, `--reference`).
+pub use embedyn_runtime::Reference;
 pub use emit::EmitError;
 pub use error::{
     is_hidden_format, shortened, AxisOf, ConstraintElement, DescriptorMismatch, LoadError,
@@ -43,7 +45,7 @@ pub use error::{
 };
 pub use generate::{
     format_tokens, generate_file, generate_source, generate_tokens, generation_model, Algorithm,
-    GenerateOptions, UnparsableCode, GENERATOR_VERSION,
+    GenerateOptions, LinkOptions, UnparsableCode, GENERATOR_VERSION,
 };
 pub use scene::{geared_rotors, GearedRotor, LockedJoint, Rotors};
 pub use size::{FunctionSize, TooLargeToCompile, DEFAULT_COMPILE_MEMORY_MB};

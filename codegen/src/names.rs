@@ -120,6 +120,44 @@ pub fn constants(names: &[&str], prefix: &str) -> Vec<String> {
     out
 }
 
+/// The names of `candidates` closest to `name`, at most three (for "did you mean"): those at the
+/// smallest edit distance (in characters, ignoring ASCII case) found, if it is at most a third of the
+/// name's length (at least 1); ties in the candidates' order.
+pub fn closest<'a>(name: &str, candidates: impl IntoIterator<Item = &'a str>) -> Vec<&'a str> {
+    let lower = |s: &str| -> Vec<char> { s.chars().map(|c| c.to_ascii_lowercase()).collect() };
+    let target = lower(name);
+    let limit = (target.len() / 3).max(1);
+    let mut close: Vec<(usize, usize, &str)> = candidates
+        .into_iter()
+        .enumerate()
+        .map(|(i, c)| (edit_distance(&target, &lower(c)), i, c))
+        .filter(|&(d, _, _)| d <= limit)
+        .collect();
+    close.sort_unstable();
+    let nearest = close.first().map_or(0, |&(d, _, _)| d);
+    close
+        .into_iter()
+        .take_while(|&(d, _, _)| d == nearest)
+        .take(3)
+        .map(|(_, _, c)| c)
+        .collect()
+}
+
+/// Levenshtein distance between two strings of characters.
+fn edit_distance(a: &[char], b: &[char]) -> usize {
+    let mut row: Vec<usize> = (0..=b.len()).collect();
+    for (i, ca) in a.iter().enumerate() {
+        let mut diagonal = row[0];
+        row[0] = i + 1;
+        for (j, cb) in b.iter().enumerate() {
+            let substitution = diagonal + usize::from(ca != cb);
+            diagonal = row[j + 1];
+            row[j + 1] = substitution.min(row[j] + 1).min(diagonal + 1);
+        }
+    }
+    row[b.len()]
+}
+
 /// The crate name of a robot's generated code: its [`identifier`] followed by `_dynamics` (a valid
 /// package name, library name and Rust path segment, in snake_case).
 pub fn crate_name(robot: &str) -> String {
@@ -260,6 +298,18 @@ mod tests {
         }
         assert!(c[9].starts_with("JOINT_1ST_"), "{}", c[9]);
         assert_eq!(constants(&names, "joint"), c);
+    }
+
+    #[test]
+    fn close_names_are_suggested_closest_first() {
+        let links = ["LF_FOOT", "RF_FOOT", "LH_FOOT", "base", "trunk"];
+        assert_eq!(closest("lf_foot", links), ["LF_FOOT"]);
+        assert_eq!(closest("LF_FOT", links), ["LF_FOOT"]);
+        assert_eq!(closest("XF_FOOT", links), ["LF_FOOT", "RF_FOOT"]);
+        assert_eq!(closest("trunc", links), ["trunk"]);
+        assert_eq!(closest("bse", links), ["base"]);
+        assert!(closest("elbow", links).is_empty());
+        assert!(closest("", links).is_empty());
     }
 
     #[test]

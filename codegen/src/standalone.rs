@@ -156,6 +156,7 @@ pub fn crate_files(
     for a in options.generated_algorithms(constrained) {
         readme.push_str(&a.spec().readme_line(constrained));
     }
+    readme.push_str(&links_note(&options.links));
     readme.push_str(&format!(
         "\nnq = {}, nv = {}. Coordinates (as embedyn's docs/conventions.md says: revolute angles in rad, prismatic in m; a floating base is\n\
          `q = [x y z qx qy qz qw …]`, `v = [v_lin ω …]` in the body frame; gravity ({}, {}, {}) m/s²{}):\n\n\
@@ -243,6 +244,45 @@ fn scene_note(options: &crate::ModelOptions) -> String {
     }
     if options.rotors == crate::Rotors::Reflected {
         note.push_str("; geared rotors reflected (armature on the joints they drive)");
+    }
+    note
+}
+
+/// The README's note on the links named at generation time: the rows of `f_ext` and the frame
+/// functions (nothing when none is named).
+fn links_note(links: &crate::LinkOptions) -> String {
+    let mut note = String::new();
+    let unique = |names: &[String]| -> Vec<String> {
+        let mut seen: Vec<String> = Vec::new();
+        for n in names {
+            if !seen.contains(n) {
+                seen.push(n.clone());
+            }
+        }
+        seen
+    };
+    let wrenches = unique(&links.wrenches);
+    if !wrenches.is_empty() {
+        let rows: Vec<String> = wrenches.iter().map(|n| code_span(n)).collect();
+        note.push_str(&format!(
+            "\nRows of `f_ext` (`WRENCH_LINKS`, index constants in `wrench`): {}.\n",
+            rows.join(", ")
+        ));
+    }
+    let frames = unique(&links.frames);
+    if !frames.is_empty() {
+        let names: Vec<&str> = frames.iter().map(String::as_str).collect();
+        let functions = crate::generate::frame_function_names(&names);
+        let listed: Vec<String> = functions
+            .iter()
+            .zip(&frames)
+            .map(|(f, n)| format!("`{f}` ({})", code_span(n)))
+            .collect();
+        note.push_str(&format!(
+            "\nFrame functions, Jacobian and bias in the reference `{}`: {}.\n",
+            links.reference.as_str(),
+            listed.join(", ")
+        ));
     }
     note
 }

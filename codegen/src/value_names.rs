@@ -37,6 +37,23 @@ impl Owners {
         Owners { body_of }
     }
 
+    /// Also `links`, each as the body (by its position in the model) it rides on, where no body or
+    /// joint has its name (named inputs of a link: `lf_foot_f_ext_fx`).
+    pub fn with_links<'a>(
+        mut self,
+        links: impl IntoIterator<Item = (&'a str, usize)>,
+        bodies: &[&str],
+    ) -> Owners {
+        for (link, b) in links {
+            if let Some(body) = bodies.get(b) {
+                self.body_of
+                    .entry(link.to_string())
+                    .or_insert_with(|| (b, body.to_string()));
+            }
+        }
+        self
+    }
+
     fn body(&self, owner: &str) -> (usize, String) {
         self.body_of
             .get(owner)

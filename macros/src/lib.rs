@@ -11,7 +11,9 @@ use syn::{Ident, LitStr, Path, Token};
 /// `robot!("model.urdf")` or `robot!("model.urdf", floating, minv, nle, only(aba, kinematics), crate = ::my_facade)`
 /// (and `max_compile_memory = 4096` to raise the limit on rustc's estimated memory, MB; `gravity = [0.0,
 /// 0.0, -1.62]` for another gravity than (0, 0, −9.81) m/s², folded into the code; `lock(knee = 0.3, …)` to fix
-/// joints; `rotors = reflected` for the reflected-inertia approximation of geared rotors).
+/// joints; `rotors = reflected` for the reflected-inertia approximation of geared rotors; `wrenches(lf_foot, …)`
+/// for `aba_ext` and `rnea_ext` with those links' wrenches; `frames(lf_foot, …)` and `reference = world` for a
+/// function `frame_<link>` per link: pose, Jacobian, bias).
 struct Args {
     path: LitStr,
     floating: bool,
@@ -30,6 +32,8 @@ struct Args {
     locks: Vec<embedyn_codegen::LockedJoint>,
     /// `rotors = exact | reflected`.
     rotors: embedyn_codegen::Rotors,
+    /// `wrenches(link, …)`, `frames(link, …)`, `reference = …`.
+    links: embedyn_codegen::LinkOptions,
 }
 
 /// A number literal, optionally negated.
@@ -77,6 +81,26 @@ fn parse_locks(input: ParseStream) -> syn::Result<Vec<embedyn_codegen::LockedJoi
     Ok(locks)
 }
 
+/// `(lf_foot, r#type, "LF-foot")`: link names as identifiers (keywords too, raw or not) or string
+/// literals.
+fn parse_names(input: ParseStream) -> syn::Result<Vec<String>> {
+    let content;
+    syn::parenthesized!(content in input);
+    let mut names = Vec::new();
+    while !content.is_empty() {
+        if content.peek(LitStr) {
+            names.push(content.parse::<LitStr>()?.value());
+        } else {
+            let name = content.call(<Ident as syn::ext::IdentExt>::parse_any)?;
+            names.push(syn::ext::IdentExt::unraw(&name).to_string());
+        }
+        if !content.is_empty() {
+            content.parse::<Token![,]>()?;
+        }
+    }
+    Ok(names)
+}
+
 /// `[x, y, z]`: three number literals, each optionally negated.
 fn parse_gravity(input: ParseStream) -> syn::Result<[f64; 3]> {
     let content;
@@ -117,6 +141,7 @@ impl Parse for Args {
             gravity: None,
             locks: Vec::new(),
             rotors: embedyn_codegen::Rotors::Exact,
+            links: embedyn_codegen::LinkOptions::default(),
         };
         while !input.is_empty() {
             input.parse::<Token![,]>()?;
@@ -143,6 +168,21 @@ impl Parse for Args {
                     args.gravity = Some(parse_gravity(input)?);
                 }
                 "lock" => args.locks.extend(parse_locks(input)?),
+                "wrenches" => args.links.wrenches.extend(parse_names(input)?),
+                "frames" => args.links.frames.extend(parse_names(input)?),
+                "reference" => {
+                    input.parse::<Token![=]>()?;
+                    let choice: Ident = input.parse()?;
+                    args.links.reference = embedyn_codegen::Reference::from_name(
+                        &choice.to_string(),
+                    )
+                    .ok_or_else(|| {
+                        syn::Error::new(
+                            choice.span(),
+                            "reference = local, reference = local_world_aligned or reference = world",
+                        )
+                    })?;
+                }
                 "rotors" => {
                     input.parse::<Token![=]>()?;
                     let choice: Ident = input.parse()?;
@@ -173,7 +213,7 @@ impl Parse for Args {
                     return Err(syn::Error::new(
                         key.span(),
                         format!(
-                            "unknown option `{other}` (expected floating, {}, f64_only, f32_only, only(…), gravity = [x, y, z], lock(joint = value, …), rotors = exact|reflected, max_compile_memory = MB or crate = path)",
+                            "unknown option `{other}` (expected floating, {}, f64_only, f32_only, only(…), gravity = [x, y, z], lock(joint = value, …), rotors = exact|reflected, wrenches(link, …), frames(link, …), reference = local|local_world_aligned|world, max_compile_memory = MB or crate = path)",
                             requested.join(", ")
                         ),
                     ));
@@ -295,6 +335,7 @@ fn expand(args: &Args) -> Result<proc_macro2::TokenStream, ExpandError> {
         f32: args.f32,
         helpers: quote!(#krate::codegen_support),
         max_compile_memory_mb: Some(args.max_compile_memory),
+        links: args.links.clone(),
         ..Default::default()
     }
     .with_requested(args.only.clone(), &args.requested);

@@ -1,0 +1,414 @@
+//! Generated contact functions (issue 11): `aba_ext`, `rnea_ext`, `nle_ext` with the wrenches of links
+//! named at generation time, one `frame_<link>` per named link (pose, Jacobian, bias) in each of the three
+//! references, `com` and `centroidal` — against the interpreted solver (f64 to 1e-12 relative) on a
+//! floating ANYmal B (feet and the IMU merged into their bodies by fixed joints), the floating quadruped
+//! (a massless link fixed to the world among the named ones) and a four-bar linkage (constraint
+//! embedding); and against Pinocchio 4.1 on ANYmal B (tests/data/pinocchio/anymal_b_floating_contact.json,
+//! the `Contact` reference of contact.rs) to 1e-9.
+
+use crate::common::{load_model, Rng};
+use crate::constraint_embedding::consistent_state;
+use crate::contact::{vecf, Contact};
+use embedyn::nalgebra::{Matrix3xX, Matrix6xX, Vector3};
+use embedyn::{
+    aba_ext, center_of_mass, centroidal_momentum, centroidal_momentum_matrix,
+    centroidal_momentum_rate, com_jacobian, forward_kinematics, forward_kinematics_acceleration,
+    frame_classical_acceleration, frame_jacobian, frame_placement, nle_ext, relative_error,
+    rnea_ext, LinkWrench, Model, Reference, Workspace,
+};
+
+mod anymal {
+    embedyn::robot!(
+        "tests/data/pinocchio/anymal_b.urdf",
+        floating,
+        f64_only,
+        only(aba_ext, rnea_ext, nle_ext, frame, com, centroidal),
+        wrenches(LF_FOOT, RF_FOOT, LH_FOOT, RH_FOOT, base, imu_link),
+        frames(LF_FOOT, RF_FOOT, LH_FOOT, RH_FOOT, base, LF_THIGH)
+    );
+}
+mod quadruped {
+    embedyn::robot!(
+        "models/quadruped.urdf",
+        f64_only,
+        wrenches(FL_foot, "RR_foot", r#imu, world),
+        frames(FL_foot, trunk, world),
+        reference = local,
+        com,
+        centroidal
+    );
+}
+mod four_bar {
+    embedyn::robot!(
+        "models/loops/four_bar_internal.urdf",
+        f64_only,
+        only(aba_ext, rnea_ext, frame, com, centroidal),
+        wrenches(tip, coupler),
+        frames(tip, rocker),
+        reference = world
+    );
+}
+
+/// What `aba_ext` returns: the singularity measure of a model with constraints, nothing for a tree.
+trait Measure {
+    fn measure(self) -> Option<f64>;
+}
+impl Measure for () {
+    fn measure(self) -> Option<f64> {
+        None
+    }
+}
+impl Measure for f64 {
+    fn measure(self) -> Option<f64> {
+        Some(self)
+    }
+}
+
+type FrameFn = fn(&[f64], &[f64], &mut [f64; 12], &mut [f64], &mut [f64; 6]);
+type AbaExtFn = fn(&[f64], &[f64], &[f64], &[[f64; 6]], &mut [f64]) -> Option<f64>;
+type RneaExtFn = fn(&[f64], &[f64], &[f64], &[[f64; 6]], &mut [f64]);
+type NleExtFn = fn(&[f64], &[f64], &[[f64; 6]], &mut [f64]);
+type ComFn = fn(&[f64], &[f64], &mut [f64; 3], &mut [f64; 3], &mut [f64]);
+type CentroidalFn = fn(&[f64], &[f64], &mut [f64; 6], &mut [f64], &mut [f64; 6]);
+
+/// One module's generated functions over slices (matrices row-major).
+struct Generated {
+    wrench_links: &'static [&'static str],
+    reference: Reference,
+    aba_ext: AbaExtFn,
+    rnea_ext: RneaExtFn,
+    nle_ext: Option<NleExtFn>,
+    frames: Vec<(&'static str, FrameFn)>,
+    com: ComFn,
+    centroidal: CentroidalFn,
+}
+
+macro_rules! generated {
+    ($m:ident, $reference:expr, nle_ext: $nle:expr, frames: [$($link:literal => $f:ident),*]) => {
+        Generated {
+            wrench_links: &$m::WRENCH_LINKS,
+            reference: $reference,
+            aba_ext: |q, v, tau, f, qdd| {
+                let f: &[[f64; 6]; $m::WRENCH_LINKS.len()] = f.try_into().unwrap();
+                $m::f64::aba_ext(
+                    q.try_into().unwrap(),
+                    v.try_into().unwrap(),
+                    tau.try_into().unwrap(),
+                    f,
+                    qdd.try_into().unwrap(),
+                )
+                .measure()
+            },
+            rnea_ext: |q, v, qdd, f, tau| {
+                $m::f64::rnea_ext(
+                    q.try_into().unwrap(),
+                    v.try_into().unwrap(),
+                    qdd.try_into().unwrap(),
+                    f.try_into().unwrap(),
+                    tau.try_into().unwrap(),
+                )
+            },
+            nle_ext: $nle,
+            frames: vec![$(($link, |q, v, pose, j, bias| {
+                let mut jacobian = [[0.0; $m::NV]; 6];
+                $m::f64::$f(q.try_into().unwrap(), v.try_into().unwrap(), pose, &mut jacobian, bias);
+                j.copy_from_slice(jacobian.as_flattened());
+            })),*],
+            com: |q, v, com, vcom, j| {
+                let mut j_com = [[0.0; $m::NV]; 3];
+                $m::f64::com(q.try_into().unwrap(), v.try_into().unwrap(), com, vcom, &mut j_com);
+                j.copy_from_slice(j_com.as_flattened());
+            },
+            centroidal: |q, v, h_g, a, dh_g| {
+                let mut a_g = [[0.0; $m::NV]; 6];
+                $m::f64::centroidal(q.try_into().unwrap(), v.try_into().unwrap(), h_g, &mut a_g, dh_g);
+                a.copy_from_slice(a_g.as_flattened());
+            },
+        }
+    };
+}
+
+fn anymal() -> Generated {
+    generated!(anymal, Reference::LocalWorldAligned,
+        nle_ext: Some(|q, v, f, tau| {
+            anymal::f64::nle_ext(
+                q.try_into().unwrap(),
+                v.try_into().unwrap(),
+                f.try_into().unwrap(),
+                tau.try_into().unwrap(),
+            )
+        }),
+        frames: ["LF_FOOT" => frame_lf_foot, "RF_FOOT" => frame_rf_foot, "LH_FOOT" => frame_lh_foot,
+                 "RH_FOOT" => frame_rh_foot, "base" => frame_base, "LF_THIGH" => frame_lf_thigh])
+}
+
+fn row_major<const R: usize>(
+    m: &embedyn::nalgebra::OMatrix<f64, embedyn::nalgebra::Const<R>, embedyn::nalgebra::Dyn>,
+) -> Vec<f64> {
+    (0..R)
+        .flat_map(|r| (0..m.ncols()).map(move |c| m[(r, c)]))
+        .collect()
+}
+
+fn linear_angular(linear: &Vector3<f64>, angular: &Vector3<f64>) -> Vec<f64> {
+    linear.iter().chain(angular.iter()).copied().collect()
+}
+
+/// The wrenches of `rows` on `links`, as the interpreted solver takes them.
+fn wrenches(model: &Model<f64>, links: &[&str], rows: &[[f64; 6]]) -> Vec<LinkWrench<f64>> {
+    links
+        .iter()
+        .zip(rows)
+        .map(|(link, w)| {
+            LinkWrench::new(
+                model.frame(link).unwrap(),
+                Vector3::new(w[0], w[1], w[2]),
+                Vector3::new(w[3], w[4], w[5]),
+            )
+        })
+        .collect()
+}
+
+/// Every generated function of `g` against the interpreted solver at the states `(q, v)`, with random
+/// wrenches and accelerations; returns the worst relative error of each function.
+fn against_interpreted(
+    g: &Generated,
+    model: &Model<f64>,
+    states: &[(Vec<f64>, Vec<f64>)],
+    rng: &mut Rng,
+) -> [f64; 5] {
+    let nv = model.nv();
+    let mut ws = Workspace::new(model);
+    let mut out = vec![0.0; nv];
+    // aba_ext, rnea_ext and nle_ext, frames, com, centroidal
+    let mut worst = [0.0f64; 5];
+    let zeros = vec![0.0; nv];
+    for (q, v) in states {
+        let rows: Vec<[f64; 6]> = g
+            .wrench_links
+            .iter()
+            .map(|_| {
+                let w = rng.vec(6, -20.0, 20.0);
+                [w[0], w[1], w[2], w[3], w[4], w[5]]
+            })
+            .collect();
+        let f_ext = wrenches(model, g.wrench_links, &rows);
+        let tau = rng.vec(nv, -5.0, 5.0);
+        let want = aba_ext(model, &mut ws, q, v, &tau, &f_ext)
+            .unwrap()
+            .to_vec();
+        let measure = (g.aba_ext)(q, v, &tau, &rows, &mut out);
+        assert_eq!(measure.is_some(), model.has_constraints());
+        assert!(measure.is_none_or(|c| c < 1e10), "singular: {measure:?}");
+        worst[0] = worst[0].max(relative_error(&out, &want));
+        let qdd = rng.vec(nv, -5.0, 5.0);
+        let want = rnea_ext(model, &mut ws, q, v, &qdd, &f_ext)
+            .unwrap()
+            .to_vec();
+        (g.rnea_ext)(q, v, &qdd, &rows, &mut out);
+        worst[0] = worst[0].max(relative_error(&out, &want));
+        if let Some(nle) = g.nle_ext {
+            let want = nle_ext(model, &mut ws, q, v, &f_ext).unwrap().to_vec();
+            nle(q, v, &rows, &mut out);
+            worst[0] = worst[0].max(relative_error(&out, &want));
+        }
+        forward_kinematics_acceleration(model, &mut ws, q, v, &zeros).unwrap();
+        let mut j = Matrix6xX::zeros(nv);
+        let (mut pose, mut jacobian, mut bias) = ([0.0; 12], vec![0.0; 6 * nv], [0.0; 6]);
+        for (link, frame_fn) in &g.frames {
+            let frame = model.frame(link).unwrap();
+            frame_fn(q, v, &mut pose, &mut jacobian, &mut bias);
+            let x = frame_placement(model, &ws, frame).unwrap();
+            let want: Vec<f64> = (0..3)
+                .flat_map(|r| (0..3).map(move |c| (r, c)))
+                .map(|(r, c)| x.rotation[(r, c)])
+                .chain(x.translation.iter().copied())
+                .collect();
+            worst[1] = worst[1].max(relative_error(&pose, &want));
+            frame_jacobian(model, &ws, frame, g.reference, &mut j).unwrap();
+            worst[1] = worst[1].max(relative_error(&jacobian, &row_major(&j)));
+            let a = frame_classical_acceleration(model, &ws, frame, g.reference).unwrap();
+            worst[1] = worst[1].max(relative_error(
+                &bias,
+                &linear_angular(&a.linear, &a.angular),
+            ));
+        }
+        forward_kinematics(model, &mut ws, q, v).unwrap();
+        let c = center_of_mass(model, &ws);
+        let mut j_com = Matrix3xX::zeros(nv);
+        com_jacobian(model, &mut ws, &mut j_com).unwrap();
+        let (mut com, mut vcom, mut j_out) = ([0.0; 3], [0.0; 3], vec![0.0; 3 * nv]);
+        (g.com)(q, v, &mut com, &mut vcom, &mut j_out);
+        worst[2] = worst[2]
+            .max(relative_error(&com, c.com.as_slice()))
+            .max(relative_error(&vcom, c.vcom.as_slice()))
+            .max(relative_error(&j_out, &row_major(&j_com)));
+        let mut a_g = Matrix6xX::zeros(nv);
+        centroidal_momentum_matrix(model, &mut ws, &mut a_g).unwrap();
+        let h = centroidal_momentum(model, &ws);
+        forward_kinematics_acceleration(model, &mut ws, q, v, &zeros).unwrap();
+        let dh = centroidal_momentum_rate(model, &ws);
+        let (mut h_g, mut a_out, mut dh_g) = ([0.0; 6], vec![0.0; 6 * nv], [0.0; 6]);
+        (g.centroidal)(q, v, &mut h_g, &mut a_out, &mut dh_g);
+        worst[3] = worst[3]
+            .max(relative_error(&h_g, &linear_angular(&h.linear, &h.angular)))
+            .max(relative_error(&a_out, &row_major(&a_g)));
+        worst[4] = worst[4].max(relative_error(
+            &dh_g,
+            &linear_angular(&dh.linear, &dh.angular),
+        ));
+    }
+    worst
+}
+
+fn assert_close(name: &str, worst: [f64; 5], tol: f64) {
+    eprintln!(
+        "{name}: generated vs interpreted: wrench dynamics {:.1e}, frames {:.1e}, com {:.1e}, centroidal {:.1e}, dA_g v {:.1e}",
+        worst[0], worst[1], worst[2], worst[3], worst[4]
+    );
+    for (what, w) in ["wrench dynamics", "frames", "com", "centroidal", "dA_g v"]
+        .iter()
+        .zip(worst)
+    {
+        assert!(w <= tol, "{name}: generated {what} off by {w:e}");
+    }
+}
+
+/// Random states of a tree.
+fn tree_states(model: &Model<f64>, rng: &mut Rng, n: usize) -> Vec<(Vec<f64>, Vec<f64>)> {
+    (0..n)
+        .map(|_| (rng.configuration(model), rng.vec(model.nv(), -2.0, 2.0)))
+        .collect()
+}
+
+/// Floating ANYmal B, local_world_aligned: wrenches on the feet (merged into the shanks), the base and
+/// the IMU (merged into the base).
+#[test]
+fn generated_contact_functions_match_interpreted_on_anymal() {
+    let model = load_model::<f64>("tests/data/pinocchio/anymal_b.urdf", true);
+    assert_eq!((model.nq(), model.nv()), (anymal::NQ, anymal::NV));
+    assert_eq!(anymal::wrench::IMU_LINK, 5);
+    let mut rng = Rng::new(1101);
+    let states = tree_states(&model, &mut rng, 10);
+    assert_close(
+        "anymal_b floating",
+        against_interpreted(&anymal(), &model, &states, &mut rng),
+        1e-12,
+    );
+}
+
+/// The floating quadruped in the local reference; among the named links a massless one fixed to the
+/// world (`world`): its wrench acts on nothing, its pose is constant and its Jacobian zero.
+#[test]
+fn generated_contact_functions_match_interpreted_on_the_quadruped() {
+    let model = load_model::<f64>("models/quadruped.urdf", false);
+    let g = generated!(quadruped, Reference::Local, nle_ext: None,
+        frames: ["FL_foot" => frame_fl_foot, "trunk" => frame_trunk, "world" => frame_world]);
+    assert_eq!(
+        quadruped::WRENCH_LINKS,
+        ["FL_foot", "RR_foot", "imu", "world"]
+    );
+    let mut rng = Rng::new(1102);
+    let states = tree_states(&model, &mut rng, 10);
+    assert_close(
+        "quadruped",
+        against_interpreted(&g, &model, &states, &mut rng),
+        1e-12,
+    );
+    // Without `only(…)`, naming wrenches and frames generated aba_ext, rnea_ext and the frame functions
+    // next to the default ones.
+    let (q, v) = &states[0];
+    let (mut qdd, mut qdd_ext) = ([0.0; quadruped::NV], [0.0; quadruped::NV]);
+    let tau = [0.5; quadruped::NV];
+    let (q, v): (&[f64; quadruped::NQ], &[f64; quadruped::NV]) =
+        (q[..].try_into().unwrap(), v[..].try_into().unwrap());
+    quadruped::f64::aba(q, v, &tau, &mut qdd);
+    quadruped::f64::aba_ext(q, v, &tau, &[[0.0; 6]; 4], &mut qdd_ext);
+    assert!(relative_error(&qdd, &qdd_ext) <= 1e-14);
+    let (mut pose, mut j, mut bias) = ([0.0; 12], [[0.0; quadruped::NV]; 6], [0.0; 6]);
+    quadruped::f64::frame_world(q, v, &mut pose, &mut j, &mut bias);
+    assert!(j.as_flattened().iter().chain(&bias).all(|&x| x == 0.0));
+}
+
+/// A four-bar linkage (constraint embedding), world reference, at consistent states: `aba_ext` returns
+/// the singularity measure, Jacobians are over the spanning coordinates.
+#[test]
+fn generated_contact_functions_match_interpreted_on_a_four_bar() {
+    let model = load_model::<f64>("models/loops/four_bar_internal.urdf", false);
+    assert!(model.has_constraints());
+    let g = generated!(four_bar, Reference::World, nle_ext: None,
+        frames: ["tip" => frame_tip, "rocker" => frame_rocker]);
+    let mut rng = Rng::new(1103);
+    let mut ws = Workspace::new(&model);
+    let states: Vec<_> = (0..10)
+        .map(|_| consistent_state(&model, &mut ws, &mut rng))
+        .collect();
+    assert_close(
+        "four_bar_internal",
+        against_interpreted(&g, &model, &states, &mut rng),
+        1e-12,
+    );
+}
+
+/// The generated functions of floating ANYmal B against Pinocchio 4.1 (its `aba` and `rnea` with `fext`,
+/// `getFrameJacobian` and `getFrameClassicalAcceleration` in local_world_aligned, `centerOfMass`,
+/// `jacobianCenterOfMass`, `ccrba`, `dccrba`) to 1e-9.
+#[test]
+fn generated_contact_functions_match_pinocchio_on_anymal() {
+    let r = Contact::load(
+        "anymal_b_floating",
+        "tests/data/pinocchio/anymal_b.urdf",
+        true,
+    );
+    let g = anymal();
+    let nv = r.model.nv();
+    let mut worst = [0.0f64; 6];
+    let mut out = vec![0.0; nv];
+    for s in r.samples() {
+        let (q, v) = (r.q(s), r.v_vec(&s["v"]));
+        // The sample's wrenches as rows of f_ext (zero on the links it leaves out).
+        let mut rows = vec![[0.0; 6]; g.wrench_links.len()];
+        for (link, w) in s["f_ext"].as_object().unwrap() {
+            let k = g.wrench_links.iter().position(|l| l == link).unwrap();
+            let (f, t) = (vecf(&w["force"]), vecf(&w["torque"]));
+            rows[k] = [f[0], f[1], f[2], t[0], t[1], t[2]];
+        }
+        (g.aba_ext)(&q, &v, &r.v_vec(&s["tau"]), &rows, &mut out);
+        worst[0] = worst[0].max(relative_error(&out, &r.v_vec(&s["qdd_ext"])));
+        (g.rnea_ext)(&q, &v, &r.v_vec(&s["qdd_for_rnea"]), &rows, &mut out);
+        worst[1] = worst[1].max(relative_error(&out, &r.v_vec(&s["tau_rnea_ext"])));
+        (g.nle_ext.unwrap())(&q, &v, &rows, &mut out);
+        worst[1] = worst[1].max(relative_error(&out, &r.v_vec(&s["nle_ext"])));
+        let (mut pose, mut jacobian, mut bias) = ([0.0; 12], vec![0.0; 6 * nv], [0.0; 6]);
+        for (link, frame_fn) in &g.frames {
+            let want = &s["frames"][link];
+            frame_fn(&q, &v, &mut pose, &mut jacobian, &mut bias);
+            let placement: Vec<f64> = crate::contact::rows(&want["placement"]["R"])
+                .concat()
+                .into_iter()
+                .chain(vecf(&want["placement"]["p"]))
+                .collect();
+            worst[2] = worst[2].max(relative_error(&pose, &placement));
+            let lwa = &want["local_world_aligned"];
+            worst[2] = worst[2].max(relative_error(&jacobian, &r.columns(&lwa["J"])));
+            worst[3] = worst[3].max(relative_error(&bias, &vecf(&lwa["classical_acceleration"])));
+        }
+        let (mut com, mut vcom, mut j_com) = ([0.0; 3], [0.0; 3], vec![0.0; 3 * nv]);
+        (g.com)(&q, &v, &mut com, &mut vcom, &mut j_com);
+        worst[4] = worst[4]
+            .max(relative_error(&com, &vecf(&s["com"])))
+            .max(relative_error(&vcom, &vecf(&s["vcom"])))
+            .max(relative_error(&j_com, &r.columns(&s["J_com"])));
+        let (mut h_g, mut a_g, mut dh_g) = ([0.0; 6], vec![0.0; 6 * nv], [0.0; 6]);
+        (g.centroidal)(&q, &v, &mut h_g, &mut a_g, &mut dh_g);
+        worst[5] = worst[5]
+            .max(relative_error(&h_g, &vecf(&s["h_g"])))
+            .max(relative_error(&a_g, &r.columns(&s["A_g"])))
+            .max(relative_error(&dh_g, &vecf(&s["dA_g_v"])));
+    }
+    eprintln!(
+        "anymal_b floating, generated vs Pinocchio: aba_ext {:.1e}, rnea_ext/nle_ext {:.1e}, pose/J {:.1e}, bias {:.1e}, com {:.1e}, centroidal {:.1e}",
+        worst[0], worst[1], worst[2], worst[3], worst[4], worst[5]
+    );
+    assert!(worst.iter().all(|&e| e <= 1e-9), "{worst:?}");
+}
