@@ -123,14 +123,30 @@ pub fn constants(names: &[&str], prefix: &str) -> Vec<String> {
 /// The names of `candidates` closest to `name`, at most three (for "did you mean"): those at the
 /// smallest edit distance (in characters, ignoring ASCII case) found, if it is at most a third of the
 /// name's length (at least 1); ties in the candidates' order.
+///
+/// Names longer than 128 characters are not compared (a typo is not the likely story there, and the edit
+/// distance's cost, the product of the lengths, stays small on a hostile input).
 pub fn closest<'a>(name: &str, candidates: impl IntoIterator<Item = &'a str>) -> Vec<&'a str> {
-    let lower = |s: &str| -> Vec<char> { s.chars().map(|c| c.to_ascii_lowercase()).collect() };
+    const MAX_COMPARED_CHARS: usize = 128;
+    let lower = |s: &str| -> Vec<char> {
+        s.chars()
+            .take(MAX_COMPARED_CHARS + 1)
+            .map(|c| c.to_ascii_lowercase())
+            .collect()
+    };
     let target = lower(name);
+    if target.len() > MAX_COMPARED_CHARS {
+        return Vec::new();
+    }
     let limit = (target.len() / 3).max(1);
     let mut close: Vec<(usize, usize, &str)> = candidates
         .into_iter()
         .enumerate()
-        .map(|(i, c)| (edit_distance(&target, &lower(c)), i, c))
+        .map(|(i, c)| (lower(c), i, c))
+        .filter(|(other, _, _)| {
+            other.len() <= MAX_COMPARED_CHARS && other.len().abs_diff(target.len()) <= limit
+        })
+        .map(|(other, i, c)| (edit_distance(&target, &other), i, c))
         .filter(|&(d, _, _)| d <= limit)
         .collect();
     close.sort_unstable();
@@ -310,6 +326,7 @@ mod tests {
         assert_eq!(closest("bse", links), ["base"]);
         assert!(closest("elbow", links).is_empty());
         assert!(closest("", links).is_empty());
+        assert!(closest(&"x".repeat(100_000), links).is_empty());
     }
 
     #[test]
