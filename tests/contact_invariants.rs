@@ -278,7 +278,7 @@ fn center_of_mass_and_momentum_invariants() {
         worst[1] = worst[1].max(relative_error(fd.as_slice(), c.vcom.as_slice()));
 
         forward_kinematics(&model, &mut ws, &q, &v).unwrap();
-        let h_g = motion_like(&centroidal_momentum(&model, &ws));
+        let h_g = motion_like(&centroidal_momentum(&model, &mut ws));
         centroidal_momentum_matrix(&model, &mut ws, &mut a_g).unwrap();
         let agv = matrix6(&a_g) * &vv;
         worst[2] = worst[2].max(relative_error(agv.as_slice(), h_g.as_slice()));
@@ -300,7 +300,7 @@ fn center_of_mass_and_momentum_invariants() {
         }
         // Ȧ_g v = d/dt (A_g(q) v) at fixed v.
         forward_kinematics_acceleration(&model, &mut ws, &q, &v, &vec![0.0; nv]).unwrap();
-        let rate = motion_like(&centroidal_momentum_rate(&model, &ws));
+        let rate = motion_like(&centroidal_momentum_rate(&model, &mut ws));
         let mut agv_at = |s: f64| {
             forward_kinematics(&model, &mut ws, &moved(&model, &q, &v, s), &vec![0.0; nv]).unwrap();
             centroidal_momentum_matrix(&model, &mut ws, &mut a_g).unwrap();
@@ -374,7 +374,7 @@ fn free_floating_momentum_changes_at_the_rate_of_gravity_and_wrenches() {
                 .unwrap()
                 .to_vec();
             forward_kinematics_acceleration(&model, &mut ws, &q, &v, &qdd).unwrap();
-            let rate = motion_like(&centroidal_momentum_rate(&model, &ws));
+            let rate = motion_like(&centroidal_momentum_rate(&model, &mut ws));
             let c = center_of_mass(&model, &ws);
             let mut expected_linear = model.gravity * c.mass;
             let mut expected_angular = Vector3::zeros();

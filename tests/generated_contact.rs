@@ -1,6 +1,6 @@
 //! Generated contact functions (issue 11): `aba_ext`, `rnea_ext`, `nle_ext` with the wrenches of links
 //! named at generation time, one `frame_<link>` per named link (pose, Jacobian, bias) in each of the three
-//! references, `com` and `centroidal` — against the interpreted solver (f64 to 1e-12 relative) on a
+//! references, `com`, `centroidal` and `centroidal_bias` — against the interpreted solver (f64 to 1e-12 relative) on a
 //! floating ANYmal B (feet and the IMU merged into their bodies by fixed joints), the floating quadruped
 //! (a massless link fixed to the world among the named ones) and a four-bar linkage (constraint
 //! embedding); and against Pinocchio 4.1 on ANYmal B (tests/data/pinocchio/anymal_b_floating_contact.json,
@@ -22,7 +22,15 @@ mod anymal {
         "tests/data/pinocchio/anymal_b.urdf",
         floating,
         f64_only,
-        only(aba_ext, rnea_ext, nle_ext, frame, com, centroidal),
+        only(
+            aba_ext,
+            rnea_ext,
+            nle_ext,
+            frame,
+            com,
+            centroidal,
+            centroidal_bias
+        ),
         wrenches(LF_FOOT, RF_FOOT, LH_FOOT, RH_FOOT, base, imu_link),
         frames(LF_FOOT, RF_FOOT, LH_FOOT, RH_FOOT, base, LF_THIGH)
     );
@@ -35,14 +43,15 @@ mod quadruped {
         frames(FL_foot, trunk, world),
         reference = local,
         com,
-        centroidal
+        centroidal,
+        centroidal_bias
     );
 }
 mod four_bar {
     embedyn::robot!(
         "models/loops/four_bar_internal.urdf",
         f64_only,
-        only(aba_ext, rnea_ext, frame, com, centroidal),
+        only(aba_ext, rnea_ext, frame, com, centroidal, centroidal_bias),
         wrenches(tip, coupler),
         frames(tip, rocker),
         reference = world
@@ -121,7 +130,8 @@ macro_rules! generated {
             },
             centroidal: |q, v, h_g, a, dh_g| {
                 let mut a_g = [[0.0; $m::NV]; 6];
-                $m::f64::centroidal(q.try_into().unwrap(), v.try_into().unwrap(), h_g, &mut a_g, dh_g);
+                $m::f64::centroidal(q.try_into().unwrap(), v.try_into().unwrap(), h_g, &mut a_g);
+                $m::f64::centroidal_bias(q.try_into().unwrap(), v.try_into().unwrap(), dh_g);
                 a.copy_from_slice(a_g.as_flattened());
             },
         }
@@ -245,9 +255,9 @@ fn against_interpreted(
             .max(relative_error(&j_out, &row_major(&j_com)));
         let mut a_g = Matrix6xX::zeros(nv);
         centroidal_momentum_matrix(model, &mut ws, &mut a_g).unwrap();
-        let h = centroidal_momentum(model, &ws);
+        let h = centroidal_momentum(model, &mut ws);
         forward_kinematics_acceleration(model, &mut ws, q, v, &zeros).unwrap();
-        let dh = centroidal_momentum_rate(model, &ws);
+        let dh = centroidal_momentum_rate(model, &mut ws);
         let (mut h_g, mut a_out, mut dh_g) = ([0.0; 6], vec![0.0; 6 * nv], [0.0; 6]);
         (g.centroidal)(q, v, &mut h_g, &mut a_out, &mut dh_g);
         worst[3] = worst[3]

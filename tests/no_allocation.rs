@@ -81,8 +81,8 @@ fn algorithm_calls_do_not_allocate() {
             }
             let _ = frame_placement(&model, &ws, wrenches[1].frame).unwrap();
             let _ = center_of_mass(&model, &ws);
-            let _ = centroidal_momentum(&model, &ws);
-            let _ = centroidal_momentum_rate(&model, &ws);
+            let _ = centroidal_momentum(&model, &mut ws);
+            let _ = centroidal_momentum_rate(&model, &mut ws);
             com_jacobian(&model, &mut ws, &mut j_com).unwrap();
             centroidal_momentum_matrix(&model, &mut ws, &mut jacobian).unwrap();
             integrate(&model, &q, &v, &mut q_out).unwrap();

@@ -9,8 +9,8 @@ use crate::trace::Sym;
 use embedyn_runtime::constraints::{completion_step, constraint_condition};
 use embedyn_runtime::nalgebra::{Matrix3xX, Matrix6xX, Vector3};
 use embedyn_runtime::{
-    aba, aba_ext, center_of_mass, centroidal_momentum, centroidal_momentum_matrix,
-    centroidal_momentum_rate, com_jacobian, crba, difference, embedding_map_in, forward_kinematics,
+    aba, aba_ext, center_of_mass, centroidal_momentum_matrix, centroidal_momentum_rate,
+    com_jacobian, crba, difference, embedding_map_in, forward_kinematics,
     forward_kinematics_acceleration, frame_classical_acceleration, frame_jacobian, frame_placement,
     gravity, integrate, link_poses, mass_matrix_inverse, nle, nle_ext, reduced_mass_matrix_in,
     rnea, rnea_ext, DynamicsError, FrameId, LinkWrench, Model, Real, Reference, Workspace,
@@ -53,8 +53,10 @@ pub enum Algorithm {
     Frame,
     /// `com`: centre of mass, its velocity and Jacobian.
     Com,
-    /// `centroidal`: centroidal momentum, its matrix and its bias rate.
+    /// `centroidal`: centroidal momentum and its matrix (`h_g`, `A_g`).
     Centroidal,
+    /// `centroidal_bias`: `Ȧ_g v`.
+    CentroidalBias,
 }
 
 /// A length of an argument or an output, in the model's terms.
@@ -1046,9 +1048,9 @@ pub const ALGORITHMS: &[AlgorithmSpec] = &[
         name: "centroidal",
         traced_name: "centroidal",
         wrapper: None,
-        summary: "centroidal momentum `h_g`, its matrix `A_g` (6 × `NV`) and `Ȧ_g v`, rows linear then angular (only when asked for)",
-        doc: "Centroidal momentum (Orin and Goswami; Pinocchio's `ccrba`): `h_g = A_g v`, the linear momentum and the angular momentum about the centre of mass in world axes, `[linear; angular]`; the centroidal momentum matrix `a_g` (6 × `NV`, rows linear then angular); and `dh_g = Ȧ_g v`, the rate of `h_g` at `qdd = 0` (`ḣ_g = A_g qdd + Ȧ_g v`; without gravity), `[linear; angular]`.",
-        doc_with_constraints: Some("Centroidal momentum (Orin and Goswami; Pinocchio's `ccrba`): `h_g = A_g v`, the linear momentum and the angular momentum about the centre of mass in world axes, `[linear; angular]`, for a `v` on the velocity constraints; the centroidal momentum matrix `a_g` (6 × `NV` over the spanning tree's coordinates, rows linear then angular; `a_g · X` over the independent ones); and `dh_g = Ȧ_g v`, the rate of `h_g` at `qdd = 0` (without gravity), `[linear; angular]`."),
+        summary: "centroidal momentum `h_g` and its matrix `A_g` (6 × `NV`), rows linear then angular (only when asked for)",
+        doc: "Centroidal momentum (Orin and Goswami; Pinocchio's `ccrba`): `h_g = A_g v`, the linear momentum and the angular momentum about the centre of mass in world axes, `[linear; angular]`, and the centroidal momentum matrix `a_g` (6 × `NV`, rows linear then angular). Positions only, then one product with `v`: `centroidal_bias` gives `Ȧ_g v`.",
+        doc_with_constraints: Some("Centroidal momentum (Orin and Goswami; Pinocchio's `ccrba`): `h_g = A_g v`, the linear momentum and the angular momentum about the centre of mass in world axes, `[linear; angular]`, for a `v` on the velocity constraints, and the centroidal momentum matrix `a_g` (6 × `NV` over the spanning tree's coordinates, rows linear then angular; `a_g · X` over the independent ones)."),
         inputs: &[Q, V],
         outputs: &[
             OutputSpec {
@@ -1061,21 +1063,63 @@ pub const ALGORITHMS: &[AlgorithmSpec] = &[
                 shape: Shape::Matrix(Dim::Fixed(6), Dim::Nv),
                 unit: "kg·m or kg (linear rows), kg·m² or kg·m (angular rows)",
             },
-            OutputSpec {
-                name: "dh_g",
-                shape: Shape::Vector(Dim::Fixed(6)),
-                unit: "N (linear), N·m (angular)",
-            },
         ],
         returns: Returns::Nothing,
         needs_constraints: false,
         generated: WhenGenerated::OnRequest,
         parameter: Parameter::None,
-        readme_note: " — centroidal momentum `h_g`, the matrix `A_g` and `Ȧ_g v`, rows linear then angular (world axes, about the centre of mass)",
+        readme_note: " — centroidal momentum `h_g` and the matrix `A_g`, rows linear then angular (world axes, about the centre of mass)",
         readme_note_with_constraints: None,
         cli: None,
         growth: Growth::Linear,
-        predicted_operations: |c| 600.0 * c.nv + 40.0 * c.links,
+        predicted_operations: |c| 300.0 * c.nv + 40.0 * c.links,
+        trace: |model, ws, inputs, _| {
+            let nv = model.nv();
+            forward_kinematics(model, ws, &inputs[0], &vec![Sym::Const(0.0); nv])?;
+            let mut a_g = Matrix6xX::from_element(nv, Sym::Const(0.0));
+            centroidal_momentum_matrix(model, ws, &mut a_g)?;
+            // h_g = A_g v: six dot products, no velocity sweep.
+            let h: Vec<Sym> = (0..6)
+                .map(|r| {
+                    (0..nv).fold(Sym::Const(0.0), |acc, c| acc + a_g[(r, c)] * inputs[1][c])
+                })
+                .collect();
+            Ok(Traced {
+                outputs: vec![h, row_major6(&a_g)],
+                returned: None,
+            })
+        },
+        interpreted: |model, ws, inputs, _| {
+            forward_kinematics(model, ws, inputs[0], &vec![0.0; model.nv()])?;
+            let mut a_g = Matrix6xX::zeros(model.nv());
+            centroidal_momentum_matrix(model, ws, &mut a_g)?;
+            let _h = &a_g * embedyn_runtime::nalgebra::DVector::from_column_slice(inputs[1]);
+            Ok(())
+        },
+    },
+    AlgorithmSpec {
+        algorithm: Algorithm::CentroidalBias,
+        name: "centroidal_bias",
+        traced_name: "centroidal_bias",
+        wrapper: None,
+        summary: "`Ȧ_g v`, the rate of the centroidal momentum at `qdd = 0`, `[linear; angular]` (only when asked for)",
+        doc: "The centroidal momentum's bias `dh_g = Ȧ_g v` (Pinocchio's `dccrba` times `v`): the rate of `h_g` at `qdd = 0`, without gravity (`ḣ_g = A_g qdd + Ȧ_g v`), `[linear; angular]`, world axes, about the centre of mass — what centroidal MPC adds to `A_g qdd`.",
+        doc_with_constraints: Some("The centroidal momentum's bias `dh_g = Ȧ_g v` (Pinocchio's `dccrba` times `v`) over the spanning tree's coordinates, for a `v` on the velocity constraints: the rate of `h_g` at `qdd = 0`, without gravity, `[linear; angular]`, world axes, about the centre of mass."),
+        inputs: &[Q, V],
+        outputs: &[OutputSpec {
+            name: "dh_g",
+            shape: Shape::Vector(Dim::Fixed(6)),
+            unit: "N (linear), N·m (angular)",
+        }],
+        returns: Returns::Nothing,
+        needs_constraints: false,
+        generated: WhenGenerated::OnRequest,
+        parameter: Parameter::None,
+        readme_note: " — `Ȧ_g v`, the centroidal momentum's rate at `qdd = 0`, `[linear; angular]`",
+        readme_note_with_constraints: None,
+        cli: None,
+        growth: Growth::Linear,
+        predicted_operations: |c| 250.0 * c.nv + 40.0 * c.links,
         trace: |model, ws, inputs, _| {
             let nv = model.nv();
             forward_kinematics_acceleration(
@@ -1085,24 +1129,15 @@ pub const ALGORITHMS: &[AlgorithmSpec] = &[
                 &inputs[1],
                 &vec![Sym::Const(0.0); nv],
             )?;
-            let mut a_g = Matrix6xX::from_element(nv, Sym::Const(0.0));
-            centroidal_momentum_matrix(model, ws, &mut a_g)?;
-            let h = centroidal_momentum(model, ws);
             let dh = centroidal_momentum_rate(model, ws);
             Ok(Traced {
-                outputs: vec![
-                    linear_angular(&h.linear, &h.angular),
-                    row_major6(&a_g),
-                    linear_angular(&dh.linear, &dh.angular),
-                ],
+                outputs: vec![linear_angular(&dh.linear, &dh.angular)],
                 returned: None,
             })
         },
         interpreted: |model, ws, inputs, _| {
             let zeros = vec![0.0; model.nv()];
             forward_kinematics_acceleration(model, ws, inputs[0], inputs[1], &zeros)?;
-            centroidal_momentum_matrix(model, ws, &mut Matrix6xX::zeros(model.nv()))?;
-            centroidal_momentum(model, ws);
             centroidal_momentum_rate(model, ws);
             Ok(())
         },
@@ -1160,7 +1195,7 @@ const _: () = {
         assert!(ALGORITHMS[i].algorithm as usize == i);
         i += 1;
     }
-    assert!(Algorithm::Centroidal as usize + 1 == ALGORITHMS.len());
+    assert!(Algorithm::CentroidalBias as usize + 1 == ALGORITHMS.len());
 };
 
 impl Algorithm {
@@ -1475,7 +1510,7 @@ mod tests {
         let e = Algorithm::from_name("abba").unwrap_err().to_string();
         assert_eq!(
             e,
-            "unknown function `abba` (expected kinematics, aba, rnea, gravity, nle, crba, minv, complete, embedding, crba_independent, integrate, difference, aba_ext, rnea_ext, nle_ext, frame, com, centroidal)"
+            "unknown function `abba` (expected kinematics, aba, rnea, gravity, nle, crba, minv, complete, embedding, crba_independent, integrate, difference, aba_ext, rnea_ext, nle_ext, frame, com, centroidal, centroidal_bias)"
         );
     }
 

@@ -58,11 +58,37 @@ fn inverse_mass<T: Real>(mass: T) -> T {
     }
 }
 
-/// Each subtree's composite inertia in world axes about the world origin, into `ws.composite`; returns
-/// the whole model's (the sum over the roots).
-fn world_composites<T: Real>(model: &Model<T>, ws: &mut Workspace<T>) -> SpatialInertia<T> {
+/// Each subtree's composite inertia in its own body frame, into `ws.composite` (CRBA's: the parent
+/// placements are folded joint by joint, where a joint's constant placement and its axis keep most entries
+/// of the transform exact zeros and ones); returns the whole model's in world axes about the world origin
+/// (the roots' composites moved by their world placements).
+fn body_composites<T: Real>(model: &Model<T>, ws: &mut Workspace<T>) -> SpatialInertia<T> {
     for (i, body) in model.bodies.iter().enumerate() {
-        ws.composite[i] = body.inertia.act(&ws.world_placement[i]);
+        ws.composite[i] = body.inertia;
+    }
+    let mut total = SpatialInertia::zero();
+    for i in (0..model.nbodies()).rev() {
+        let c = ws.composite[i].named(&model.bodies[i].name, "ic");
+        ws.composite[i] = c;
+        match model.joints[i].parent {
+            Some(p) => ws.composite[p] = ws.composite[p] + c.act(&ws.parent_placement[i]),
+            None => total = total + c.act(&ws.world_placement[i]),
+        }
+    }
+    total
+}
+
+/// Each subtree's mass and first moment in world coordinates (into `ws.composite`, rotational inertia
+/// left zero); returns the whole model's.
+fn world_first_moments<T: Real>(model: &Model<T>, ws: &mut Workspace<T>) -> SpatialInertia<T> {
+    for (i, body) in model.bodies.iter().enumerate() {
+        let x = &ws.world_placement[i];
+        let inertia = &body.inertia;
+        ws.composite[i] = SpatialInertia {
+            mass: inertia.mass,
+            first_moment: x.rotation * inertia.first_moment + x.translation * inertia.mass,
+            rotational: nalgebra::Matrix3::zeros(),
+        };
     }
     let mut total = SpatialInertia::zero();
     for i in (0..model.nbodies()).rev() {
@@ -85,7 +111,7 @@ pub fn com_jacobian<T: Real>(
     jacobian: &mut Matrix3xX<T>,
 ) -> Result<Vector3<T>, DynamicsError> {
     check_len("J_com columns", jacobian.ncols(), model.nv())?;
-    let total = world_composites(model, ws);
+    let total = world_first_moments(model, ws);
     let inv = inverse_mass(total.mass);
     for (i, joint) in model.joints.iter().enumerate() {
         let c = &ws.composite[i];
@@ -103,18 +129,23 @@ pub fn com_jacobian<T: Real>(
 /// The centroidal momentum matrix `A_g` (6 × nv, rows linear then angular; the momentum about the centre
 /// of mass in world axes is `h_g = A_g v`) into `a_g`, from the poses of the last forward kinematics
 /// (Pinocchio's `ccrba`); returns the centre of mass. Overwrites `ws.composite`; never allocates.
+///
+/// Column `k` is the momentum of the subtree joint `k` carries when only that coordinate moves: the
+/// subtree's composite inertia times the joint's motion direction, formed in the joint's own body frame
+/// (where the direction is a constant axis and the product picks a column of the inertia), then moved to
+/// world axes and taken about the centre of mass.
 pub fn centroidal_momentum_matrix<T: Real>(
     model: &Model<T>,
     ws: &mut Workspace<T>,
     a_g: &mut Matrix6xX<T>,
 ) -> Result<Vector3<T>, DynamicsError> {
     check_len("A_g columns", a_g.ncols(), model.nv())?;
-    let total = world_composites(model, ws);
+    let total = body_composites(model, ws);
     let com = total.first_moment * inverse_mass(total.mass);
     for (i, joint) in model.joints.iter().enumerate() {
         for k in 0..joint.nv() {
-            let s = ws.world_placement[i].act_motion(&joint.subspace_column(k));
-            let f = about_com(&ws.composite[i].mul_motion(&s), &com);
+            let local = ws.composite[i].mul_motion(&joint.subspace_column(k));
+            let f = about_com(&ws.world_placement[i].act_force(&local), &com);
             for r in 0..3 {
                 a_g[(r, joint.v_index + k)] = f.linear[r];
                 a_g[(r + 3, joint.v_index + k)] = f.angular[r];
@@ -130,38 +161,58 @@ fn about_com<T: Real>(f: &Force<T>, c: &Vector3<T>) -> Force<T> {
 }
 
 /// The centroidal momentum `h_g = A_g v` (`[angular; linear]` as a spatial force: the linear momentum and
-/// the angular momentum about the centre of mass, world axes), from the last forward kinematics, in O(N).
-pub fn centroidal_momentum<T: Real>(model: &Model<T>, ws: &Workspace<T>) -> Force<T> {
-    let mut h = Force::zero();
-    let mut mass = T::zero();
-    let mut moment = Vector3::zeros();
+/// the angular momentum about the centre of mass, world axes), from the last forward kinematics, in O(N):
+/// each body's momentum carried to its parent's frame (RNEA's inward sweep), the roots' moved to the world.
+/// Overwrites `ws.force`.
+pub fn centroidal_momentum<T: Real>(model: &Model<T>, ws: &mut Workspace<T>) -> Force<T> {
     for (i, body) in model.bodies.iter().enumerate() {
-        let x = &ws.world_placement[i];
-        h += x.act_force(&body.inertia.mul_motion(&ws.velocity[i]));
-        mass += body.inertia.mass;
-        moment += x.rotation * body.inertia.first_moment + x.translation * body.inertia.mass;
+        ws.force[i] = body.inertia.mul_motion(&ws.velocity[i]);
     }
-    about_com(&h, &(moment * inverse_mass(mass)))
+    about_com(&carried_to_world(model, ws), &com_of(model, ws))
 }
 
 /// The rate of the centroidal momentum, `ḣ_g = A_g qdd + Ȧ_g v`, after
 /// [`forward_kinematics_acceleration`](super::forward_kinematics_acceleration)`(q, v, qdd)`; with
 /// `qdd = 0` it is `Ȧ_g v`, the bias centroidal MPC needs (Pinocchio's `dccrba` times `v`). It is the sum
-/// of the bodies' momentum rates in world axes, the moment taken about the moving centre of mass
-/// (`d/dt (n_O − c × p) = ṅ_O − c × ṗ`, since `ċ × p = ċ × m ċ = 0`). Gravity is not in it: for a robot
-/// touched by nothing else, `ḣ_g = (m g, 0)`.
-pub fn centroidal_momentum_rate<T: Real>(model: &Model<T>, ws: &Workspace<T>) -> Force<T> {
-    let mut rate = Force::zero();
+/// of the bodies' momentum rates `I a + v ×* I v` (RNEA's body forces without gravity) in world axes, the
+/// moment taken about the moving centre of mass (`d/dt (n_O − c × p) = ṅ_O − c × ṗ`, since
+/// `ċ × p = ċ × m ċ = 0`). Gravity is not in it: for a robot touched by nothing else, `ḣ_g = (m g, 0)`.
+/// Overwrites `ws.force`.
+pub fn centroidal_momentum_rate<T: Real>(model: &Model<T>, ws: &mut Workspace<T>) -> Force<T> {
+    for (i, body) in model.bodies.iter().enumerate() {
+        let inertia = &body.inertia;
+        let v = &ws.velocity[i];
+        ws.force[i] =
+            inertia.mul_motion(&ws.acceleration[i]) + v.cross_force(&inertia.mul_motion(v));
+    }
+    about_com(&carried_to_world(model, ws), &com_of(model, ws))
+}
+
+/// The sum of the per-body forces in `ws.force` (body frames) in world axes about the world origin,
+/// carried leaves first to each parent's frame and the roots' moved to the world.
+fn carried_to_world<T: Real>(model: &Model<T>, ws: &mut Workspace<T>) -> Force<T> {
+    let mut total = Force::zero();
+    for i in (0..model.nbodies()).rev() {
+        let f = ws.force[i].named(&model.bodies[i].name, "f");
+        match model.joints[i].parent {
+            Some(p) => {
+                let fp = ws.parent_placement[i].act_force(&f);
+                ws.force[p] += fp;
+            }
+            None => total += ws.world_placement[i].act_force(&f),
+        }
+    }
+    total
+}
+
+/// The centre of mass from the last forward kinematics (the origin for a massless model).
+fn com_of<T: Real>(model: &Model<T>, ws: &Workspace<T>) -> Vector3<T> {
     let mut mass = T::zero();
     let mut moment = Vector3::zeros();
     for (i, body) in model.bodies.iter().enumerate() {
         let x = &ws.world_placement[i];
-        let inertia = &body.inertia;
-        let v = &ws.velocity[i];
-        let f = inertia.mul_motion(&ws.acceleration[i]) + v.cross_force(&inertia.mul_motion(v));
-        rate += x.act_force(&f);
-        mass += inertia.mass;
-        moment += x.rotation * inertia.first_moment + x.translation * inertia.mass;
+        mass += body.inertia.mass;
+        moment += x.rotation * body.inertia.first_moment + x.translation * body.inertia.mass;
     }
-    about_com(&rate, &(moment * inverse_mass(mass)))
+    moment * inverse_mass(mass)
 }
