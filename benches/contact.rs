@@ -11,7 +11,6 @@ use std::hint::black_box;
 use std::time::Duration;
 
 #[path = "../tests/common/mod.rs"]
-#[allow(dead_code)]
 mod common;
 use common::{load_model, Rng};
 
