@@ -1252,6 +1252,64 @@ mod tests {
         assert!(src.contains("m::minv(q, &mut mat);"), "{src}");
     }
 
+    /// The links a runner's functions are generated for (wrench links, frame, reference) reach its
+    /// source, hence its cache key: a runner generated for other links is never reused.
+    #[test]
+    fn the_links_reach_the_cache_key() {
+        use embedyn_codegen::LinkOptions;
+        let path =
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("../models/loops/four_bar_internal.urdf");
+        let loaded = embedyn_codegen::load(&path).unwrap();
+        let source = |algorithms: Vec<Algorithm>, links: LinkOptions| {
+            let options = GenerateOptions {
+                algorithms,
+                exact: true,
+                f32: false,
+                links,
+                ..Default::default()
+            };
+            let s = runner_source(&loaded, &options).unwrap();
+            let main = s
+                .files
+                .iter()
+                .find(|(p, _)| p.ends_with("main.rs"))
+                .unwrap();
+            (s.key, main.1.clone())
+        };
+        let frame = |reference| LinkOptions {
+            frames: vec!["tip".into()],
+            reference,
+            ..Default::default()
+        };
+        let (local, main) = source(
+            vec![Algorithm::Frame],
+            frame(embedyn_codegen::Reference::Local),
+        );
+        assert!(main.contains("\"frame_tip\" =>"), "{main}");
+        assert!(
+            main.contains("m::frame_tip(q, a, &mut o0, &mut o1, &mut o2);"),
+            "{main}"
+        );
+        let (world, _) = source(
+            vec![Algorithm::Frame],
+            frame(embedyn_codegen::Reference::World),
+        );
+        assert_ne!(local, world);
+        let wrenches = |links: &[&str]| LinkOptions {
+            wrenches: links.iter().map(|l| l.to_string()).collect(),
+            ..Default::default()
+        };
+        let (one, main) = source(vec![Algorithm::AbaExt], wrenches(&["crank"]));
+        assert!(main.contains("const WRENCHES: usize = 1;"), "{main}");
+        assert!(main.contains("m::aba_ext(q, a, b, w, &mut out)"), "{main}");
+        let (two, main) = source(vec![Algorithm::AbaExt], wrenches(&["crank", "tip"]));
+        assert!(main.contains("const WRENCHES: usize = 2;"), "{main}");
+        assert_ne!(one, two);
+        // Without links, the runner is what it always was: no wrenches in its rows.
+        let (_, main) = source(vec![Algorithm::Aba], LinkOptions::default());
+        assert!(!main.contains("WRENCHES"), "{main}");
+    }
+
     #[test]
     fn runner_source_parses_for_every_algorithm() {
         for constrained in [false, true] {
