@@ -10,7 +10,7 @@ use super::{
 };
 use embedyn_codegen::{Loaded, ModelOptions};
 use embedyn_runtime::constraints::{constraint_violation, singularity_threshold};
-use embedyn_runtime::nalgebra::{self, DMatrix, Matrix3xX, Matrix6xX, Vector3};
+use embedyn_runtime::nalgebra::{DMatrix, Matrix3xX, Matrix6xX, Vector3};
 use embedyn_runtime::{
     aba, aba_ext, center_of_mass, centroidal_momentum, centroidal_momentum_matrix,
     centroidal_momentum_rate, com_jacobian, crba, difference, embedding_map, forward_kinematics,
@@ -164,20 +164,6 @@ fn takes_wrenches(algo: EvalAlgo) -> bool {
     matches!(algo, EvalAlgo::Dynamics(Algo::Aba | Algo::Rnea | Algo::Nle))
 }
 
-/// What the generated engine cannot evaluate yet: the frame and centroidal algorithms, and samples with
-/// external wrenches (their generated functions are being written). The one place to change when they
-/// exist.
-fn not_generated_yet(algo: EvalAlgo, samples: &Samples) -> Option<CliError> {
-    let what = match algo {
-        EvalAlgo::Dynamics(_) if samples.has_wrenches() => {
-            format!("`{F_EXT}` (external wrenches)")
-        }
-        EvalAlgo::Dynamics(_) => return None,
-        other => format!("`--algo {}`", other.name()),
-    };
-    Some(CliError::NotGenerated { what })
-}
-
 /// Whether the algorithm works on the configuration space (`integrate`, `difference`): on the spanning
 /// tree's coordinates as given, which need not satisfy the constraints.
 fn on_configuration_space(algo: Algo) -> bool {
@@ -217,10 +203,32 @@ pub fn eval(
     // resolution of typical angles).
     let model64 = loaded.model::<f64>(options)?;
     let frame = query.frame(&model64)?;
+    let samples = read_samples(&model64, query, input)?;
+    if engine == Engine::Generated {
+        // Before anything is compiled.
+        samples.check_all()?;
+        let plan = Plan::new(&model64, query, &samples)?;
+        let wrench_count = plan.wrench_rows.len();
+        let rows = generated_rows(&model64, &plan, scalar, &samples, wrench_count)?;
+        // (Built once every sample is known to be evaluable.)
+        let gen_options = generated_options(options, &plan, scalar, max_compile_memory_mb);
+        let binary = super::runner::build_runner(loaded, &gen_options)?;
+        return generated_outputs(
+            loaded, options, &model64, &plan, scalar, &samples, &rows, &binary,
+        );
+    }
+    match scalar {
+        Scalar::F64 => eval_in::<f64>(&model64, query, frame, &samples),
+        Scalar::F32 => eval_in::<f32>(&loaded.model(options)?, query, frame, &samples),
+    }
+}
+
+/// The samples of `input` for `query` on `model`, each state checked against the constraints.
+fn read_samples(model64: &Model<f64>, query: &Query, input: &str) -> Result<Samples, CliError> {
     // Only the fields the algorithm uses are read, at the lengths the model needs.
     // The sample's fields are the function's inputs (its descriptor's).
     let (nq, nv) = (model64.nq(), model64.nv());
-    let dims = embedyn_codegen::algorithm::Dims::of(&model64);
+    let dims = embedyn_codegen::algorithm::Dims::of(model64);
     let (request, optional): (Vec<(&'static str, usize)>, &[&'static str]) = match query.algo {
         EvalAlgo::Dynamics(algo) => (
             algo.spec()
@@ -247,7 +255,7 @@ pub fn eval(
         EvalAlgo::Dynamics(a) if on_configuration_space(a)
     );
     if model64.has_constraints() && !on_configurations {
-        let mut ws = Workspace::new(&model64);
+        let mut ws = Workspace::new(model64);
         let zero = vec![0.0; nv];
         for i in 0..samples.len() {
             let q = samples.vector(i, "q")?;
@@ -257,71 +265,226 @@ pub fn eval(
                 EvalAlgo::Dynamics(_) => &zero[..],
                 _ => samples.optional_vector(i, "v")?.unwrap_or(&zero[..]),
             };
-            check_consistent(&model64, &mut ws, q, v, i)?;
+            check_consistent(model64, &mut ws, q, v, i)?;
         }
     }
-    if engine == Engine::Generated {
-        // Before anything is compiled.
-        samples.check_all()?;
-        if let Some(refusal) = not_generated_yet(query.algo, &samples) {
-            return Err(refusal);
-        }
-        let EvalAlgo::Dynamics(algo) = query.algo else {
-            return Err(CliError::NotGenerated {
-                what: format!("`--algo {}`", query.algo.name()),
-            });
+    Ok(samples)
+}
+
+/// What the generated engine compiles and runs for a query: one generated function, the links it is
+/// generated for, and the wrenches' rows.
+#[derive(Debug, PartialEq)]
+struct Plan {
+    /// What the command reports (its outputs' fields).
+    algo: EvalAlgo,
+    /// The generated function that computes it (`aba_ext` for `aba` with wrenches, `frame` for
+    /// `jacobian`, …).
+    function: Algo,
+    /// The links it is generated for: the wrenches' links, the frame and its reference. Part of the
+    /// generated source, hence of the runner's cache key.
+    links: embedyn_codegen::LinkOptions,
+    /// The runner's name for the function (`frame_<link>` for a frame function).
+    arm: String,
+    /// For each row of `f_ext`, the link's index among the model's frames (the samples' numbering).
+    wrench_rows: Vec<usize>,
+    /// Whether the model has constraints.
+    constrained: bool,
+}
+
+impl Plan {
+    /// The plan for `query` on `samples`: the plain function where no sample carries a wrench; else the
+    /// one with wrenches, for the union of the links the samples name, in the model's frame order
+    /// (links fixed to the world left out: a wrench there moves nothing, as in the interpreted engine).
+    fn new(model: &Model<f64>, query: &Query, samples: &Samples) -> Result<Plan, CliError> {
+        let frames: Vec<FrameId> = model.frames().collect();
+        let name_of = |f: FrameId| model.frame_name(f).unwrap_or_default().to_string();
+        let mut plan = Plan {
+            algo: query.algo,
+            function: Algo::Aba,
+            links: embedyn_codegen::LinkOptions::default(),
+            arm: String::new(),
+            wrench_rows: Vec::new(),
+            constrained: model.has_constraints(),
         };
-        return eval_generated(
-            loaded,
-            options,
-            &model64,
-            algo,
-            scalar,
-            &samples,
-            max_compile_memory_mb,
-        );
-    }
-    match scalar {
-        Scalar::F64 => eval_in::<f64>(&model64, query, frame, &samples),
-        Scalar::F32 => eval_in::<f32>(&loaded.model(options)?, query, frame, &samples),
+        plan.function = match query.algo {
+            EvalAlgo::Dynamics(algo) if takes_wrenches(query.algo) && samples.has_wrenches() => {
+                let mut rows = Vec::new();
+                for i in 0..samples.len() {
+                    for w in samples.wrenches(i)? {
+                        let frame = *frames
+                            .get(w.frame)
+                            .ok_or(InternalError::SampleNotInInput { sample: i })?;
+                        if frame.body.is_some() && !rows.contains(&w.frame) {
+                            rows.push(w.frame);
+                        }
+                    }
+                }
+                rows.sort_unstable();
+                plan.links.wrenches = rows.iter().map(|&k| name_of(frames[k])).collect();
+                plan.wrench_rows = rows;
+                match (algo, plan.wrench_rows.is_empty()) {
+                    (_, true) => algo,
+                    (Algo::Aba, false) => Algo::AbaExt,
+                    (Algo::Rnea, false) => Algo::RneaExt,
+                    (Algo::Nle, false) => Algo::NleExt,
+                    (other, false) => return Err(not_evaluated(other)),
+                }
+            }
+            EvalAlgo::Dynamics(algo) => algo,
+            EvalAlgo::Jacobian => {
+                let link = query.frame.clone().ok_or(InternalError::FieldNotRead {
+                    field: "--frame".into(),
+                })?;
+                plan.links.reference = query.reference;
+                plan.links.frames = vec![link];
+                Algo::Frame
+            }
+            EvalAlgo::Com => Algo::Com,
+            EvalAlgo::Centroidal => Algo::Centroidal,
+        };
+        plan.arm = match plan.function {
+            Algo::Frame => {
+                let links: Vec<&str> = plan.links.frames.iter().map(String::as_str).collect();
+                embedyn_codegen::frame_function_names(&links)
+                    .pop()
+                    .unwrap_or_default()
+            }
+            other => other.name().to_string(),
+        };
+        Ok(plan)
     }
 }
 
-/// `--engine generated`: the same samples through the compiled generated code; the independent-coordinate
-/// projections (for couplings) use the model's embedding map, as the interpreted engine does.
-fn eval_generated(
+/// Several `eval --engine generated` queries on one model through one runner, built in the cache folder
+/// `folder` (else the usual one): the union of the queries' functions, links and scalars (where two
+/// queries name wrench links, or two name a reference, they must agree). Each answer is what `eval`
+/// prints for its query alone. For tests, which otherwise pay a compile per query.
+pub fn eval_generated_together(
     loaded: &Loaded,
     options: &ModelOptions,
-    model: &Model<f64>,
-    algo: Algo,
-    scalar: Scalar,
-    samples: &Samples,
-    max_compile_memory_mb: u64,
-) -> Result<Evaluated, CliError> {
-    // The function and scalar asked for only: a fraction of the compile time and memory, and a model
-    // whose constants do not fit f32 can still be evaluated in f64.
-    // What the command reports for a model with constraints may be another function's (`crba`: Xᵀ M X).
-    let algorithms = super::runner::runner_algorithms(&[algo], model.has_constraints());
-    let gen_options = embedyn_codegen::GenerateOptions {
+    queries: &[(Query, Scalar, &str)],
+    folder: Option<&std::path::Path>,
+) -> Result<Vec<Evaluated>, CliError> {
+    let model64 = loaded.model::<f64>(options)?;
+    let constrained = model64.has_constraints();
+    let mut gen_options = embedyn_codegen::GenerateOptions {
         model: options.clone(),
-        algorithms,
+        algorithms: Vec::new(),
+        exact: true,
+        f64: false,
+        f32: false,
+        max_compile_memory_mb: None,
+        ..Default::default()
+    };
+    let disagree = |what: &str| CliError::BadOption {
+        option: "--engine generated",
+        message: format!("queries run together must name the same {what}"),
+    };
+    let mut prepared = Vec::with_capacity(queries.len());
+    let mut reference = None;
+    for (query, scalar, input) in queries {
+        query.frame(&model64)?;
+        let samples = read_samples(&model64, query, input)?;
+        samples.check_all()?;
+        let plan = Plan::new(&model64, query, &samples)?;
+        for a in super::runner::runner_algorithms(&[plan.function], constrained) {
+            if !gen_options.algorithms.contains(&a) {
+                gen_options.algorithms.push(a);
+            }
+        }
+        let links = &mut gen_options.links;
+        if !plan.links.wrenches.is_empty() {
+            if !links.wrenches.is_empty() && links.wrenches != plan.links.wrenches {
+                return Err(disagree("wrench links"));
+            }
+            links.wrenches.clone_from(&plan.links.wrenches);
+        }
+        for f in &plan.links.frames {
+            if !links.frames.contains(f) {
+                links.frames.push(f.clone());
+            }
+            if reference.is_some_and(|r| r != plan.links.reference) {
+                return Err(disagree("reference"));
+            }
+            reference = Some(plan.links.reference);
+            links.reference = plan.links.reference;
+        }
+        gen_options.f64 |= *scalar == Scalar::F64;
+        gen_options.f32 |= *scalar == Scalar::F32;
+        prepared.push((plan, *scalar, samples));
+    }
+    let wrench_count = gen_options.links.wrenches.len();
+    let mut rows = Vec::with_capacity(prepared.len());
+    for (plan, scalar, samples) in &prepared {
+        rows.push(generated_rows(
+            &model64,
+            plan,
+            *scalar,
+            samples,
+            wrench_count,
+        )?);
+    }
+    let binary = super::runner::build_runner_in(loaded, &gen_options, folder)?;
+    prepared
+        .iter()
+        .zip(&rows)
+        .map(|((plan, scalar, samples), rows)| {
+            generated_outputs(
+                loaded, options, &model64, plan, *scalar, samples, rows, &binary,
+            )
+        })
+        .collect()
+}
+
+/// What `--engine generated` compiles for `plan`: the function and scalar asked for only (a fraction of
+/// the compile time and memory, and a model whose constants do not fit f32 can still be evaluated in
+/// f64), with the plan's links; what the command reports for a model with constraints may be another
+/// function's (`crba`: Xᵀ M X).
+fn generated_options(
+    options: &ModelOptions,
+    plan: &Plan,
+    scalar: Scalar,
+    max_compile_memory_mb: u64,
+) -> embedyn_codegen::GenerateOptions {
+    embedyn_codegen::GenerateOptions {
+        model: options.clone(),
+        algorithms: super::runner::runner_algorithms(&[plan.function], plan.constrained),
         exact: true,
         f64: scalar == Scalar::F64,
         f32: scalar == Scalar::F32,
         max_compile_memory_mb: Some(max_compile_memory_mb),
+        links: plan.links.clone(),
         ..Default::default()
-    };
+    }
+}
+
+/// The runner's input rows for `plan` on `samples`, each checked as the interpreted engine checks its
+/// input; `wrench_count` is the runner's number of wrench links (rows end with `f_ext`, zeros on the
+/// links a sample puts no wrench on).
+fn generated_rows(
+    model: &Model<f64>,
+    plan: &Plan,
+    scalar: Scalar,
+    samples: &Samples,
+    wrench_count: usize,
+) -> Result<Vec<Vec<f64>>, CliError> {
+    let function = plan.function;
     let (nq, nv) = (model.nq(), model.nv());
+    let frames: Vec<FrameId> = model.frames().collect();
     let mut rows = Vec::with_capacity(samples.len());
-    // The runner reads `q`, two `NV`-vectors and a second configuration per sample: the function's
-    // inputs after `q` (its descriptor's) in their slots, zeros for those it does not have.
+    // The runner reads `q`, two `NV`-vectors, a second configuration and, with wrench links, `f_ext` per
+    // sample: the function's inputs after `q` (its descriptor's) in their slots, zeros for those it does
+    // not have (and for an optional `v` a sample leaves out, and for a link a sample puts no wrench on).
     use embedyn_codegen::algorithm::Dim;
-    let inputs = &algo.spec().inputs[1..];
+    let inputs = &function.spec().inputs[1..];
     let vectors = inputs.iter().filter(|i| i.len == Dim::Nv).count();
     let configurations = inputs.iter().filter(|i| i.len == Dim::Nq).count();
-    if vectors > 2 || configurations > 1 || vectors + configurations != inputs.len() {
-        return Err(not_evaluated(algo));
+    let wrench_inputs = inputs.iter().filter(|i| i.len == Dim::WrenchLinks).count();
+    if vectors > 2 || configurations > 1 || vectors + configurations + wrench_inputs != inputs.len()
+    {
+        return Err(not_evaluated(function));
     }
+    let zeros = vec![0.0; nv.max(nq)];
     for i in 0..samples.len() {
         let mut row = samples.vector(i, "q")?.to_vec();
         check_quaternions(model, &row, i)?;
@@ -331,8 +494,27 @@ fn eval_generated(
             fits::<f32>("q", &row, i)?;
         }
         let mut second = vec![0.0; nq];
+        let mut f_ext = vec![0.0; 6 * wrench_count];
         for input in inputs {
-            let x = samples.vector(i, input.name)?;
+            if input.len == Dim::WrenchLinks {
+                let given = samples.wrenches(i)?;
+                if scalar == Scalar::F32 {
+                    wrenches::<f64, f32>(model, &frames, given, i)?;
+                }
+                // Two wrenches on one link add up, as in the interpreted engine.
+                for w in given {
+                    if let Some(k) = plan.wrench_rows.iter().position(|&r| r == w.frame) {
+                        for (j, x) in w.force.iter().chain(&w.torque).enumerate() {
+                            f_ext[6 * k + j] += x;
+                        }
+                    }
+                }
+                continue;
+            }
+            let x = match samples.optional_vector(i, input.name)? {
+                Some(x) => x,
+                None => &zeros[..input.len.len(&embedyn_codegen::algorithm::Dims::of(model))],
+            };
             if scalar == Scalar::F32 {
                 fits::<f32>(input.name, x, i)?;
             }
@@ -345,48 +527,72 @@ fn eval_generated(
         }
         row.resize(nq + 2 * nv, 0.0);
         row.extend_from_slice(&second);
+        row.extend_from_slice(&f_ext);
         rows.push(row);
     }
-    // (Built once every sample is known to be evaluable.)
-    let binary = super::runner::build_runner(loaded, &gen_options)?;
-    let name = algo.name();
+    Ok(rows)
+}
+
+/// The answers of the runner `binary` to `rows` ([`generated_rows`]) for `plan`, as the command prints
+/// them; the independent-coordinate projections (for couplings and loops) use the model's embedding map
+/// in the scalar asked for, as the interpreted engine does.
+#[allow(clippy::too_many_arguments)]
+fn generated_outputs(
+    loaded: &Loaded,
+    options: &ModelOptions,
+    model: &Model<f64>,
+    plan: &Plan,
+    scalar: Scalar,
+    samples: &Samples,
+    rows: &[Vec<f64>],
+    binary: &std::path::Path,
+) -> Result<Evaluated, CliError> {
+    let constrained = model.has_constraints();
+    let function = plan.function;
+    let (nq, nv) = (model.nq(), model.nv());
     let scalar_name = match scalar {
         Scalar::F64 => "f64",
         Scalar::F32 => "f32",
     };
-    // What one output row holds; the runner's output is checked against it (count and length).
-    let len = match algo {
-        Algo::Aba if model.has_constraints() => nv + 1,
-        Algo::Aba => nv,
-        a if gives_torques(a) => nv,
-        Algo::Crba if model.has_constraints() => model.independent_nv().pow(2) + 1,
-        Algo::Crba => nv * nv,
-        Algo::Integrate => nq,
-        Algo::Difference => nv,
-        other => return Err(not_evaluated(other)),
-    };
-    let outputs = super::runner::run(&binary, name, scalar_name, RowShape::Eval { len }, &rows)?;
+    // What one output row holds (the reported function's outputs in order, then the singularity
+    // measure it returns); the runner's output is checked against it (count and length).
+    let reported = function.reported_by(constrained).spec();
+    let dims = embedyn_codegen::algorithm::Dims::of(model);
+    let sizes: Vec<usize> = reported
+        .outputs
+        .iter()
+        .map(|o| match o.shape {
+            embedyn_codegen::algorithm::Shape::Vector(d) => d.len(&dims),
+            embedyn_codegen::algorithm::Shape::Matrix(r, c) => r.len(&dims) * c.len(&dims),
+        })
+        .collect();
+    let returns_value = reported.returns_value(constrained);
+    let len = sizes.iter().sum::<usize>() + usize::from(returns_value);
+    let outputs = super::runner::run(binary, &plan.arm, scalar_name, RowShape::Eval { len }, rows)?;
     let mut ws = Workspace::new(model);
+    // X in the scalar asked for, so that the singularity verdict is that scalar's.
     let mut model32 = match scalar {
-        Scalar::F32 if gives_torques(algo) && model.has_constraints() => {
+        Scalar::F32 if constrained => {
             let m32 = loaded.model::<f32>(options)?;
             let ws32 = Workspace::new(&m32);
             Some((m32, ws32))
         }
         _ => None,
     };
+    let mut embedding = |q: &[f64], i: usize| -> Result<DMatrix<f64>, CliError> {
+        match model32.as_mut() {
+            Some((m32, ws32)) => embedding_f64(m32, ws32, q, i),
+            None => embedding_f64(model, &mut ws, q, i),
+        }
+    };
     let independent = independent_indices(model);
     let mut out = Vec::with_capacity(outputs.len());
-    for (i, (o, row)) in outputs.iter().zip(&rows).enumerate() {
+    for (i, (o, row)) in outputs.iter().zip(rows).enumerate() {
         let mut o = o.clone();
-        if algo
-            .reported_by(model.has_constraints())
-            .spec()
-            .returns_value(model.has_constraints())
-        {
-            // The generated `aba` and `crba_independent` also return the singularity measure cond₁(Y1);
-            // refuse where the interpreted engine does, by the same threshold for the scalar (NaN counts
-            // as singular).
+        if returns_value {
+            // The generated `aba`, `aba_ext` and `crba_independent` also return the singularity measure
+            // cond₁(Y1); refuse where the interpreted engine does, by the same threshold for the scalar
+            // (NaN counts as singular).
             let condition = o.pop().unwrap_or(f64::NAN);
             let threshold = match scalar {
                 Scalar::F64 => singularity_threshold::<f64>(),
@@ -403,70 +609,122 @@ fn eval_generated(
                 });
             }
         }
-        // Named as the output is in the JSON, as the interpreted engine names it.
-        let output = match algo {
-            Algo::Aba => "qdd",
-            a if gives_torques(a) => "tau",
-            Algo::Crba => "M",
-            Algo::Integrate => "q",
-            Algo::Difference => "v",
-            _ => name,
-        };
-        let o = finite(&o, i, output)?;
+        // The outputs, in order.
+        let mut parts = Vec::with_capacity(sizes.len());
+        let mut start = 0;
+        for &n in &sizes {
+            parts.push(&o[start..start + n]);
+            start += n;
+        }
         let q = &row[..nq];
-        out.push(match algo {
-            Algo::Aba => Output::Aba {
-                qdd_independent: independent.iter().map(|&k| o[k]).collect(),
-                qdd: o,
-            },
-            a if gives_torques(a) => {
+        let x = match (constrained, plan.algo) {
+            (true, EvalAlgo::Jacobian | EvalAlgo::Com | EvalAlgo::Centroidal) => {
+                Some(embedding(q, i)?)
+            }
+            _ => None,
+        };
+        let x = x.as_ref();
+        let has_v = samples.optional_vector(i, "v").ok().flatten().is_some();
+        out.push(match (plan.algo, &parts[..]) {
+            (EvalAlgo::Dynamics(Algo::Aba), [qdd]) => {
+                let qdd = finite(qdd, i, "qdd")?;
+                Output::Aba {
+                    qdd_independent: independent.iter().map(|&k| qdd[k]).collect(),
+                    qdd,
+                }
+            }
+            (EvalAlgo::Dynamics(a), [tau]) if gives_torques(a) => {
+                let tau = finite(tau, i, "tau")?;
                 // Xᵀ τ with X in the scalar asked for, so that the singularity verdict is that scalar's.
-                let tau_independent: Vec<f64> = match model32.as_mut() {
-                    Some((m32, ws32)) if model.has_constraints() => project(m32, ws32, q, &o, i)?,
-                    _ if model.has_constraints() => project(model, &mut ws, q, &o, i)?,
-                    _ => o.clone(),
+                let tau_independent: Vec<f64> = match constrained {
+                    true => {
+                        let x = embedding(q, i)?;
+                        (0..x.ncols())
+                            .map(|c| (0..tau.len()).map(|r| x[(r, c)] * tau[r]).sum())
+                            .collect()
+                    }
+                    false => tau.clone(),
                 };
                 let tau_independent = finite(&tau_independent, i, "tau_independent")?;
                 Output::Torques {
-                    tau: o,
+                    tau,
                     tau_independent,
                 }
             }
-            Algo::Crba => {
+            (EvalAlgo::Dynamics(Algo::Crba), [m]) => {
                 // Xᵀ M X for a model with constraints (the generated `crba_independent`).
-                let n = if model.has_constraints() {
+                let m = finite(m, i, "M")?;
+                let n = if constrained {
                     model.independent_nv()
                 } else {
                     nv
                 };
-                let m = nalgebra::DMatrix::from_row_slice(n, n, &o);
                 Output::Crba {
-                    m: (0..n)
-                        .map(|r| (0..n).map(|c| m[(r, c)]).collect())
-                        .collect(),
+                    m: m.chunks(n.max(1)).take(n).map(<[f64]>::to_vec).collect(),
                 }
             }
-            Algo::Integrate => Output::Integrated { q: o },
-            Algo::Difference => Output::Difference { v: o },
-            other => return Err(not_evaluated(other)),
+            (EvalAlgo::Dynamics(Algo::Integrate), [q]) => Output::Integrated {
+                q: finite(q, i, "q")?,
+            },
+            (EvalAlgo::Dynamics(Algo::Difference), [v]) => Output::Difference {
+                v: finite(v, i, "v")?,
+            },
+            (EvalAlgo::Jacobian, [_pose, j, bias]) => {
+                let get = |r: usize, c: usize| j[r * nv + c];
+                let bias = |range: Range<usize>, name| {
+                    has_v.then(|| finite(&bias[range], i, name)).transpose()
+                };
+                Output::Jacobian {
+                    j_linear: matrix_rows(get, 0..3, nv, None, i, "J_linear")?,
+                    j_angular: matrix_rows(get, 3..6, nv, None, i, "J_angular")?,
+                    bias_linear: bias(0..3, "bias_linear")?,
+                    bias_angular: bias(3..6, "bias_angular")?,
+                    j_linear_independent: x
+                        .map(|x| matrix_rows(get, 0..3, nv, Some(x), i, "J_linear_independent"))
+                        .transpose()?,
+                    j_angular_independent: x
+                        .map(|x| matrix_rows(get, 3..6, nv, Some(x), i, "J_angular_independent"))
+                        .transpose()?,
+                }
+            }
+            (EvalAlgo::Com, [com, vcom, j]) => {
+                let get = |r: usize, c: usize| j[r * nv + c];
+                Output::Com {
+                    com: finite(com, i, "com")?,
+                    j_com: matrix_rows(get, 0..3, nv, None, i, "J_com")?,
+                    vcom: has_v.then(|| finite(vcom, i, "vcom")).transpose()?,
+                    j_com_independent: x
+                        .map(|x| matrix_rows(get, 0..3, nv, Some(x), i, "J_com_independent"))
+                        .transpose()?,
+                }
+            }
+            (EvalAlgo::Centroidal, [h_g, a_g, dh_g]) => {
+                let get = |r: usize, c: usize| a_g[r * nv + c];
+                Output::Centroidal {
+                    a_g: matrix_rows(get, 0..6, nv, None, i, "A_g")?,
+                    h_g: finite(h_g, i, "h_g")?,
+                    dh_g: finite(dh_g, i, "dh_g")?,
+                    a_g_independent: x
+                        .map(|x| matrix_rows(get, 0..6, nv, Some(x), i, "A_g_independent"))
+                        .transpose()?,
+                }
+            }
+            _ => return Err(not_evaluated(function)),
         });
     }
     Ok(Evaluated::new(model, out))
 }
 
-/// `Xᵀ τ` (the generalized force on the independent coordinates) with `X` of `model` at `q`.
-fn project<T: Real>(
+/// The embedding map `X` of `model` at `q` (in the model's scalar), as f64.
+fn embedding_f64<T: Real>(
     model: &Model<T>,
     ws: &mut Workspace<T>,
     q: &[f64],
-    tau: &[f64],
     sample: usize,
-) -> Result<Vec<f64>, CliError> {
+) -> Result<DMatrix<f64>, CliError> {
     let q = cast::<T>(q);
     let x = embedding_map(model, ws, &q).map_err(|e| CliError::Dynamics { sample, error: e })?;
-    Ok((0..x.ncols())
-        .map(|c| (0..tau.len()).map(|r| x[(r, c)].to_f64() * tau[r]).sum())
-        .collect())
+    Ok(x.map(|v| v.to_f64()))
 }
 
 /// Every entry of `x` is finite once converted to `T` (what the interpreted engine's input check finds
@@ -620,8 +878,8 @@ fn eval_in<T: Real>(
 
 /// A sample's wrenches in the scalar `T`, on the model's frames (`frames`, the order the samples were
 /// read with); a value finite in f64 but not in `T` is refused naming the link and the entry.
-fn wrenches<T: Real>(
-    model: &Model<T>,
+fn wrenches<M: Real, T: Real>(
+    model: &Model<M>,
     frames: &[FrameId],
     given: &[Wrench],
     sample: usize,

@@ -292,7 +292,7 @@ pub use embedyn_codegen::Algorithm as Algo;
 pub use embedyn_runtime::Reference;
 
 /// What `embedyn eval --algo` evaluates: an algorithm with a generated counterpart (its descriptor's), or
-/// one of the frame and centroidal quantities the interpreted engine computes (CONTRACT §3).
+/// one of the frame and centroidal quantities (CONTRACT §3).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum EvalAlgo {
     /// An algorithm of the descriptors (`aba`, `rnea`, `crba`, …).
@@ -312,9 +312,10 @@ impl From<Algo> for EvalAlgo {
 }
 
 impl EvalAlgo {
-    /// The algorithms of the interpreted engine only, with their `--algo` help. (Should the descriptors
-    /// offer one of these names, this entry is the one `--algo` means.)
-    const INTERPRETED_ONLY: [(EvalAlgo, &'static str, &'static str); 3] = [
+    /// The frame and centroidal algorithms, with their `--algo` help: the command line's names for them
+    /// (the generated engine runs the generated `frame_<link>`, `com` and `centroidal`). (Should the
+    /// descriptors offer one of these names, this entry is the one `--algo` means.)
+    const KINEMATIC: [(EvalAlgo, &'static str, &'static str); 3] = [
         (
             EvalAlgo::Jacobian,
             "jacobian",
@@ -336,7 +337,7 @@ impl EvalAlgo {
     pub fn name(self) -> &'static str {
         match self {
             EvalAlgo::Dynamics(a) => a.name(),
-            other => Self::INTERPRETED_ONLY
+            other => Self::KINEMATIC
                 .iter()
                 .find(|(a, _, _)| *a == other)
                 .map_or("", |&(_, name, _)| name),
@@ -345,7 +346,7 @@ impl EvalAlgo {
 
     /// The algorithm named `name` on the command line.
     pub fn from_name(name: &str) -> Option<EvalAlgo> {
-        Self::INTERPRETED_ONLY
+        Self::KINEMATIC
             .iter()
             .find(|(_, n, _)| *n == name)
             .map(|&(a, _, _)| a)
@@ -357,9 +358,9 @@ impl EvalAlgo {
     }
 }
 
-/// `--algo`'s values, with their help: the algorithms' descriptors, then the interpreted-only ones.
+/// `--algo`'s values, with their help: the algorithms' descriptors, then the frame and centroidal ones.
 fn algo_parser() -> impl clap::builder::TypedValueParser<Value = EvalAlgo> {
-    let only = EvalAlgo::INTERPRETED_ONLY;
+    let only = EvalAlgo::KINEMATIC;
     let values = Algo::offered_by_cli()
         .filter(move |a| only.iter().all(|&(_, name, _)| name != a.name()))
         .map(|a| {
@@ -500,12 +501,6 @@ pub enum CliError {
         option: &'static str,
         /// What is wrong with it.
         message: String,
-    },
-    /// What the generated engine does not evaluate yet (`what`: the algorithm, or external wrenches).
-    #[error("{what} is not available with --engine generated yet; use --engine interpreted")]
-    NotGenerated {
-        /// What was asked for.
-        what: String,
     },
     /// A broken invariant of embedyn itself.
     #[error("internal error: {0} (a bug)")]
@@ -938,6 +933,39 @@ pub fn eval_interpreted(
         0,
     )?;
     as_value(&document)
+}
+
+/// One query of [`eval_generated_together`]: `(algorithm, --frame, --reference, --scalar, input)`.
+pub type GeneratedQuery<'a> = (
+    EvalAlgo,
+    Option<&'a str>,
+    Option<Reference>,
+    Scalar,
+    &'a str,
+);
+
+/// Several `embedyn eval --engine generated` queries on one model, each `(algorithm, --frame,
+/// --reference, --scalar, input)`, through one runner compiled in the cache folder `folder` (else the
+/// usual one) with the union of their functions, links and scalars (wrench links and references must
+/// agree): for tests, which would otherwise pay a compile per query. Each answer is the JSON document
+/// `eval` prints for its query alone.
+#[doc(hidden)]
+pub fn eval_generated_together(
+    loaded: &Loaded,
+    options: &ModelOptions,
+    queries: &[GeneratedQuery],
+    folder: Option<&Path>,
+) -> Result<Vec<serde_json::Value>, CliError> {
+    let queries = queries
+        .iter()
+        .map(|&(algo, frame, reference, scalar, input)| {
+            eval::Query::new(algo, frame.map(str::to_string), reference).map(|q| (q, scalar, input))
+        })
+        .collect::<Result<Vec<_>, CliError>>()?;
+    eval::eval_generated_together(loaded, options, &queries, folder)?
+        .iter()
+        .map(as_value)
+        .collect()
 }
 
 /// `embedyn complete` on input text already read: the JSON document the command prints, or its error.

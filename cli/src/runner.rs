@@ -259,8 +259,14 @@ fn create_private_dir(dir: &Path) -> Result<(), CliError> {
 /// embedyn works. Checking the path as given and working through it later would not do: a symlink, or a
 /// folder above that someone else can rename, could point elsewhere between the check and the use. So the
 /// path is resolved once, every folder from `/` down is checked, and only the resolved path is used.
-fn cache_root() -> Result<PathBuf, CliError> {
-    let given = absolute_cache_dir()?;
+fn cache_root(folder: Option<&Path>) -> Result<PathBuf, CliError> {
+    let given = match folder {
+        Some(folder) => std::path::absolute(folder).map_err(|error| RunnerError::Path {
+            path: folder.to_path_buf(),
+            error,
+        })?,
+        None => absolute_cache_dir()?,
+    };
     create_private_dir(&given)?;
     let root = std::fs::canonicalize(&given).map_err(|error| RunnerError::Path {
         path: given.clone(),
@@ -414,8 +420,18 @@ fn check_entry(entry: &Path, source_sha256: &str) -> EntryState {
     }
 }
 
-/// Writes (or reuses, after checking it) the runner for `loaded` and returns the path of its binary.
-pub fn build_runner(loaded: &Loaded, options: &GenerateOptions) -> Result<PathBuf, CliError> {
+/// The runner's crate for `loaded` and `options`, before anything is written: its files, the cache key
+/// (from every file the runner is generated from: the model's code, with the functions, scalars and links
+/// of `options`, and `main.rs`) and the SHA-256 of the source the entry is built from.
+struct RunnerSource {
+    krate: String,
+    files: Vec<(PathBuf, String)>,
+    key: String,
+    bin_name: String,
+    source_sha256: String,
+}
+
+fn runner_source(loaded: &Loaded, options: &GenerateOptions) -> Result<RunnerSource, CliError> {
     let mut files = crate_files(loaded, options)?;
     let krate = crate_name(&loaded.robot.name);
     let constrained = loaded.model::<f64>(&options.model)?.has_constraints();
@@ -423,7 +439,8 @@ pub fn build_runner(loaded: &Loaded, options: &GenerateOptions) -> Result<PathBu
         .into_iter()
         .filter_map(|(on, name)| on.then_some(name))
         .collect();
-    let main = runner_main(&krate, &options.algorithms, constrained, &scalars)
+    let links = RunnerLinks::of(options);
+    let main = runner_main(&krate, &options.algorithms, constrained, &scalars, &links)
         .map_err(RunnerError::from)?;
     files.push((PathBuf::from("src/main.rs"), main));
     let key_parts: Vec<&[u8]> = std::iter::once(GENERATOR_VERSION.as_bytes())
@@ -453,8 +470,35 @@ pub fn build_runner(loaded: &Loaded, options: &GenerateOptions) -> Result<PathBu
         .flat_map(|(p, t)| [p.as_os_str().as_encoded_bytes(), t.as_bytes()])
         .collect();
     let source_sha256 = sha256_hex(&source_parts);
+    Ok(RunnerSource {
+        krate,
+        files,
+        key,
+        bin_name,
+        source_sha256,
+    })
+}
 
-    let root = cache_root()?;
+/// Writes (or reuses, after checking it) the runner for `loaded` and returns the path of its binary.
+pub fn build_runner(loaded: &Loaded, options: &GenerateOptions) -> Result<PathBuf, CliError> {
+    build_runner_in(loaded, options, None)
+}
+
+/// [`build_runner`] in the cache folder `folder` (checked as the usual one is), or the usual one.
+pub fn build_runner_in(
+    loaded: &Loaded,
+    options: &GenerateOptions,
+    folder: Option<&Path>,
+) -> Result<PathBuf, CliError> {
+    let RunnerSource {
+        krate,
+        files,
+        key,
+        bin_name,
+        source_sha256,
+    } = runner_source(loaded, options)?;
+
+    let root = cache_root(folder)?;
     let entry = root.join(format!("{krate}-{key}"));
     match check_entry(&entry, &source_sha256) {
         EntryState::Valid => return Ok(runner_path(&entry)),
@@ -672,60 +716,176 @@ pub fn runner_algorithms(algorithms: &[Algorithm], constrained: bool) -> Vec<Alg
     needed
 }
 
+/// What the runner's crate was generated with beyond its functions: how many links take wrenches (each
+/// row then carries `6 K` numbers more: `f_ext` row-major) and the names of its frame functions.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct RunnerLinks {
+    /// `WRENCH_LINKS.len()` (0: the crate has no wrench links, the rows their usual length).
+    pub wrenches: usize,
+    /// The generated `frame_<link>` functions, each its own arm of the runner, named as the function.
+    pub frame_functions: Vec<String>,
+}
+
+impl RunnerLinks {
+    /// What `options` generates: its wrench links (each once) and the names of its frame functions.
+    pub fn of(options: &GenerateOptions) -> RunnerLinks {
+        fn once(names: &[String]) -> Vec<&str> {
+            let mut out: Vec<&str> = Vec::new();
+            for n in names {
+                if !out.contains(&n.as_str()) {
+                    out.push(n);
+                }
+            }
+            out
+        }
+        RunnerLinks {
+            wrenches: once(&options.links.wrenches).len(),
+            frame_functions: embedyn_codegen::frame_function_names(&once(&options.links.frames)),
+        }
+    }
+}
+
+/// The runner's arms for `algorithm`: the name the command line sends, then the code evaluating and
+/// timing it ([`runner_calls`]); one arm per frame function for `frame`, none for a function the runner
+/// does not run or whose links were not named.
+fn runner_arms(
+    algorithm: Algorithm,
+    constrained: bool,
+    links: &RunnerLinks,
+) -> Vec<(String, TokenStream, TokenStream)> {
+    use embedyn_codegen::algorithm::Parameter;
+    let names = match algorithm.spec().parameter {
+        Parameter::None => vec![algorithm.name().to_string()],
+        Parameter::WrenchLinks if links.wrenches > 0 => vec![algorithm.name().to_string()],
+        Parameter::WrenchLinks => Vec::new(),
+        Parameter::Frame => links.frame_functions.clone(),
+    };
+    names
+        .into_iter()
+        .filter_map(|name| {
+            let function = (algorithm.spec().parameter == Parameter::Frame).then_some(&name[..]);
+            let (eval, bench) = runner_calls(algorithm, constrained, function)?;
+            Some((name, eval, bench))
+        })
+        .collect()
+}
+
 /// The runner's code for `algorithm` (evaluating, timing), read from its descriptor: the function that
-/// computes what the command line reports for it, called with `q` and its other inputs — up to two
-/// `NV`-vectors (`a`, `b`, in order) and one more configuration (`p`) — and writing one `NQ`- or
-/// `NV`-vector, `NV × NV` or `NI × NI` matrix, whose values are printed, then the returned singularity
-/// measure if any. `None` for a function the runner does not run by its own name: one that exists only
-/// for a model with constraints (the command line reaches `crba_independent` as `crba`), or whose
-/// arguments or outputs the runner has no buffers for (`kinematics`).
-fn runner_calls(algorithm: Algorithm, constrained: bool) -> Option<(TokenStream, TokenStream)> {
+/// computes what the command line reports for it (`function` when given: a frame function's name),
+/// called with `q` and its other inputs — up to two `NV`-vectors (`a`, `b`, in order), one more
+/// configuration (`p`) and the wrenches `f_ext` (`w`) — and writing either one `NQ`- or `NV`-vector,
+/// `NV × NV` or `NI × NI` matrix (the buffers the runner keeps), or several outputs of fixed, `NQ`,
+/// `NV` or `NI` sizes (buffers of their own); the values are printed in the order of the outputs, then
+/// the returned singularity measure if any. `None` for a function the runner does not run by its own
+/// name: one that exists only for a model with constraints (the command line reaches
+/// `crba_independent` as `crba`), or whose arguments or outputs the runner has no buffers for
+/// (`kinematics`).
+fn runner_calls(
+    algorithm: Algorithm,
+    constrained: bool,
+    function: Option<&str>,
+) -> Option<(TokenStream, TokenStream)> {
     use embedyn_codegen::algorithm::{Dim, Shape};
     if algorithm.needs_constraints() {
         return None;
     }
     let spec = algorithm.reported_by(constrained).spec();
-    let [output] = spec.outputs else {
-        return None;
-    };
-    let (buffer, values) = match output.shape {
-        Shape::Vector(Dim::Nv) => (quote!(out), quote!(out)),
-        Shape::Vector(Dim::Nq) => (quote!(out_q), quote!(out_q)),
-        Shape::Matrix(Dim::Nv, Dim::Nv) => (quote!(mat), quote!(mat.as_flattened())),
-        Shape::Matrix(Dim::Ni, Dim::Ni) => (quote!(mat_i), quote!(mat_i.as_flattened())),
-        _ => return None,
+    // The runner's own buffers for one output of the usual shapes (the code as it always was); buffers
+    // of the function's own otherwise.
+    let kept = match spec.outputs {
+        [output] => match output.shape {
+            Shape::Vector(Dim::Nv) => Some((quote!(out), quote!(out))),
+            Shape::Vector(Dim::Nq) => Some((quote!(out_q), quote!(out_q))),
+            Shape::Matrix(Dim::Nv, Dim::Nv) => Some((quote!(mat), quote!(mat.as_flattened()))),
+            Shape::Matrix(Dim::Ni, Dim::Ni) => Some((quote!(mat_i), quote!(mat_i.as_flattened()))),
+            _ => None,
+        },
+        _ => None,
     };
     let (first, rest) = spec.inputs.split_first()?;
     if first.len != Dim::Nq {
         return None;
     }
-    // Each further input's slot of the row: the `NV`-vectors `a`, `b` in order, the configuration `p`.
+    // Each further input's slot of the row: the `NV`-vectors `a`, `b` in order, the configuration `p`,
+    // the wrenches `w`.
     let (mut eval_args, mut bench_args) = (vec![quote!(q)], vec![quote!(black_box(&s.0))]);
     let mut vectors = [(quote!(a), quote!(&s.1)), (quote!(b), quote!(&s.2))].into_iter();
     let mut configurations = [(quote!(p), quote!(&s.3))].into_iter();
+    let mut wrenches = [(quote!(w), quote!(&s.4))].into_iter();
     for input in rest {
         let (eval, bench) = match input.len {
             Dim::Nv => vectors.next()?,
             Dim::Nq => configurations.next()?,
+            Dim::WrenchLinks => wrenches.next()?,
             _ => return None,
         };
         eval_args.push(eval);
         bench_args.push(bench);
     }
-    let function = format_ident!("{}", spec.name);
-    let values = quote!(#values.iter().map(|&x| f64::from(x)));
+    let function = format_ident!("{}", function.unwrap_or(spec.name));
+    let (setup, buffers, values) = match kept {
+        Some((buffer, values)) => (
+            quote!(),
+            vec![quote!(&mut #buffer)],
+            quote!(#values.iter().map(|&x| f64::from(x))),
+        ),
+        None => {
+            let len = |d: Dim| -> Option<TokenStream> {
+                Some(match d {
+                    Dim::Nq => quote!(NQ),
+                    Dim::Nv => quote!(NV),
+                    Dim::Ni => quote!(NI),
+                    Dim::Fixed(n) => {
+                        let n = proc_macro2::Literal::usize_unsuffixed(n);
+                        quote!(#n)
+                    }
+                    Dim::Frames | Dim::WrenchLinks => return None,
+                })
+            };
+            let (mut setup, mut buffers, mut values) = (Vec::new(), Vec::new(), Vec::new());
+            for (k, output) in spec.outputs.iter().enumerate() {
+                let buffer = format_ident!("o{}", k);
+                let (init, flat) = match output.shape {
+                    Shape::Vector(d) => {
+                        let n = len(d)?;
+                        (quote!([0.0 as S; #n]), quote!(#buffer.iter()))
+                    }
+                    Shape::Matrix(r, c) => {
+                        let (r, c) = (len(r)?, len(c)?);
+                        (
+                            quote!([[0.0 as S; #c]; #r]),
+                            quote!(#buffer.as_flattened().iter()),
+                        )
+                    }
+                };
+                setup.push(quote!(let mut #buffer = #init;));
+                buffers.push(quote!(&mut #buffer));
+                values.push(flat);
+            }
+            let (head, tail) = values.split_first()?;
+            (
+                quote!(#(#setup)*),
+                buffers,
+                quote!(#head #(.chain(#tail))*.map(|&x| f64::from(x))),
+            )
+        }
+    };
     Some(if spec.returns_value(constrained) {
         (
             quote! {
-                let condition = m::#function(#(#eval_args,)* &mut #buffer);
+                #setup
+                let condition = m::#function(#(#eval_args,)* #(#buffers),*);
                 emit(text, #values.chain([f64::from(condition)]));
             },
-            quote!(black_box(m::#function(#(#bench_args,)* &mut #buffer));),
+            quote! {
+                #setup
+                black_box(m::#function(#(#bench_args,)* #(#buffers),*));
+            },
         )
     } else {
         (
-            quote! { m::#function(#(#eval_args,)* &mut #buffer); emit(text, #values); },
-            quote!(m::#function(#(#bench_args,)* &mut #buffer);),
+            quote! { #setup m::#function(#(#eval_args,)* #(#buffers),*); emit(text, #values); },
+            quote! { #setup m::#function(#(#bench_args,)* #(#buffers),*); },
         )
     })
 }
@@ -743,6 +903,7 @@ fn runner_main(
     algorithms: &[Algorithm],
     constrained: bool,
     scalars: &[&str],
+    links: &RunnerLinks,
 ) -> Result<String, RunnerSourceError> {
     let krate: syn::Ident =
         syn::parse_str(krate).map_err(|error| RunnerSourceError::NotAnIdentifier {
@@ -753,13 +914,40 @@ fn runner_main(
     let mut eval_calls = Vec::new();
     let mut bench_calls = Vec::new();
     for &a in algorithms {
-        let Some((eval, bench)) = runner_calls(a, constrained) else {
-            continue;
-        };
-        names.push(a.name());
-        eval_calls.push(eval);
-        bench_calls.push(bench);
+        for (name, eval, bench) in runner_arms(a, constrained, links) {
+            names.push(name);
+            eval_calls.push(eval);
+            bench_calls.push(bench);
+        }
     }
+    // With wrench links, each row carries `f_ext` after the second configuration (`w`, the state's
+    // fifth entry); without, the rows and the code are what they always were.
+    let wrenches = links.wrenches > 0;
+    let (wrench_count, state_type, state_wrenches, state_pattern, row_len) = if wrenches {
+        let k = proc_macro2::Literal::usize_unsuffixed(links.wrenches);
+        (
+            quote! {
+                /// `WRENCH_LINKS.len()`: each row ends with `f_ext`, `6 · WRENCHES` numbers row-major.
+                const WRENCHES: usize = #k;
+            },
+            quote!(([S; NQ], [S; NV], [S; NV], [S; NQ], [[S; 6]; WRENCHES])),
+            quote! {
+                core::array::from_fn(|k| {
+                    core::array::from_fn(|j| r[2 * NQ + 2 * NV + 6 * k + j] as S)
+                }),
+            },
+            quote!((q, a, b, p, w)),
+            quote!(2 * NQ + 2 * NV + 6 * WRENCHES),
+        )
+    } else {
+        (
+            quote!(),
+            quote!(([S; NQ], [S; NV], [S; NV], [S; NQ])),
+            quote!(),
+            quote!((q, a, b, p)),
+            quote!(2 * NQ + 2 * NV),
+        )
+    };
     // Only the scalar modules the crate has (a model whose constants do not fit f32 has no f32 module).
     let present: Vec<(&str, TokenStream)> = [("f64", quote!(f64)), ("f32", quote!(f32))]
         .into_iter()
@@ -780,7 +968,7 @@ fn runner_main(
             fn #function(algo: &str, bench: bool, rows: &[Vec<f64>], text: &mut String) -> Result<(), Refusal> {
                 use #krate::#module as m;
                 type S = #scalar;
-                let states: Vec<([S; NQ], [S; NV], [S; NV], [S; NQ])> = rows
+                let states: Vec<#state_type> = rows
                     .iter()
                     .map(|r| {
                         (
@@ -788,6 +976,7 @@ fn runner_main(
                             core::array::from_fn(|i| r[NQ + i] as S),
                             core::array::from_fn(|i| r[NQ + NV + i] as S),
                             core::array::from_fn(|i| r[NQ + 2 * NV + i] as S),
+                            #state_wrenches
                         )
                     })
                     .collect();
@@ -813,8 +1002,8 @@ fn runner_main(
                     };
                     text.push_str(&format!("{ns:?}\n"));
                 } else {
-                    for (q, a, b, p) in &states {
-                        let _ = (q, a, b, p);
+                    for #state_pattern in &states {
+                        let _ = #state_pattern;
                         match algo {
                             #(#names => { #eval_calls })*
                             other => return Err(Refusal::UnknownAlgorithm(other.to_string())),
@@ -834,6 +1023,7 @@ fn runner_main(
         use std::hint::black_box;
         use std::io::{Read, Write};
         use #krate::{NI, NQ, NV};
+        #wrench_count
 
         /// Appends one output line: every number as the f64 that reads back exactly.
         fn emit(text: &mut String, values: impl Iterator<Item = f64>) {
@@ -867,7 +1057,7 @@ fn runner_main(
                     Refusal::UnknownMode(mode) => write!(f, "unknown mode {mode:?}"),
                     Refusal::NotANumber { row, text, error } => write!(f, "row {row}: {text:?}: {error}"),
                     Refusal::RowLength { row, numbers } => {
-                        write!(f, "row {row} has {numbers} numbers, expected {}", 2 * NQ + 2 * NV)
+                        write!(f, "row {row} has {numbers} numbers, expected {}", #row_len)
                     }
                     Refusal::ScalarNotGenerated(scalar) => write!(f, "scalar {scalar:?} was not generated"),
                     Refusal::UnknownAlgorithm(algo) => write!(f, "unknown algorithm {algo:?}"),
@@ -906,7 +1096,7 @@ fn runner_main(
                         })
                     })
                     .collect::<Result<Vec<f64>, Refusal>>()?;
-                if row.len() != 2 * NQ + 2 * NV {
+                if row.len() != #row_len {
                     return Err(Refusal::RowLength { row: i, numbers: row.len() });
                 }
                 rows.push(row);
@@ -1035,17 +1225,89 @@ mod tests {
             [Aba, Rnea, Crba, CrbaIndependent]
         );
         // `crba` of a model with constraints runs `crba_independent` and prints its measure after M.
-        let src = runner_main("arm_dynamics", &[Crba], true, &["f64"]).unwrap();
+        let src = runner_main(
+            "arm_dynamics",
+            &[Crba],
+            true,
+            &["f64"],
+            &RunnerLinks::default(),
+        )
+        .unwrap();
         assert!(
             src.contains("let condition = m::crba_independent(q, &mut mat_i);"),
             "{src}"
         );
         // Functions the runner has no buffers or name for get no arm.
-        let src = runner_main("arm_dynamics", &Algorithm::ALL, false, &["f64"]).unwrap();
+        let src = runner_main(
+            "arm_dynamics",
+            &Algorithm::ALL,
+            false,
+            &["f64"],
+            &RunnerLinks::default(),
+        )
+        .unwrap();
         for absent in ["kinematics", "complete", "embedding"] {
             assert!(!src.contains(&format!("m::{absent}")), "{absent}: {src}");
         }
         assert!(src.contains("m::minv(q, &mut mat);"), "{src}");
+    }
+
+    /// The links a runner's functions are generated for (wrench links, frame, reference) reach its
+    /// source, hence its cache key: a runner generated for other links is never reused.
+    #[test]
+    fn the_links_reach_the_cache_key() {
+        use embedyn_codegen::LinkOptions;
+        let path =
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("../models/loops/four_bar_internal.urdf");
+        let loaded = embedyn_codegen::load(&path).unwrap();
+        let source = |algorithms: Vec<Algorithm>, links: LinkOptions| {
+            let options = GenerateOptions {
+                algorithms,
+                exact: true,
+                f32: false,
+                links,
+                ..Default::default()
+            };
+            let s = runner_source(&loaded, &options).unwrap();
+            let main = s
+                .files
+                .iter()
+                .find(|(p, _)| p.ends_with("main.rs"))
+                .unwrap();
+            (s.key, main.1.clone())
+        };
+        let frame = |reference| LinkOptions {
+            frames: vec!["tip".into()],
+            reference,
+            ..Default::default()
+        };
+        let (local, main) = source(
+            vec![Algorithm::Frame],
+            frame(embedyn_codegen::Reference::Local),
+        );
+        assert!(main.contains("\"frame_tip\" =>"), "{main}");
+        assert!(
+            main.contains("m::frame_tip(q, a, &mut o0, &mut o1, &mut o2);"),
+            "{main}"
+        );
+        let (world, _) = source(
+            vec![Algorithm::Frame],
+            frame(embedyn_codegen::Reference::World),
+        );
+        assert_ne!(local, world);
+        let wrenches = |links: &[&str]| LinkOptions {
+            wrenches: links.iter().map(|l| l.to_string()).collect(),
+            ..Default::default()
+        };
+        let (one, main) = source(vec![Algorithm::AbaExt], wrenches(&["crank"]));
+        assert!(main.contains("const WRENCHES: usize = 1;"), "{main}");
+        assert!(main.contains("m::aba_ext(q, a, b, w, &mut out)"), "{main}");
+        let (two, main) = source(vec![Algorithm::AbaExt], wrenches(&["crank", "tip"]));
+        assert!(main.contains("const WRENCHES: usize = 2;"), "{main}");
+        assert_ne!(one, two);
+        // Without links, the runner is what it always was: no wrenches in its rows.
+        let (_, main) = source(vec![Algorithm::Aba], LinkOptions::default());
+        assert!(!main.contains("WRENCHES"), "{main}");
     }
 
     #[test]
@@ -1056,6 +1318,7 @@ mod tests {
                 &Algorithm::ALL,
                 constrained,
                 &["f64", "f32"],
+                &RunnerLinks::default(),
             )
             .unwrap();
             assert!(src.contains("use arm_dynamics::{NI, NQ, NV};"), "{src}");
@@ -1064,6 +1327,13 @@ mod tests {
                 "{src}"
             );
         }
-        assert!(runner_main("not an identifier", &Algorithm::ALL, false, &["f64"]).is_err());
+        assert!(runner_main(
+            "not an identifier",
+            &Algorithm::ALL,
+            false,
+            &["f64"],
+            &RunnerLinks::default()
+        )
+        .is_err());
     }
 }

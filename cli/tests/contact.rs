@@ -3,7 +3,7 @@
 //! (tests/data/pinocchio/contact.py: a fixed UR5 and a floating ANYmal B) to 1e-9 relative; their errors;
 //! and the `_independent` fields of a loop model.
 
-use crate::cli::{embedyn, json_of, repo};
+use crate::cli::{json_of, repo};
 use serde_json::{json, Value};
 
 const TOL: f64 = 1e-9;
@@ -515,31 +515,209 @@ fn bad_external_wrenches_name_the_sample_the_link_and_the_field() {
     json_of(&["eval", &model, "--algo", "gravity"], &input);
 }
 
-/// The generated engine has no wrenches, frames or centroidal functions yet: a clear refusal, before
-/// anything is compiled (no cache folder is needed).
-#[test]
-fn generated_engine_refuses_what_it_does_not_have_yet() {
-    let model = repo("tests/data/pinocchio/ur5.urdf");
-    let state = json!({"q": vec![0.1; 6], "v": vec![0.0; 6], "tau": vec![0.0; 6], "qdd": vec![0.0; 6],
-        "f_ext": {"tool0": {"force": [0.0, 0.0, 1.0], "torque": [0.0, 0.0, 0.0]}}});
-    let input = json!({"samples": [state]}).to_string();
-    for args in [
-        &["--algo", "aba"][..],
-        &["--algo", "rnea"],
-        &["--algo", "nle"],
-        &["--algo", "jacobian", "--frame", "tool0"],
-        &["--algo", "com"],
-        &["--algo", "centroidal"],
-    ] {
-        let mut full = vec!["eval", &model, "--engine", "generated"];
-        full.extend(args);
-        let (ok, out, err) = embedyn(&full, &input);
-        assert!(!ok && out.is_empty(), "{args:?}");
-        assert!(
-            err.contains("not available with --engine generated yet; use --engine interpreted"),
-            "{args:?}: {err}"
-        );
+/// Every number of an answer, fields in name order (rows after rows).
+fn numbers(v: &Value) -> Vec<f64> {
+    match v {
+        Value::Array(a) => a.iter().flat_map(numbers).collect(),
+        Value::Object(o) => {
+            let mut keys: Vec<&String> = o.keys().collect();
+            keys.sort();
+            keys.into_iter().flat_map(|k| numbers(&o[k])).collect()
+        }
+        x => vec![x.as_f64().unwrap()],
     }
+}
+
+/// The generated answer agrees with the interpreted one: the same fields in every sample, to `tol`
+/// (CONTRACT §2's relative error, per sample).
+fn agrees(what: &str, generated: &Value, interpreted: &Value, tol: f64) -> f64 {
+    let (g, i) = (
+        generated["samples"].as_array().unwrap(),
+        interpreted["samples"].as_array().unwrap(),
+    );
+    assert_eq!(g.len(), i.len(), "{what}");
+    let mut worst = 0.0f64;
+    for (k, (g, i)) in g.iter().zip(i).enumerate() {
+        let keys = |v: &Value| {
+            let mut k: Vec<String> = v.as_object().unwrap().keys().cloned().collect();
+            k.sort();
+            k
+        };
+        assert_eq!(keys(g), keys(i), "{what}, sample {k}");
+        let e = relative_error(&numbers(g), &numbers(i));
+        assert!(
+            e <= tol,
+            "{what}, sample {k}: generated vs interpreted {e:e}"
+        );
+        worst = worst.max(e);
+    }
+    worst
+}
+
+/// A random state of floating ANYmal B (nq 19, nv 18), reproducible.
+fn anymal_state(seed: u64) -> Value {
+    let mut x = seed
+        .wrapping_mul(6364136223846793005)
+        .wrapping_add(1442695040888963407);
+    let mut next = move || {
+        x = x
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((x >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+    };
+    let mut q: Vec<f64> = (0..19).map(|_| next()).collect();
+    let n = q[3..7].iter().map(|a| a * a).sum::<f64>().sqrt();
+    for a in &mut q[3..7] {
+        *a /= n;
+    }
+    let v: Vec<f64> = (0..18).map(|_| 2.0 * next()).collect();
+    let tau: Vec<f64> = (0..18).map(|_| 10.0 * next()).collect();
+    let qdd: Vec<f64> = (0..18).map(|_| 3.0 * next()).collect();
+    json!({"q": q, "v": v, "tau": tau, "qdd": qdd})
+}
+
+/// `--engine generated` on floating ANYmal B agrees with the interpreted engine, in f64 to 1e-12 and
+/// in f32 to 1e-4: `aba`, `rnea` and `nle` with wrenches (`aba_ext`, `rnea_ext`, `nle_ext` over the
+/// links the samples name: a sample with wrenches on two feet, one with a single foot and the base, one
+/// without `f_ext`), `jacobian` of a foot with and without `v`, `com` and `centroidal`. One runner
+/// compile: the queries run together (`eval_generated_together`, the union of their functions), each
+/// answer what `eval` prints for it alone.
+#[test]
+fn generated_engine_agrees_on_wrenches_frames_and_centroidal() {
+    let path = repo("tests/data/pinocchio/anymal_b.urdf");
+    let mut states: Vec<Value> = (0..3).map(anymal_state).collect();
+    states[0]["f_ext"] = json!({
+        "LF_FOOT": {"force": [1.0, 2.0, 30.0], "torque": [0.1, 0.2, 0.3]},
+        "RH_FOOT": {"force": [-3.0, 2.0, 25.0], "torque": [0.0, 0.0, 0.5]}});
+    states[1]["f_ext"] = json!({
+        "RH_FOOT": {"force": [4.0, -1.0, 20.0], "torque": [0.2, 0.0, 0.0]},
+        "base": {"force": [1.0, 1.0, 1.0], "torque": [1.0, -1.0, 1.0]}});
+    let with_wrenches = json!({ "samples": states }).to_string();
+    let without_v: Vec<Value> = states.iter().map(|s| json!({"q": s["q"]})).collect();
+    let without_v = json!({ "samples": without_v }).to_string();
+    use embedyn_cli::{EvalAlgo, Scalar};
+    let dynamics = |name| EvalAlgo::from_name(name).unwrap();
+    let mut queries: Vec<(EvalAlgo, Option<&str>, &str)> = Vec::new();
+    for algo in ["aba", "rnea", "nle"] {
+        queries.push((dynamics(algo), None, &with_wrenches));
+    }
+    queries.push((EvalAlgo::Jacobian, Some("LF_FOOT"), &with_wrenches));
+    queries.push((EvalAlgo::Jacobian, Some("LF_FOOT"), &without_v));
+    queries.push((EvalAlgo::Com, None, &with_wrenches));
+    queries.push((EvalAlgo::Com, None, &without_v));
+    queries.push((EvalAlgo::Centroidal, None, &with_wrenches));
+    let mut together = Vec::new();
+    for scalar in [Scalar::F64, Scalar::F32] {
+        for &(algo, frame, input) in &queries {
+            together.push((algo, frame, None, scalar, input));
+        }
+    }
+    let loaded = embedyn_codegen::load(std::path::Path::new(&path)).unwrap();
+    let options = embedyn_codegen::ModelOptions {
+        floating: true,
+        ..Default::default()
+    };
+    let cache = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("embedyn-cache");
+    let started = std::time::Instant::now();
+    let generated =
+        embedyn_cli::eval_generated_together(&loaded, &options, &together, Some(&cache)).unwrap();
+    eprintln!(
+        "floating ANYmal B, {} queries through one runner: {:.1} s (compile included unless cached)",
+        together.len(),
+        started.elapsed().as_secs_f64()
+    );
+    let mut worst = [0.0f64; 2];
+    for ((algo, frame, _, scalar, input), generated) in together.iter().zip(&generated) {
+        let mut args = vec!["eval", &path, "--floating", "--algo", algo.name()];
+        if let Some(frame) = frame {
+            args.extend(["--frame", frame]);
+        }
+        let interpreted = json_of(&args, input);
+        let (tol, k) = match scalar {
+            Scalar::F64 => (1e-12, 0),
+            Scalar::F32 => (1e-4, 1),
+        };
+        let what = format!("{} {frame:?} {scalar:?}", algo.name());
+        worst[k] = worst[k].max(agrees(&what, generated, &interpreted, tol));
+    }
+    eprintln!(
+        "worst relative error: f64 {:e}, f32 {:e}",
+        worst[0], worst[1]
+    );
+    // The wrenches act: without them the answers differ.
+    let plain = json_of(
+        &["eval", &path, "--floating", "--algo", "aba"],
+        &json!({"samples": [{"q": states[0]["q"], "v": states[0]["v"], "tau": states[0]["tau"]}]})
+            .to_string(),
+    );
+    let e = relative_error(
+        &vecf(&generated[0]["samples"][0]["qdd"]),
+        &vecf(&plain["samples"][0]["qdd"]),
+    );
+    assert!(e > 1e-3, "the wrenches change nothing? {e:e}");
+}
+
+/// `--engine generated` on the four-bar linkage (a loop), through the command line: `jacobian` in two
+/// references, each compiled from its own source (the reference is part of the generated code, hence of
+/// the runner's cache key: the second eval does not reuse the first's runner), both agreeing with the
+/// interpreted engine to 1e-12, `J_linear_independent` and `J_angular_independent` included; the two
+/// references give different Jacobians.
+#[test]
+fn generated_jacobians_of_a_loop_model_in_two_references() {
+    let path = repo("models/loops/four_bar_internal.urdf");
+    let done = json_of(
+        &["complete", &path],
+        &json!({"samples": [{"q": [0.4, 0.0, 0.2, 0.0], "v": [1.3, 0.0, -0.5, 0.0]},
+            {"q": [-0.3, 0.0, -0.6, 0.0], "v": [-0.7, 0.0, 0.9, 0.0]}]})
+        .to_string(),
+    );
+    let mut states: Vec<Value> = done["samples"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| json!({"q": s["q"], "v": s["v"]}))
+        .collect();
+    states.push(json!({"q": states[0]["q"]}));
+    let input = json!({ "samples": states }).to_string();
+    let mut answers = Vec::new();
+    for reference in ["local", "world"] {
+        let args = [
+            "eval",
+            &path,
+            "--algo",
+            "jacobian",
+            "--frame",
+            "tip",
+            "--reference",
+            reference,
+        ];
+        let interpreted = json_of(&args, &input);
+        let mut generated_args = args.to_vec();
+        generated_args.extend(["--engine", "generated"]);
+        let started = std::time::Instant::now();
+        let (ok, out, err) = crate::cli::embedyn_cached(&generated_args, &input);
+        assert!(ok, "{reference}: {err}");
+        eprintln!(
+            "four-bar jacobian {reference}: {:.1} s{}",
+            started.elapsed().as_secs_f64(),
+            if err.contains("compiling") {
+                " (compiled)"
+            } else {
+                ""
+            }
+        );
+        let generated: Value = serde_json::from_str(&out).unwrap();
+        assert!(generated["samples"][0]["J_linear_independent"].is_array());
+        assert!(generated["samples"][0]["bias_linear"].is_array());
+        assert!(generated["samples"][2]["bias_linear"].is_null());
+        agrees(reference, &generated, &interpreted, 1e-12);
+        answers.push(generated);
+    }
+    let e = relative_error(
+        &numbers(&answers[0]["samples"][0]["J_linear"]),
+        &numbers(&answers[1]["samples"][0]["J_linear"]),
+    );
+    assert!(e > 1e-3, "local and world Jacobians agree? {e:e}");
 }
 
 /// A loop model: `J_linear_independent`, `J_angular_independent` are J · X, with X the model's embedding

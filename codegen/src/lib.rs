@@ -44,8 +44,8 @@ pub use error::{
     MAX_LISTED_ERRORS, MAX_SHOWN_CHARS,
 };
 pub use generate::{
-    format_tokens, generate_file, generate_source, generate_tokens, generation_model, Algorithm,
-    GenerateOptions, LinkOptions, UnparsableCode, GENERATOR_VERSION,
+    format_tokens, frame_function_names, generate_file, generate_source, generate_tokens,
+    generation_model, Algorithm, GenerateOptions, LinkOptions, UnparsableCode, GENERATOR_VERSION,
 };
 pub use scene::{geared_rotors, GearedRotor, LockedJoint, Rotors};
 pub use size::{FunctionSize, TooLargeToCompile, DEFAULT_COMPILE_MEMORY_MB};
