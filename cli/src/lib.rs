@@ -329,7 +329,7 @@ impl EvalAlgo {
         (
             EvalAlgo::Centroidal,
             "centroidal",
-            "Centroidal momentum matrix A_g, momentum h_g and bias dh_g",
+            "Centroidal momentum matrix A_g and momentum h_g (Pinocchio's ccrba)",
         ),
     ];
 

@@ -11,7 +11,7 @@ use super::{check_len, DynamicsError, Workspace};
 #[allow(unused_imports)]
 use crate::alloc_prelude::*;
 use crate::model::Model;
-use crate::spatial::{Force, SpatialInertia};
+use crate::spatial::{Force, SpatialInertia, Transform};
 use crate::Real;
 use nalgebra::{Matrix3xX, Matrix6xX, Vector3};
 
@@ -143,9 +143,13 @@ pub fn centroidal_momentum_matrix<T: Real>(
     let total = body_composites(model, ws);
     let com = total.first_moment * inverse_mass(total.mass);
     for (i, joint) in model.joints.iter().enumerate() {
+        // The body's pose relative to a frame at the centre of mass with world axes: one transform takes
+        // a body-frame momentum to the world's axes and about the centre of mass.
+        let x = &ws.world_placement[i];
+        let about_com = Transform::new(x.rotation, x.translation - com);
         for k in 0..joint.nv() {
             let local = ws.composite[i].mul_motion(&joint.subspace_column(k));
-            let f = about_com(&ws.world_placement[i].act_force(&local), &com);
+            let f = about_com.act_force(&local);
             for r in 0..3 {
                 a_g[(r, joint.v_index + k)] = f.linear[r];
                 a_g[(r + 3, joint.v_index + k)] = f.angular[r];
