@@ -35,6 +35,27 @@ mod anymal {
         frames(LF_FOOT, RF_FOOT, LH_FOOT, RH_FOOT, base, LF_THIGH)
     );
 }
+mod ur5 {
+    embedyn::robot!(
+        "tests/data/pinocchio/ur5.urdf",
+        f64_only,
+        only(aba_ext, rnea_ext, frame, com, centroidal, centroidal_bias),
+        wrenches(tool0, wrist_2_link, base_link),
+        frames(tool0, wrist_3_link, forearm_link, ee_link),
+        reference = local
+    );
+}
+mod solo12 {
+    embedyn::robot!(
+        "tests/data/pinocchio/solo12_floating.urdf",
+        floating,
+        f64_only,
+        only(aba_ext, rnea_ext, frame, com, centroidal, centroidal_bias),
+        wrenches(FL_FOOT, FR_FOOT, HL_FOOT, HR_FOOT, base_link),
+        frames(FL_FOOT, HR_FOOT, base_link, FL_UPPER_LEG),
+        reference = world
+    );
+}
 mod quadruped {
     embedyn::robot!(
         "models/quadruped.urdf",
@@ -360,17 +381,29 @@ fn generated_contact_functions_match_interpreted_on_a_four_bar() {
     );
 }
 
-/// The generated functions of floating ANYmal B against Pinocchio 4.1 (its `aba` and `rnea` with `fext`,
-/// `getFrameJacobian` and `getFrameClassicalAcceleration` in local_world_aligned, `centerOfMass`,
-/// `jacobianCenterOfMass`, `ccrba`, `dccrba`) to 1e-9.
+/// The generated functions against Pinocchio 4.1 (its `aba` and `rnea` with `fext`, `getFrameJacobian`
+/// and `getFrameClassicalAcceleration`, `centerOfMass`, `jacobianCenterOfMass`, `ccrba`, `dccrba`) to 1e-9:
+/// a fixed UR5 (wrenches on the flange, a body link and the link fixed to the world; frames in `local`),
+/// a floating Solo-12 (`world`) and a floating ANYmal B (`local_world_aligned`).
 #[test]
-fn generated_contact_functions_match_pinocchio_on_anymal() {
-    let r = Contact::load(
-        "anymal_b_floating",
-        "tests/data/pinocchio/anymal_b.urdf",
-        true,
-    );
-    let g = anymal();
+fn generated_contact_functions_match_pinocchio() {
+    let ur5 = generated!(ur5, Reference::Local, nle_ext: None,
+        frames: ["tool0" => frame_tool0, "wrist_3_link" => frame_wrist_3_link,
+                 "forearm_link" => frame_forearm_link, "ee_link" => frame_ee_link]);
+    let solo12 = generated!(solo12, Reference::World, nle_ext: None,
+        frames: ["FL_FOOT" => frame_fl_foot, "HR_FOOT" => frame_hr_foot, "base_link" => frame_base_link,
+                 "FL_UPPER_LEG" => frame_fl_upper_leg]);
+    for (name, urdf, floating) in crate::contact::ROBOTS {
+        let g = match name {
+            "ur5" => &ur5,
+            "solo12_floating" => &solo12,
+            _ => &anymal(),
+        };
+        against_pinocchio(&Contact::load(name, urdf, floating), g);
+    }
+}
+
+fn against_pinocchio(r: &Contact, g: &Generated) {
     let nv = r.model.nv();
     let mut worst = [0.0f64; 6];
     let mut out = vec![0.0; nv];
@@ -387,8 +420,10 @@ fn generated_contact_functions_match_pinocchio_on_anymal() {
         worst[0] = worst[0].max(relative_error(&out, &r.v_vec(&s["qdd_ext"])));
         (g.rnea_ext)(&q, &v, &r.v_vec(&s["qdd_for_rnea"]), &rows, &mut out);
         worst[1] = worst[1].max(relative_error(&out, &r.v_vec(&s["tau_rnea_ext"])));
-        (g.nle_ext.unwrap())(&q, &v, &rows, &mut out);
-        worst[1] = worst[1].max(relative_error(&out, &r.v_vec(&s["nle_ext"])));
+        if let Some(nle_ext) = g.nle_ext {
+            nle_ext(&q, &v, &rows, &mut out);
+            worst[1] = worst[1].max(relative_error(&out, &r.v_vec(&s["nle_ext"])));
+        }
         let (mut pose, mut jacobian, mut bias) = ([0.0; 12], vec![0.0; 6 * nv], [0.0; 6]);
         for (link, frame_fn) in &g.frames {
             let want = &s["frames"][link];
@@ -399,9 +434,12 @@ fn generated_contact_functions_match_pinocchio_on_anymal() {
                 .chain(vecf(&want["placement"]["p"]))
                 .collect();
             worst[2] = worst[2].max(relative_error(&pose, &placement));
-            let lwa = &want["local_world_aligned"];
-            worst[2] = worst[2].max(relative_error(&jacobian, &r.columns(&lwa["J"])));
-            worst[3] = worst[3].max(relative_error(&bias, &vecf(&lwa["classical_acceleration"])));
+            let reference = &want[g.reference.as_str()];
+            worst[2] = worst[2].max(relative_error(&jacobian, &r.columns(&reference["J"])));
+            worst[3] = worst[3].max(relative_error(
+                &bias,
+                &vecf(&reference["classical_acceleration"]),
+            ));
         }
         let (mut com, mut vcom, mut j_com) = ([0.0; 3], [0.0; 3], vec![0.0; 3 * nv]);
         (g.com)(&q, &v, &mut com, &mut vcom, &mut j_com);
@@ -417,8 +455,10 @@ fn generated_contact_functions_match_pinocchio_on_anymal() {
             .max(relative_error(&dh_g, &vecf(&s["dA_g_v"])));
     }
     eprintln!(
-        "anymal_b floating, generated vs Pinocchio: aba_ext {:.1e}, rnea_ext/nle_ext {:.1e}, pose/J {:.1e}, bias {:.1e}, com {:.1e}, centroidal {:.1e}",
+        "{} ({}), generated vs Pinocchio: aba_ext {:.1e}, rnea_ext/nle_ext {:.1e}, pose/J {:.1e}, bias {:.1e}, com {:.1e}, centroidal {:.1e}",
+        r.name,
+        g.reference.as_str(),
         worst[0], worst[1], worst[2], worst[3], worst[4], worst[5]
     );
-    assert!(worst.iter().all(|&e| e <= 1e-9), "{worst:?}");
+    assert!(worst.iter().all(|&e| e <= 1e-9), "{}: {worst:?}", r.name);
 }

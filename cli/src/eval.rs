@@ -345,7 +345,7 @@ impl Plan {
         plan.arm = match plan.function {
             Algo::Frame => {
                 let links: Vec<&str> = plan.links.frames.iter().map(String::as_str).collect();
-                embedyn_codegen::frame_function_names(&links)
+                embedyn_codegen::frame_function_names(model, &links)
                     .pop()
                     .unwrap_or_default()
             }

@@ -434,12 +434,13 @@ struct RunnerSource {
 fn runner_source(loaded: &Loaded, options: &GenerateOptions) -> Result<RunnerSource, CliError> {
     let mut files = crate_files(loaded, options)?;
     let krate = crate_name(&loaded.robot.name);
-    let constrained = loaded.model::<f64>(&options.model)?.has_constraints();
+    let model = loaded.model::<f64>(&options.model)?;
+    let constrained = model.has_constraints();
     let scalars: Vec<&str> = [(options.f64, "f64"), (options.f32, "f32")]
         .into_iter()
         .filter_map(|(on, name)| on.then_some(name))
         .collect();
-    let links = RunnerLinks::of(options);
+    let links = RunnerLinks::of(options, &model);
     let main = runner_main(&krate, &options.algorithms, constrained, &scalars, &links)
         .map_err(RunnerError::from)?;
     files.push((PathBuf::from("src/main.rs"), main));
@@ -727,8 +728,9 @@ pub struct RunnerLinks {
 }
 
 impl RunnerLinks {
-    /// What `options` generates: its wrench links (each once) and the names of its frame functions.
-    pub fn of(options: &GenerateOptions) -> RunnerLinks {
+    /// What `options` generates for `model`: its wrench links (each once) and the names of its frame
+    /// functions.
+    pub fn of(options: &GenerateOptions, model: &embedyn_runtime::Model<f64>) -> RunnerLinks {
         fn once(names: &[String]) -> Vec<&str> {
             let mut out: Vec<&str> = Vec::new();
             for n in names {
@@ -740,7 +742,10 @@ impl RunnerLinks {
         }
         RunnerLinks {
             wrenches: once(&options.links.wrenches).len(),
-            frame_functions: embedyn_codegen::frame_function_names(&once(&options.links.frames)),
+            frame_functions: embedyn_codegen::frame_function_names(
+                model,
+                &once(&options.links.frames),
+            ),
         }
     }
 }

@@ -210,16 +210,27 @@ pub enum EmitError {
     },
 }
 
-/// Emits `pub fn name(args…, outputs…)` for one scalar module; `helpers` is the path of the helper module.
+/// What every function of one generated module is emitted against.
+pub struct ModuleContext<'a> {
+    /// The path of the helper module (`sincos`, `sqrt`).
+    pub helpers: &'a TokenStream,
+    /// The joints and bodies that named values belong to.
+    pub owners: &'a Owners,
+    /// The names at the module's level so far (public functions, parts of long functions), which a
+    /// function's parts must not take and join.
+    pub taken: &'a mut HashSet<String>,
+}
+
+/// Emits `pub fn name(args…, outputs…)` for one scalar module.
 pub fn function(
     name: &str,
     doc: &str,
     args: &[Arg],
     outputs: &[Output],
     tape: &Tape,
-    helpers: &TokenStream,
-    owners: &Owners,
+    module: &mut ModuleContext,
 ) -> Result<Emitted, EmitError> {
+    let (helpers, owners) = (module.helpers, module.owners);
     let nodes = &tape.nodes;
     // Liveness from the outputs.
     let mut live = vec![false; nodes.len()];
@@ -297,8 +308,19 @@ pub fn function(
         let helpers = helpers.to_string().replace(' ', "");
         let operations = order.len();
         let text = crate::emit_large::function_text(
-            name, doc, args, outputs, nodes, order, &batch, &angles, &sin_of, &cos_of, &helpers,
+            name,
+            doc,
+            args,
+            outputs,
+            nodes,
+            order,
+            &batch,
+            &angles,
+            &sin_of,
+            &cos_of,
+            &helpers,
             &names,
+            module.taken,
         );
         return Ok(Emitted {
             operations,
@@ -360,7 +382,7 @@ pub fn function(
         }
     };
     let chunk_bodies: Vec<Vec<&str>> = chunks.iter().map(|ns| names.bodies(ns.iter())).collect();
-    let chunk_names = part_names(name, &chunk_bodies);
+    let chunk_names = part_names(name, &chunk_bodies, module.taken);
     let mut chunk_fns = Vec::new();
     let mut bodies = Vec::new();
     for (c, ns) in chunks.iter().enumerate() {

@@ -165,6 +165,7 @@ pub(crate) fn function_text(
     cos_of: &HashMap<Sym, u32>,
     helpers: &str,
     names: &ValueNames,
+    taken: &mut std::collections::HashSet<String>,
 ) -> String {
     let order = pair_sines_with_cosines(nodes, order, sin_of, cos_of, batch);
     let position: HashMap<u32, usize> = order.iter().enumerate().map(|(i, &n)| (n, i)).collect();
@@ -290,7 +291,7 @@ pub(crate) fn function_text(
     let part_bodies: Vec<Vec<&str>> = part_ranges(&parts, order.len())
         .map(|range| names.bodies(order[range].iter()))
         .collect();
-    let part_functions = part_names(name, &part_bodies);
+    let part_functions = part_names(name, &part_bodies, taken);
     for (c, range) in part_ranges(&parts, order.len()).enumerate() {
         let part = Part {
             nodes,

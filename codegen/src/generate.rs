@@ -168,12 +168,32 @@ struct Instance<'a> {
     frame: Option<FrameId>,
 }
 
-/// The names of the frame functions of `links` (each named once, in order): `frame_` and the link's
-/// constant ([`crate::names::constants`]) in snake_case, `frame_lf_foot`.
-pub fn frame_function_names(links: &[&str]) -> Vec<String> {
-    crate::names::constants(links, "link")
-        .into_iter()
-        .map(|c| format!("frame_{}", c.to_ascii_lowercase()))
+/// The index constant of every link of `model`, by link name: one spelling per link for the `frames::` and
+/// `wrench::` constants and the `frame_<link>` functions, so that `wrench::FOOT` and `frame_foot` are the
+/// link `frames::FOOT` is, whatever links a user names and in whatever order ([`crate::names::constants`]
+/// over the bodies' links in coordinate order, then the links fixed to the world).
+pub fn link_constants<T: Real>(model: &Model<T>) -> std::collections::HashMap<String, String> {
+    let names: Vec<&str> = model.frames().filter_map(|f| model.frame_name(f)).collect();
+    names
+        .iter()
+        .map(|n| n.to_string())
+        .zip(crate::names::constants(&names, "link"))
+        .collect()
+}
+
+/// The generated frame functions' names for `links` of `model` (`frame_` and the link's constant in lower
+/// case: `frame_lf_foot` for `frames::LF_FOOT`), in the order given.
+pub fn frame_function_names<T: Real>(model: &Model<T>, links: &[&str]) -> Vec<String> {
+    let constants = link_constants(model);
+    links
+        .iter()
+        .map(|l| {
+            let c = constants
+                .get(*l)
+                .cloned()
+                .unwrap_or_else(|| crate::names::identifier(l, "link").to_ascii_uppercase());
+            format!("frame_{}", c.to_ascii_lowercase())
+        })
         .collect()
 }
 
@@ -327,8 +347,20 @@ fn index_module(
     value: impl Fn(usize) -> usize,
     what: &str,
 ) -> TokenStream {
-    let module = format_ident!("{}", module);
     let constants = crate::names::constants(names, prefix);
+    index_module_spelled(module, doc, names, &constants, value, what)
+}
+
+/// [`index_module`] with the constants' spelling given (`constants[i]` for `names[i]`).
+fn index_module_spelled(
+    module: &str,
+    doc: &str,
+    names: &[&str],
+    constants: &[String],
+    value: impl Fn(usize) -> usize,
+    what: &str,
+) -> TokenStream {
+    let module = format_ident!("{}", module);
     let items = constants
         .iter()
         .zip(names)
@@ -404,7 +436,7 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
         .collect();
     // One function per algorithm, and per link named for a frame function.
     let frame_names: Vec<&str> = frame_links.iter().map(|(name, _)| name.as_str()).collect();
-    let frame_functions = frame_function_names(&frame_names);
+    let frame_functions = frame_function_names(&model64, &frame_names);
     let mut instances = Vec::new();
     for &algo in &algorithms {
         match algo.spec().parameter {
@@ -426,6 +458,18 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
             }),
         }
     }
+    // Every name at the module's level: the public functions (and wrappers' names, every algorithm's
+    // name), which the parts of long functions must not take.
+    let mut taken: std::collections::HashSet<String> = instances
+        .iter()
+        .map(|i| i.name.clone())
+        .chain(Algorithm::ALL.iter().map(|a| a.name().to_string()))
+        .chain(
+            Algorithm::ALL
+                .iter()
+                .map(|a| a.spec().traced_name.to_string()),
+        )
+        .collect();
     let wrench_frames: Vec<FrameId> = wrench_links.iter().map(|(_, f)| *f).collect();
     let wrench_names: Vec<&str> = wrench_links.iter().map(|(n, _)| n.as_str()).collect();
     let mut functions = Vec::new();
@@ -447,6 +491,7 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
                 &links,
                 &wrench_names,
                 &options.helpers,
+                &mut taken,
             )?;
             // Constants are folded in f64; the f32 module writes them as f32 literals.
             if options.f32 && function.largest_constant > f64::from(f32::MAX) {
@@ -514,6 +559,14 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
         #[allow(dead_code)]
         pub const FRAMES: [&str; #nf] = [#(#frames),*];
     };
+    // Links are spelled alike in `frames`, `wrench` and the frame functions' names.
+    let link_constants = link_constants(&model64);
+    let spelled = |names: &[&str]| -> Vec<String> {
+        names
+            .iter()
+            .map(|n| link_constants.get(*n).cloned().unwrap_or_default())
+            .collect()
+    };
     let q_index: Vec<usize> = model64.joints.iter().map(|j| j.q_index).collect();
     let v_index: Vec<usize> = model64.joints.iter().map(|j| j.v_index).collect();
     let indices = [
@@ -541,11 +594,11 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
             |i| v_index[i],
             "Index in `v` of the first entry of joint",
         ),
-        index_module(
+        index_module_spelled(
             "frames",
             "Index in `FRAMES` (and in the output of `kinematics`) of each link, by name: `FRAMES[frames::LF_FOOT]` is the link `lf_foot`.",
             &frames,
-            "link",
+            &spelled(&frames),
             |i| i,
             "Index in `FRAMES` of link",
         ),
@@ -554,11 +607,11 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
         quote!()
     } else {
         let k = proc_macro2::Literal::usize_unsuffixed(wrench_names.len());
-        let index = index_module(
+        let index = index_module_spelled(
             "wrench",
-            "Row in `f_ext` (of `aba_ext`, `rnea_ext`, `nle_ext`) and index in `WRENCH_LINKS` of each link named to take an external wrench, by name (spelled as in `frames`).",
+            "Row in `f_ext` (of `aba_ext`, `rnea_ext`, `nle_ext`) and index in `WRENCH_LINKS` of each link named to take an external wrench, by name (spelled as in `frames`: `wrench::FOOT` is the link `frames::FOOT` is).",
             &wrench_names,
-            "link",
+            &spelled(&wrench_names),
             |i| i,
             "Row in `f_ext` of the wrench on link",
         );
@@ -758,6 +811,7 @@ fn generate_algorithm(
     links: &Links,
     wrench_names: &[&str],
     helpers: &TokenStream,
+    taken: &mut std::collections::HashSet<String>,
 ) -> Result<Emitted, LoadError> {
     let algo = instance.algorithm;
     let spec = algo.spec();
@@ -899,8 +953,11 @@ fn generate_algorithm(
         &args,
         &outputs,
         &tape,
-        helpers,
-        &owners,
+        &mut crate::emit::ModuleContext {
+            helpers,
+            owners: &owners,
+            taken,
+        },
     )
     .map_err(|e| located_at_robot(loaded, e.into()))?;
     if let Some(wrapper) = spec.wrapper {
@@ -983,6 +1040,106 @@ mod tests {
     fn quadruped() -> Loaded {
         crate::load(concat!(env!("CARGO_MANIFEST_DIR"), "/../models/quadruped.urdf").as_ref())
             .unwrap()
+    }
+
+    /// A link is spelled alike in `frames::`, `wrench::` and `frame_<link>`, whatever links are named and
+    /// in whatever order (attacker trial, issue 11: `wrench::FOOT` was the link `foot` while
+    /// `frames::FOOT` was `Foot`).
+    #[test]
+    fn links_are_spelled_alike_in_frames_wrench_and_frame_functions() {
+        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../tests/data/case_names.urdf");
+        let loaded = crate::load(path.as_ref()).unwrap();
+        let model = loaded.model::<f64>(&Default::default()).unwrap();
+        let spelling = link_constants(&model);
+        for order in [["foot", "Foot", "foot_2"], ["foot_2", "Foot", "foot"]] {
+            let options = GenerateOptions {
+                f32: false,
+                links: LinkOptions {
+                    wrenches: order.map(String::from).to_vec(),
+                    frames: order.map(String::from).to_vec(),
+                    ..Default::default()
+                },
+                ..GenerateOptions::default()
+            };
+            let text = generate_source(&loaded, &options).unwrap();
+            let module = |name: &str| -> String {
+                let start = text.find(&format!("pub mod {name} {{")).unwrap();
+                text[start..start + text[start..].find("\n}").unwrap()].to_string()
+            };
+            let (frames, wrench) = (module("frames"), module("wrench"));
+            for (k, link) in order.iter().enumerate() {
+                let c = &spelling[*link];
+                let frame_index = model
+                    .frames()
+                    .position(|f| model.frame_name(f) == Some(link));
+                assert!(
+                    frames.contains(&format!("pub const {c}: usize = {};", frame_index.unwrap()))
+                );
+                assert!(
+                    wrench.contains(&format!("pub const {c}: usize = {k};")),
+                    "{wrench}"
+                );
+                assert!(text.contains(&format!("pub fn frame_{}(", c.to_ascii_lowercase())));
+            }
+        }
+    }
+
+    /// Long functions are split into parts named after their bodies; a body named `ext` (or
+    /// `independent`, `bias`, `step`) must not give a part the name of a public function (`aba` + `ext` =
+    /// `aba_ext`), on a chain long enough to be split (attacker trial, issue 11: rustc's E0428 on this
+    /// very chain).
+    #[test]
+    fn parts_of_long_functions_never_take_a_public_function_name() {
+        let dir = std::env::temp_dir().join(format!("embedyn-parts-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let inertial = r#"<inertial><origin xyz="0.05 0.01 0.02"/><mass value="0.5"/><inertia ixx="0.001" ixy="1e-05" ixz="0" iyy="0.0015" iyz="0" izz="0.00125"/></inertial>"#;
+        let mut urdf = String::from(r#"<robot name="chain"><link name="base"/>"#);
+        let mut parent = "base".to_string();
+        // The attacker's chain: 24 links, the last named `ext` (its own part of `aba`).
+        for i in 0..24 {
+            let link = match i {
+                23 => "ext".to_string(),
+                _ => format!("b{i}"),
+            };
+            let axis = ["1 0 0", "0 1 0", "0 0 1"][i % 3];
+            urdf += &format!(
+                r#"<link name="{link}">{inertial}</link><joint name="{link}" type="revolute"><parent link="{parent}"/><child link="{link}"/><origin xyz="0.1 0.02 0.03" rpy="0.1 0.2 0.3"/><axis xyz="{axis}"/><limit lower="-3" upper="3" effort="1" velocity="1"/></joint>"#
+            );
+            parent = link;
+        }
+        urdf += "</robot>";
+        let path = dir.join("chain.urdf");
+        std::fs::write(&path, urdf).unwrap();
+        let loaded = crate::load(&path).unwrap();
+        let options = GenerateOptions {
+            f32: false,
+            links: LinkOptions {
+                wrenches: vec!["ext".into(), "b4".into()],
+                frames: vec!["ext".into()],
+                ..Default::default()
+            },
+            ..GenerateOptions::default()
+        }
+        .with_requested(None, &[Algorithm::CentroidalBias, Algorithm::Centroidal]);
+        let text = generate_source(&loaded, &options).unwrap();
+        std::fs::remove_dir_all(&dir).ok();
+        let mut seen = std::collections::HashSet::new();
+        for line in text.lines() {
+            let line = line.trim_start();
+            let Some(rest) = line
+                .strip_prefix("pub fn ")
+                .or_else(|| line.strip_prefix("fn "))
+            else {
+                continue;
+            };
+            let name = rest.split(['(', '<']).next().unwrap();
+            assert!(seen.insert(name.to_string()), "`{name}` is defined twice");
+        }
+        assert!(
+            seen.iter().any(|n| n.starts_with("aba_") && n != "aba_ext"),
+            "aba was not split: {seen:?}"
+        );
+        assert!(seen.contains("aba_ext") && seen.contains("centroidal_bias"));
     }
 
     #[test]

@@ -156,7 +156,7 @@ pub fn crate_files(
     for a in options.generated_algorithms(constrained) {
         readme.push_str(&a.spec().readme_line(constrained));
     }
-    readme.push_str(&links_note(&options.links));
+    readme.push_str(&links_note(&model, &options.links));
     readme.push_str(&format!(
         "\nnq = {}, nv = {}. Coordinates (as embedyn's docs/conventions.md says: revolute angles in rad, prismatic in m; a floating base is\n\
          `q = [x y z qx qy qz qw …]`, `v = [v_lin ω …]` in the body frame; gravity ({}, {}, {}) m/s²{}):\n\n\
@@ -250,7 +250,7 @@ fn scene_note(options: &crate::ModelOptions) -> String {
 
 /// The README's note on the links named at generation time: the rows of `f_ext` and the frame
 /// functions (nothing when none is named).
-fn links_note(links: &crate::LinkOptions) -> String {
+fn links_note(model: &embedyn_runtime::Model<f64>, links: &crate::LinkOptions) -> String {
     let mut note = String::new();
     let unique = |names: &[String]| -> Vec<String> {
         let mut seen: Vec<String> = Vec::new();
@@ -272,7 +272,7 @@ fn links_note(links: &crate::LinkOptions) -> String {
     let frames = unique(&links.frames);
     if !frames.is_empty() {
         let names: Vec<&str> = frames.iter().map(String::as_str).collect();
-        let functions = crate::generate::frame_function_names(&names);
+        let functions = crate::generate::frame_function_names(model, &names);
         let listed: Vec<String> = functions
             .iter()
             .zip(&frames)

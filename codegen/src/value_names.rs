@@ -145,10 +145,16 @@ fn labelled(label: &Label, cache: &mut HashMap<String, String>) -> String {
 }
 
 /// The names of a function's parts, from the bodies each part covers: `aba_thigh_to_foot`, `aba_base`
-/// (one body), `aba_part3` (no named value); distinct (a repeated name gets `_2`, …).
-pub(crate) fn part_names(function: &str, bodies: &[Vec<&str>]) -> Vec<String> {
+/// (one body), `aba_part3` (no named value); distinct from every name in `taken` — the module's public
+/// functions and the parts named before — which they join (a taken name gets `_2`, …). Without the
+/// module-wide set, a body named `ext` would give `aba` a part `aba_ext`, the public function's name.
+pub(crate) fn part_names(
+    function: &str,
+    bodies: &[Vec<&str>],
+    taken: &mut HashSet<String>,
+) -> Vec<String> {
     let mut cache: HashMap<String, String> = HashMap::new();
-    let mut used: HashSet<String> = HashSet::new();
+    let used = taken;
     bodies
         .iter()
         .enumerate()
@@ -237,13 +243,33 @@ mod tests {
 
     #[test]
     fn parts_are_named_after_their_bodies() {
+        // The module's public functions are taken: a body named `ext` must not give `aba` a part called
+        // `aba_ext` (attacker trial, issue 11).
+        let mut taken: HashSet<String> = ["aba", "aba_ext"].map(String::from).into();
         let names = part_names(
             "aba",
-            &[vec!["base", "Thigh"], vec!["foot"], vec![], vec!["foot"]],
+            &[
+                vec!["base", "Thigh"],
+                vec!["foot"],
+                vec![],
+                vec!["foot"],
+                vec!["ext"],
+            ],
+            &mut taken,
         );
         assert_eq!(
             names,
-            ["aba_base_to_thigh", "aba_foot", "aba_part2", "aba_foot_2"]
+            [
+                "aba_base_to_thigh",
+                "aba_foot",
+                "aba_part2",
+                "aba_foot_2",
+                "aba_ext_2"
+            ]
         );
+        // And a later function's parts avoid the earlier ones'.
+        let later = part_names("aba_ext", &[vec!["foot"]], &mut taken);
+        assert_eq!(later, ["aba_ext_foot"]);
+        assert!(taken.contains("aba_ext_2"));
     }
 }
