@@ -46,14 +46,30 @@ pub const MAX_SHOWN_CHARS: usize = 80;
 /// `text`, or its first [`MAX_SHOWN_CHARS`] characters and `… (N bytes)` when it is longer (by more
 /// than the 32 characters that note could take, so that a shortened text is never shortened again): what
 /// messages show of a name or a value from a model file.
+///
+/// Line breaks in it are shown as `\n`, `\r` (and U+2028, U+2029 as `\u{2028}`, `\u{2029}`): a name
+/// never starts a new line of a message, so a hostile link name cannot forge an `error:` line.
 pub fn shortened(text: &str) -> std::borrow::Cow<'_, str> {
-    if text.char_indices().nth(MAX_SHOWN_CHARS + 32).is_none() {
-        return std::borrow::Cow::Borrowed(text);
+    let breaks = |c: char| matches!(c, '\n' | '\r' | '\u{2028}' | '\u{2029}');
+    let escaped: std::borrow::Cow<'_, str> = if text.contains(breaks) {
+        std::borrow::Cow::Owned(
+            text.chars()
+                .map(|c| match c {
+                    c if breaks(c) => c.escape_default().to_string(),
+                    c => c.to_string(),
+                })
+                .collect(),
+        )
+    } else {
+        std::borrow::Cow::Borrowed(text)
+    };
+    if escaped.char_indices().nth(MAX_SHOWN_CHARS + 32).is_none() {
+        return escaped;
     }
-    match text.char_indices().nth(MAX_SHOWN_CHARS) {
-        None => std::borrow::Cow::Borrowed(text),
+    match escaped.char_indices().nth(MAX_SHOWN_CHARS) {
+        None => escaped,
         Some((end, _)) => {
-            std::borrow::Cow::Owned(format!("{}… ({} bytes)", &text[..end], text.len()))
+            std::borrow::Cow::Owned(format!("{}… ({} bytes)", &escaped[..end], text.len()))
         }
     }
 }
@@ -502,7 +518,7 @@ pub enum LoadErrorKind {
         joint: String,
     },
     /// `--wrenches` or `--frames` names a link the model does not have.
-    #[error("there is no link \"{link}\"{hint}")]
+    #[error("there is no link \"{}\"{hint}", crate::names::shown(.link))]
     UnknownLinkNamed {
         /// The name given.
         link: String,
@@ -615,6 +631,22 @@ pub enum LoadErrorKind {
     NeedsLinks {
         /// The function.
         function: Algorithm,
+    },
+    /// A link named twice in `wrenches(…)` or `frames(…)`.
+    #[error("the link \"{}\" is named twice in {option} (each link once: one row of `f_ext`, one frame function)", crate::names::shown(.link))]
+    LinkNamedTwice {
+        /// The link.
+        link: String,
+        /// The option (`--wrenches / wrenches(…)`, …).
+        option: &'static str,
+    },
+    /// Links named for functions that `only(…)` leaves out: they would be silently ignored.
+    #[error("{option} names links, but no function generated takes them: add {functions} to `only(…)` / `--only`, or drop the links")]
+    LinksUnused {
+        /// The option (`--wrenches / wrenches(…)`, …).
+        option: &'static str,
+        /// The functions that would take them.
+        functions: &'static str,
     },
     /// A constant folded from the model's numbers is beyond f32's range.
     #[error("`{}`: the constant {constant:e}, folded from the model's numbers, is beyond the range of the scalar type f32 (largest {:e}); generated f32 code cannot hold it, generate the f64 functions only", .function.name(), f32::MAX)]
@@ -952,5 +984,27 @@ fn links_option(function: Algorithm) -> &'static str {
             "name them with `frames(link, …)` (robot!) or `--frames LINK,…` (embedyn generate)"
         }
         _ => "name the links that take wrenches with `wrenches(link, …)` (robot!) or `--wrenches LINK,…` (embedyn generate)",
+    }
+}
+
+#[cfg(test)]
+mod shortened_tests {
+    use super::shortened;
+
+    /// A name in a message never starts a new line (attacker trial, issue 11: a link named
+    /// `new\nline` printed across two lines, and so could forge an `error:` line), and a shortened name
+    /// is never shortened again.
+    #[test]
+    fn names_in_messages_never_break_lines() {
+        assert_eq!(shortened("new\nline"), "new\\nline");
+        assert_eq!(shortened("a\r\u{2028}b"), "a\\r\\u{2028}b");
+        assert_eq!(shortened("plain"), "plain");
+        let long = "x\n".repeat(200);
+        let once = shortened(&long).into_owned();
+        assert!(
+            !once.contains('\n') && once.ends_with("(400 bytes)"),
+            "{once}"
+        );
+        assert_eq!(shortened(&once), once);
     }
 }

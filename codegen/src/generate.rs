@@ -197,8 +197,8 @@ pub fn frame_function_names<T: Real>(model: &Model<T>, links: &[&str]) -> Vec<St
         .collect()
 }
 
-/// The frames of the links `names` (each once, in the order first named); a name of no link of the
-/// model is an error at `option` naming it and the closest link names.
+/// The frames of the links `names`, in order; a name of no link of the model is an error at `option`
+/// naming it and the closest link names, and so is a link named twice.
 fn resolve_links(
     loaded: &Loaded,
     model: &Model<f64>,
@@ -208,7 +208,13 @@ fn resolve_links(
     let mut links: Vec<(String, FrameId)> = Vec::new();
     for name in names {
         if links.iter().any(|(n, _)| n == name) {
-            continue;
+            return Err(LoadError::at(
+                Location::new(&loaded.robot.source, None, option),
+                LoadErrorKind::LinkNamedTwice {
+                    link: name.clone(),
+                    option,
+                },
+            ));
         }
         let Some(frame) = model.frame(name) else {
             let known: Vec<&str> = model.frames().filter_map(|f| model.frame_name(f)).collect();
@@ -426,6 +432,28 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
             loaded,
             LoadErrorKind::NeedsLinks { function: *a },
         ));
+    }
+    // Links named for functions that are not generated would be silently ignored.
+    for (named, parameter, option, functions) in [
+        (
+            !wrench_links.is_empty(),
+            Parameter::WrenchLinks,
+            "--wrenches / wrenches(…)",
+            "`aba_ext`, `rnea_ext` or `nle_ext`",
+        ),
+        (
+            !frame_links.is_empty(),
+            Parameter::Frame,
+            "--frames / frames(…)",
+            "`frame`",
+        ),
+    ] {
+        if named && !algorithms.iter().any(|a| a.spec().parameter == parameter) {
+            return Err(located_at_robot(
+                loaded,
+                LoadErrorKind::LinksUnused { option, functions },
+            ));
+        }
     }
     let model: Model<Sym> = snapped(&model64).cast();
     let (nq, nv) = (model.nq(), model.nv());
@@ -1187,14 +1215,35 @@ mod tests {
             ),
             "{e}"
         );
-        // Without `only`: aba_ext, rnea_ext and one frame function per link (each link once).
+        // A link named twice is an error (one row of f_ext, one frame function per link).
+        let e = generate_source(
+            &loaded,
+            &with_links(&["FL_foot", "imu", "FL_foot"], &[], None),
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("the link \"FL_foot\" is named twice"), "{e}");
+        // Links for functions `only(…)` leaves out are an error, not silently ignored.
+        for (wrenches, frames, missing) in [
+            (
+                &["FL_foot"][..],
+                &[][..],
+                "`aba_ext`, `rnea_ext` or `nle_ext`",
+            ),
+            (&[][..], &["trunk"][..], "`frame`"),
+        ] {
+            let e = generate_source(
+                &loaded,
+                &with_links(wrenches, frames, Some(vec![Algorithm::Aba])),
+            )
+            .unwrap_err()
+            .to_string();
+            assert!(e.contains(&format!("add {missing} to `only(…)`")), "{e}");
+        }
+        // Without `only`: aba_ext, rnea_ext and one frame function per link.
         let text = generate_source(
             &loaded,
-            &with_links(
-                &["FL_foot", "imu", "FL_foot"],
-                &["trunk", "FL_foot", "trunk"],
-                None,
-            ),
+            &with_links(&["FL_foot", "imu"], &["trunk", "FL_foot"], None),
         )
         .unwrap();
         for f in [
