@@ -243,7 +243,7 @@ pub struct Model<T: Real> {
     pub world_link_placements: Vec<Transform<T>>,
 }
 
-/// A frame of the model: a URDF link, on a moving body or fixed to the world (CONTRACT §2: a frame's
+/// A frame of the model: a URDF link, on a moving body or fixed to the world (docs/conventions.md: a frame's
 /// placement is its link frame). Find one by name with [`Model::frame`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct FrameId {

@@ -1,5 +1,5 @@
 //! Frame kinematics: the pose, velocity, classical acceleration and 6 × nv Jacobian of any link, in the
-//! three references Pinocchio defines (CONTRACT §2).
+//! three references Pinocchio defines (docs/conventions.md, "Contacts, frames and momentum").
 //!
 //! Every function here reads the kinematics of the last [`forward_kinematics`](super::forward_kinematics)
 //! (poses, velocities) or [`forward_kinematics_acceleration`] (also accelerations, without gravity) call
@@ -28,7 +28,7 @@ pub enum Reference {
 }
 
 impl Reference {
-    /// The name the command line and CONTRACT §2 use (`local`, `local_world_aligned`, `world`).
+    /// The name the command line and docs/conventions.md use (`local`, `local_world_aligned`, `world`).
     pub fn as_str(self) -> &'static str {
         match self {
             Reference::Local => "local",

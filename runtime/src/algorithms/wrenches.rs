@@ -2,7 +2,7 @@
 //! [`aba_ext`], [`rnea_ext`] and [`nle_ext`] take them.
 //!
 //! A wrench is given where a controller knows it: on a link (a foot, a tool flange — also a link merged
-//! into its parent body by a fixed joint), in that link's own frame, about its origin (CONTRACT §2). The
+//! into its parent body by a fixed joint), in that link's own frame, about its origin (docs/conventions.md). The
 //! algorithms move it once into the frame of the body the link rides on and subtract it from that body's
 //! bias force; nothing else changes, so the call costs a few operations per wrench over the plain one,
 //! and in generated code a link without a wrench costs nothing.
