@@ -46,6 +46,10 @@ mod loop_knees {
     );
 }
 
+/// A generated frame function: `(q, v, pose, jacobian, bias)`.
+type FrameFn<const NQ: usize, const NV: usize> =
+    fn(&[f64; NQ], &[f64; NV], &mut [f64; 12], &mut [[f64; NV]; 6], &mut [f64; 6]);
+
 /// Counts heap allocations, to show that the control loop makes none.
 struct Counting;
 static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
@@ -247,13 +251,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         (qi::RH_HFE, vi::RH_HFE),
         (qi::RH_KFE, vi::RH_KFE),
     ];
-    let foot_functions: [fn(
-        &[f64; NQ],
-        &[f64; NV],
-        &mut [f64; 12],
-        &mut [[f64; NV]; 6],
-        &mut [f64; 6],
-    ); 4] = [
+    let foot_functions: [FrameFn<NQ, NV>; 4] = [
         gen::frame_lf_foot,
         gen::frame_rf_foot,
         gen::frame_lh_foot,
@@ -338,7 +336,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
 fn feet_xy<const NQ: usize, const NV: usize>(
     q: &[f64; NQ],
     v: &[f64; NV],
-    feet: &[fn(&[f64; NQ], &[f64; NV], &mut [f64; 12], &mut [[f64; NV]; 6], &mut [f64; 6]); 4],
+    feet: &[FrameFn<NQ, NV>; 4],
 ) -> [[f64; 2]; 4] {
     let (mut pose, mut jacobian, mut bias) = ([0.0; 12], [[0.0; NV]; 6], [0.0; 6]);
     feet.map(|foot| {
@@ -386,13 +384,7 @@ fn closed_loop_knees(ground: &Ground) -> Result<(), Box<dyn std::error::Error>> 
     for (k, &(_, iv)) in actuated.iter().enumerate() {
         independent[6 + k] = iv;
     }
-    let foot_functions: [fn(
-        &[f64; NQ],
-        &[f64; NV],
-        &mut [f64; 12],
-        &mut [[f64; NV]; 6],
-        &mut [f64; 6],
-    ); 4] = [
+    let foot_functions: [FrameFn<NQ, NV>; 4] = [
         gen::frame_fl_foot,
         gen::frame_fr_foot,
         gen::frame_hl_foot,
