@@ -378,8 +378,8 @@ fn closed_loop_knees(ground: &Ground) -> Result<(), Box<dyn std::error::Error>> 
     ];
     // The independent velocities: the base's six, then the actuated joints (INDEPENDENT's order).
     let mut independent = [0usize; NI];
-    for k in 0..6 {
-        independent[k] = vi::FLOATING_BASE + k;
+    for (k, slot) in independent.iter_mut().take(6).enumerate() {
+        *slot = vi::FLOATING_BASE + k;
     }
     for (k, &(_, iv)) in actuated.iter().enumerate() {
         independent[6 + k] = iv;
