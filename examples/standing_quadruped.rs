@@ -160,7 +160,7 @@ fn standing(
     }
     q[2] -= mean + sink; // the base's z
     forward_kinematics(model, &mut ws, &q, &zero)?;
-    let com = center_of_mass(model, &ws);
+    let com = center_of_mass(model, &ws)?;
     // Σ f = m g; Σ f (x − c_x) = Σ f (y − c_y) = 0: three equations, four forces, least norm.
     let mut a = DMatrix::zeros(3, feet.len());
     for (k, &f) in frames.iter().enumerate() {

@@ -265,7 +265,7 @@ fn against_interpreted(
             ));
         }
         forward_kinematics(model, &mut ws, q, v).unwrap();
-        let c = center_of_mass(model, &ws);
+        let c = center_of_mass(model, &ws).unwrap();
         let mut j_com = Matrix3xX::zeros(nv);
         com_jacobian(model, &mut ws, &mut j_com).unwrap();
         let (mut com, mut vcom, mut j_out) = ([0.0; 3], [0.0; 3], vec![0.0; 3 * nv]);
@@ -276,9 +276,9 @@ fn against_interpreted(
             .max(relative_error(&j_out, &row_major(&j_com)));
         let mut a_g = Matrix6xX::zeros(nv);
         centroidal_momentum_matrix(model, &mut ws, &mut a_g).unwrap();
-        let h = centroidal_momentum(model, &mut ws);
+        let h = centroidal_momentum(model, &mut ws).unwrap();
         forward_kinematics_acceleration(model, &mut ws, q, v, &zeros).unwrap();
-        let dh = centroidal_momentum_rate(model, &mut ws);
+        let dh = centroidal_momentum_rate(model, &mut ws).unwrap();
         let (mut h_g, mut a_out, mut dh_g) = ([0.0; 6], vec![0.0; 6 * nv], [0.0; 6]);
         (g.centroidal)(q, v, &mut h_g, &mut a_out, &mut dh_g);
         worst[3] = worst[3]

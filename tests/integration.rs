@@ -16,6 +16,7 @@ mod configuration;
 mod constraint_embedding;
 mod contact;
 mod contact_invariants;
+mod contact_sweep;
 mod dynamics_oracles;
 mod energy;
 mod extremes;

@@ -1005,7 +1005,7 @@ impl<'m, T: Real> Kinematics<'m, T> {
                 }
             }
             EvalAlgo::Com => {
-                let c = center_of_mass(model, ws);
+                let c = center_of_mass(model, ws).map_err(at)?;
                 let j = &mut self.j3;
                 let com = com_jacobian(model, ws, j).map_err(at)?;
                 let get = |r, c| j[(r, c)];
@@ -1023,7 +1023,7 @@ impl<'m, T: Real> Kinematics<'m, T> {
             EvalAlgo::Centroidal => {
                 let a = &mut self.j6;
                 centroidal_momentum_matrix(model, ws, a).map_err(at)?;
-                let h = centroidal_momentum(model, ws);
+                let h = centroidal_momentum(model, ws).map_err(at)?;
                 let linear_angular = |f: &embedyn_runtime::Force<T>| -> Vec<T> {
                     f.linear.iter().chain(f.angular.iter()).copied().collect()
                 };

@@ -1021,7 +1021,7 @@ pub const ALGORITHMS: &[AlgorithmSpec] = &[
         predicted_operations: |c| 200.0 * c.nv + 20.0 * c.links,
         trace: |model, ws, inputs, _| {
             forward_kinematics(model, ws, &inputs[0], &inputs[1])?;
-            let c = center_of_mass(model, ws);
+            let c = center_of_mass(model, ws)?;
             let mut j_com = Matrix3xX::from_element(model.nv(), Sym::Const(0.0));
             com_jacobian(model, ws, &mut j_com)?;
             let j_com = (0..3)
@@ -1039,7 +1039,7 @@ pub const ALGORITHMS: &[AlgorithmSpec] = &[
         },
         interpreted: |model, ws, inputs, _| {
             forward_kinematics(model, ws, inputs[0], inputs[1])?;
-            center_of_mass(model, ws);
+            center_of_mass(model, ws)?;
             com_jacobian(model, ws, &mut Matrix3xX::zeros(model.nv())).map(|_| ())
         },
     },
@@ -1129,7 +1129,7 @@ pub const ALGORITHMS: &[AlgorithmSpec] = &[
                 &inputs[1],
                 &vec![Sym::Const(0.0); nv],
             )?;
-            let dh = centroidal_momentum_rate(model, ws);
+            let dh = centroidal_momentum_rate(model, ws)?;
             Ok(Traced {
                 outputs: vec![linear_angular(&dh.linear, &dh.angular)],
                 returned: None,
@@ -1138,7 +1138,7 @@ pub const ALGORITHMS: &[AlgorithmSpec] = &[
         interpreted: |model, ws, inputs, _| {
             let zeros = vec![0.0; model.nv()];
             forward_kinematics_acceleration(model, ws, inputs[0], inputs[1], &zeros)?;
-            centroidal_momentum_rate(model, ws);
+            centroidal_momentum_rate(model, ws)?;
             Ok(())
         },
     },

@@ -60,7 +60,8 @@ pub use algorithms::{
     frame_classical_acceleration, frame_jacobian, frame_placement, frame_velocity, gravity,
     kinetic_energy, kkt_forward_dynamics, link_poses, mass_matrix_inverse, nle, nle_ext,
     potential_energy, reduced_mass_matrix, reduced_mass_matrix_in, rnea, rnea_ext,
-    rnea_with_gravity, CenterOfMass, DynamicsError, Kinematics, LinkWrench, Reference, Workspace,
+    rnea_with_gravity, CenterOfMass, DynamicsError, Kinematics, LinkWrench, Reference, Sweep,
+    Workspace,
 };
 #[cfg(feature = "alloc")]
 pub use configuration::{

@@ -11,7 +11,7 @@
 
 use super::{
     check_configuration, check_input, gravity_in, per_coordinate, velocity_sweep, DynamicsError,
-    Workspace,
+    Sweep, Workspace,
 };
 #[allow(unused_imports)]
 use crate::alloc_prelude::*;
@@ -95,6 +95,8 @@ pub(crate) fn forward_step<T: Real>(
 ) -> Result<(), DynamicsError> {
     let joint = &model.joints[i];
     check_pivot(joint, ws.d_pivot[i])?;
+    // Accelerations with gravity.
+    ws.sweep = Sweep::None;
     let x = &ws.parent_placement[i];
     let a_prime = match joint.parent {
         Some(p) => x.inv_act_motion(&ws.acceleration[p]),

@@ -6,8 +6,12 @@
 //! they are left out, as in Pinocchio). The centroidal momentum matrix `A_g` is Pinocchio's `ccrba`: each
 //! joint's motion direction times the composite inertia of the subtree it carries, all in world axes,
 //! the moment taken about the centre of mass.
+//!
+//! Each function checks that the workspace holds what it reads ([`Sweep`]: world placements, velocities,
+//! accelerations without gravity) and fails with [`DynamicsError::KinematicsNotComputed`] otherwise. They
+//! overwrite `ws.force` or `ws.composite`, never the kinematics, so any number of them can follow one sweep.
 
-use super::{check_len, DynamicsError, Workspace};
+use super::{check_len, DynamicsError, Sweep, Workspace};
 #[allow(unused_imports)]
 use crate::alloc_prelude::*;
 use crate::model::Model;
@@ -29,7 +33,16 @@ pub struct CenterOfMass<T: Real> {
 /// The centre of mass, its velocity and the total mass from the last
 /// [`forward_kinematics`](super::forward_kinematics) (Pinocchio's `centerOfMass(q, v)`). A model without
 /// mass has its centre of mass at the origin.
-pub fn center_of_mass<T: Real>(model: &Model<T>, ws: &Workspace<T>) -> CenterOfMass<T> {
+///
+/// # Errors
+/// [`DynamicsError::KinematicsNotComputed`] unless [`forward_kinematics`](super::forward_kinematics)`(q, v)`
+/// or [`forward_kinematics_acceleration`](super::forward_kinematics_acceleration) ran last on `ws`
+/// ([`Sweep::Velocities`]).
+pub fn center_of_mass<T: Real>(
+    model: &Model<T>,
+    ws: &Workspace<T>,
+) -> Result<CenterOfMass<T>, DynamicsError> {
+    ws.require("center_of_mass", Sweep::Velocities)?;
     let mut mass = T::zero();
     let mut moment = Vector3::zeros();
     let mut momentum = Vector3::zeros();
@@ -43,11 +56,11 @@ pub fn center_of_mass<T: Real>(model: &Model<T>, ws: &Workspace<T>) -> CenterOfM
         momentum += x.rotation * (v.linear * inertia.mass + v.angular.cross(&inertia.first_moment));
     }
     let inv = inverse_mass(mass);
-    CenterOfMass {
+    Ok(CenterOfMass {
         mass,
         com: moment * inv,
         vcom: momentum * inv,
-    }
+    })
 }
 
 /// `1/m`, or zero for a massless model (whose centre of mass is then the origin).
@@ -105,11 +118,17 @@ fn world_first_moments<T: Real>(model: &Model<T>, ws: &mut Workspace<T>) -> Spat
 /// last forward kinematics (Pinocchio's `jacobianCenterOfMass`); returns the centre of mass. Column `k`
 /// is the velocity of the centre of mass of the subtree joint `k` carries, weighted by that subtree's
 /// share of the mass. Overwrites `ws.composite`; never allocates.
+///
+/// # Errors
+/// [`DynamicsError::KinematicsNotComputed`] unless a call that leaves world placements
+/// ([`Sweep::Placements`], e.g. [`forward_kinematics`](super::forward_kinematics)) ran last on `ws`;
+/// [`DynamicsError::WrongLength`] for a `jacobian` without `nv` columns.
 pub fn com_jacobian<T: Real>(
     model: &Model<T>,
     ws: &mut Workspace<T>,
     jacobian: &mut Matrix3xX<T>,
 ) -> Result<Vector3<T>, DynamicsError> {
+    ws.require("com_jacobian", Sweep::Placements)?;
     check_len("J_com columns", jacobian.ncols(), model.nv())?;
     let total = world_first_moments(model, ws);
     let inv = inverse_mass(total.mass);
@@ -134,11 +153,17 @@ pub fn com_jacobian<T: Real>(
 /// subtree's composite inertia times the joint's motion direction, formed in the joint's own body frame
 /// (where the direction is a constant axis and the product picks a column of the inertia), then moved to
 /// world axes and taken about the centre of mass.
+///
+/// # Errors
+/// [`DynamicsError::KinematicsNotComputed`] unless a call that leaves world placements
+/// ([`Sweep::Placements`], e.g. [`forward_kinematics`](super::forward_kinematics)) ran last on `ws`;
+/// [`DynamicsError::WrongLength`] for an `a_g` without `nv` columns.
 pub fn centroidal_momentum_matrix<T: Real>(
     model: &Model<T>,
     ws: &mut Workspace<T>,
     a_g: &mut Matrix6xX<T>,
 ) -> Result<Vector3<T>, DynamicsError> {
+    ws.require("centroidal_momentum_matrix", Sweep::Placements)?;
     check_len("A_g columns", a_g.ncols(), model.nv())?;
     let total = body_composites(model, ws);
     let com = total.first_moment * inverse_mass(total.mass);
@@ -168,11 +193,20 @@ fn about_com<T: Real>(f: &Force<T>, c: &Vector3<T>) -> Force<T> {
 /// the angular momentum about the centre of mass, world axes), from the last forward kinematics, in O(N):
 /// each body's momentum carried to its parent's frame (RNEA's inward sweep), the roots' moved to the world.
 /// Overwrites `ws.force`.
-pub fn centroidal_momentum<T: Real>(model: &Model<T>, ws: &mut Workspace<T>) -> Force<T> {
+///
+/// # Errors
+/// [`DynamicsError::KinematicsNotComputed`] unless [`forward_kinematics`](super::forward_kinematics)`(q, v)`
+/// or [`forward_kinematics_acceleration`](super::forward_kinematics_acceleration) ran last on `ws`
+/// ([`Sweep::Velocities`]).
+pub fn centroidal_momentum<T: Real>(
+    model: &Model<T>,
+    ws: &mut Workspace<T>,
+) -> Result<Force<T>, DynamicsError> {
+    ws.require("centroidal_momentum", Sweep::Velocities)?;
     for (i, body) in model.bodies.iter().enumerate() {
         ws.force[i] = body.inertia.mul_motion(&ws.velocity[i]);
     }
-    about_com(&carried_to_world(model, ws), &com_of(model, ws))
+    Ok(about_com(&carried_to_world(model, ws), &com_of(model, ws)))
 }
 
 /// The rate of the centroidal momentum, `ḣ_g = A_g qdd + Ȧ_g v`, after
@@ -182,14 +216,25 @@ pub fn centroidal_momentum<T: Real>(model: &Model<T>, ws: &mut Workspace<T>) -> 
 /// moment taken about the moving centre of mass (`d/dt (n_O − c × p) = ṅ_O − c × ṗ`, since
 /// `ċ × p = ċ × m ċ = 0`). Gravity is not in it: for a robot touched by nothing else, `ḣ_g = (m g, 0)`.
 /// Overwrites `ws.force`.
-pub fn centroidal_momentum_rate<T: Real>(model: &Model<T>, ws: &mut Workspace<T>) -> Force<T> {
+///
+/// # Errors
+/// [`DynamicsError::KinematicsNotComputed`] unless
+/// [`forward_kinematics_acceleration`](super::forward_kinematics_acceleration) (or
+/// [`crate::constraint_kinematics`], its `qdd = 0`) ran last on `ws` ([`Sweep::Accelerations`]): after
+/// [`forward_kinematics`](super::forward_kinematics) there are no accelerations, after [`crate::aba`]
+/// they include gravity.
+pub fn centroidal_momentum_rate<T: Real>(
+    model: &Model<T>,
+    ws: &mut Workspace<T>,
+) -> Result<Force<T>, DynamicsError> {
+    ws.require("centroidal_momentum_rate", Sweep::Accelerations)?;
     for (i, body) in model.bodies.iter().enumerate() {
         let inertia = &body.inertia;
         let v = &ws.velocity[i];
         ws.force[i] =
             inertia.mul_motion(&ws.acceleration[i]) + v.cross_force(&inertia.mul_motion(v));
     }
-    about_com(&carried_to_world(model, ws), &com_of(model, ws))
+    Ok(about_com(&carried_to_world(model, ws), &com_of(model, ws)))
 }
 
 /// The sum of the per-body forces in `ws.force` (body frames) in world axes about the world origin,

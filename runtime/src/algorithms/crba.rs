@@ -5,7 +5,7 @@
 //! a spatial force, one frame change per ancestor. Body frames keep the zero structure of axis-aligned
 //! joints, which generated code exploits; world frames would fill it in.
 
-use super::{check_configuration, DynamicsError, Workspace};
+use super::{check_configuration, DynamicsError, Sweep, Workspace};
 #[allow(unused_imports)]
 use crate::alloc_prelude::*;
 use crate::model::Model;
@@ -39,6 +39,8 @@ pub fn crba<'w, T: Real>(
 ) -> Result<&'w DMatrix<T>, DynamicsError> {
     check_configuration(model, q)?;
     ws.reserve_mass_matrix(model);
+    // Parent placements only.
+    ws.sweep = Sweep::None;
     let n = model.nbodies();
     for (i, joint) in model.joints.iter().enumerate() {
         ws.parent_placement[i] = joint.placement.compose(&joint.joint_transform(q));

@@ -20,7 +20,7 @@ use super::aba::{backward_step, forward_step, init_articulated};
 use super::kinematics::world_placements;
 use super::{
     check_configuration, check_input, crba, forward_kinematics, parent_placement, rnea,
-    DynamicsError, Workspace,
+    DynamicsError, Sweep, Workspace,
 };
 #[allow(unused_imports)]
 use crate::alloc_prelude::*;
@@ -46,6 +46,8 @@ pub fn constraint_kinematics<T: Real>(
             None => ws.coriolis[i],
         };
     }
+    // forward_kinematics_acceleration(q, v, 0): the same sums, without the zero joint terms.
+    ws.sweep = Sweep::Accelerations;
     Ok(())
 }
 
@@ -57,6 +59,7 @@ pub(crate) fn position_kinematics<T: Real>(
     q: &[T],
 ) -> Result<(), DynamicsError> {
     check_configuration(model, q)?;
+    ws.sweep = Sweep::None;
     for (i, joint) in model.joints.iter().enumerate() {
         ws.parent_placement[i] = parent_placement(joint, q);
         ws.velocity[i] = Motion::zero();
@@ -64,6 +67,8 @@ pub(crate) fn position_kinematics<T: Real>(
         ws.acceleration[i] = Motion::zero();
     }
     world_placements(model, ws);
+    // Velocities zero, not the caller's.
+    ws.sweep = Sweep::Placements;
     Ok(())
 }
 
@@ -78,6 +83,9 @@ pub(crate) fn aba<'w, T: Real>(
     f_ext: &[super::LinkWrench<T>],
 ) -> Result<&'w [T], DynamicsError> {
     constraint_kinematics(model, ws, q, v)?;
+    // The accelerations become those of the motion with gravity; placements and velocities stay valid,
+    // but `aba` promises as little as the tree's `aba` does (whose sweep leaves no world placements).
+    ws.sweep = Sweep::None;
     let (kin, scratch) = ws.split_constraints();
     for (g, gw) in scratch.groups.iter_mut().enumerate() {
         embed(model, kin, g, gw, true)?;
@@ -219,6 +227,8 @@ fn group_forward<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, gi: usize) {
     let g = &model.groups[gi];
     let gw = &mut ws.constraints.groups[gi];
     let ni = g.independent.len();
+    // Accelerations with gravity.
+    ws.sweep = Sweep::None;
     let a_parent = match g.parent {
         Some(p) => ws.acceleration[p],
         None => Motion::new(Vector3::zeros(), -model.gravity),
@@ -368,6 +378,8 @@ pub fn kkt_forward_dynamics<T: Real>(
     crate::constraints::jacobian(model, ws, &mut jac);
     let mut bias = vec![T::zero(); raw];
     crate::constraints::bias(model, ws, &mut bias);
+    // Accelerations at qdd = 0, not at the qdd returned.
+    ws.sweep = Sweep::Velocities;
     let rows: Vec<usize> = model
         .groups
         .iter()

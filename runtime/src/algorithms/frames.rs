@@ -4,8 +4,13 @@
 //! Every function here reads the kinematics of the last [`forward_kinematics`](super::forward_kinematics)
 //! (poses, velocities) or [`forward_kinematics_acceleration`] (also accelerations, without gravity) call
 //! on the workspace, as Pinocchio's frame functions read `data`: one sweep serves any number of frames.
+//! Unlike Pinocchio's, each checks that the workspace holds what it reads ([`Sweep`]) and fails with
+//! [`DynamicsError::KinematicsNotComputed`] where a call is missing (a new workspace, or another
+//! algorithm ran since), rather than return another state's numbers.
 
-use super::{check_configuration, check_input, forward_kinematics, DynamicsError, Workspace};
+use super::{
+    check_configuration, check_input, forward_kinematics, DynamicsError, Sweep, Workspace,
+};
 #[allow(unused_imports)]
 use crate::alloc_prelude::*;
 use crate::model::{FrameId, Model};
@@ -72,6 +77,7 @@ pub fn forward_kinematics_acceleration<T: Real>(
             + joint.joint_motion(qdd);
         ws.acceleration[i] = a.named(&model.bodies[i].name, "a");
     }
+    ws.sweep = Sweep::Accelerations;
     Ok(())
 }
 
@@ -89,11 +95,17 @@ fn frame_parts<'a, T: Real>(
 }
 
 /// The world pose of a frame, from the last forward kinematics.
+///
+/// # Errors
+/// [`DynamicsError::KinematicsNotComputed`] unless [`forward_kinematics`](super::forward_kinematics) (or
+/// another call that leaves world placements, [`Sweep::Placements`]) ran last on `ws`;
+/// [`DynamicsError::UnknownFrame`] for a frame of another model.
 pub fn frame_placement<T: Real>(
     model: &Model<T>,
     ws: &Workspace<T>,
     frame: FrameId,
 ) -> Result<Transform<T>, DynamicsError> {
+    ws.require("frame_placement", Sweep::Placements)?;
     Ok(match frame_parts(model, ws, frame)? {
         (Some(body), in_body) => body.compose(in_body),
         (None, in_world) => *in_world,
@@ -120,12 +132,18 @@ fn express<T: Real>(
 
 /// The spatial velocity of a frame in `reference` (from the last forward kinematics): `[angular; linear]`,
 /// the linear part as [`Reference`] says. Zero for a link fixed to the world.
+///
+/// # Errors
+/// [`DynamicsError::KinematicsNotComputed`] unless [`forward_kinematics`](super::forward_kinematics)`(q, v)`
+/// or [`forward_kinematics_acceleration`] ran last on `ws` ([`Sweep::Velocities`]);
+/// [`DynamicsError::UnknownFrame`] for a frame of another model.
 pub fn frame_velocity<T: Real>(
     model: &Model<T>,
     ws: &Workspace<T>,
     frame: FrameId,
     reference: Reference,
 ) -> Result<Motion<T>, DynamicsError> {
+    ws.require("frame_velocity", Sweep::Velocities)?;
     Ok(match frame_parts(model, ws, frame)? {
         (Some(body), in_body) => express(
             body,
@@ -143,12 +161,19 @@ pub fn frame_velocity<T: Real>(
 /// `LocalWorldAligned`). After `forward_kinematics_acceleration(q, v, 0)` it is the bias of the frame's
 /// acceleration, `a = J qdd + bias` (in `LocalWorldAligned`, `bias = J̇ v`); Pinocchio's
 /// `getFrameClassicalAcceleration`. Zero for a link fixed to the world.
+///
+/// # Errors
+/// [`DynamicsError::KinematicsNotComputed`] unless [`forward_kinematics_acceleration`] (or
+/// [`crate::constraint_kinematics`], its `qdd = 0`) ran last on `ws` ([`Sweep::Accelerations`]): after
+/// [`forward_kinematics`](super::forward_kinematics) there are no accelerations, after [`crate::aba`]
+/// they include gravity; [`DynamicsError::UnknownFrame`] for a frame of another model.
 pub fn frame_classical_acceleration<T: Real>(
     model: &Model<T>,
     ws: &Workspace<T>,
     frame: FrameId,
     reference: Reference,
 ) -> Result<Motion<T>, DynamicsError> {
+    ws.require("frame_classical_acceleration", Sweep::Accelerations)?;
     let (Some(body), in_body) = frame_parts(model, ws, frame)? else {
         return Ok(Motion::zero());
     };
@@ -167,6 +192,11 @@ pub fn frame_classical_acceleration<T: Real>(
 /// of a link fixed to the world. For a model with loops, couplings or mimic joints the columns are over
 /// the spanning tree's coordinates; `J X` ([`crate::embedding_map_in`]) is the Jacobian over the
 /// independent ones. Never allocates.
+///
+/// # Errors
+/// [`DynamicsError::KinematicsNotComputed`] unless [`forward_kinematics`](super::forward_kinematics) (or
+/// another call that leaves world placements, [`Sweep::Placements`]) ran last on `ws`;
+/// [`DynamicsError::WrongLength`] for a `jacobian` without `nv` columns; [`DynamicsError::UnknownFrame`].
 pub fn frame_jacobian<T: Real>(
     model: &Model<T>,
     ws: &Workspace<T>,
@@ -174,6 +204,7 @@ pub fn frame_jacobian<T: Real>(
     reference: Reference,
     jacobian: &mut Matrix6xX<T>,
 ) -> Result<(), DynamicsError> {
+    ws.require("frame_jacobian", Sweep::Placements)?;
     super::check_len("jacobian columns", jacobian.ncols(), model.nv())?;
     jacobian.fill(T::zero());
     let (Some(body), in_body) = frame_parts(model, ws, frame)? else {

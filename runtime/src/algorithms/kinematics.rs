@@ -1,11 +1,13 @@
-use super::{check_configuration, check_input, velocity_sweep, DynamicsError, Workspace};
+use super::{check_configuration, check_input, velocity_sweep, DynamicsError, Sweep, Workspace};
 #[allow(unused_imports)]
 use crate::alloc_prelude::*;
 use crate::model::Model;
 use crate::spatial::Transform;
 use crate::Real;
 
-/// Forward kinematics: each body's pose in the parent and world frames, and its spatial velocity.
+/// Forward kinematics: each body's pose in the parent and world frames, and its spatial velocity
+/// ([`Sweep::Velocities`]: what [`crate::frame_jacobian`], [`crate::frame_velocity`], the centre of mass
+/// and the centroidal momentum read).
 pub fn forward_kinematics<T: Real>(
     model: &Model<T>,
     ws: &mut Workspace<T>,
@@ -16,6 +18,7 @@ pub fn forward_kinematics<T: Real>(
     check_input("v", v, model.nv())?;
     velocity_sweep(model, ws, q, v);
     world_placements(model, ws);
+    ws.sweep = Sweep::Velocities;
     Ok(())
 }
 

@@ -6,7 +6,7 @@
 //! `[I − Hψ𝒦]*`, carrying one spatial acceleration per column outward. Cost O(N · nv).
 
 use super::aba::{articulated_inertia_plus, check_pivot, d_block, factor_joint};
-use super::{check_configuration, DynamicsError, Workspace};
+use super::{check_configuration, DynamicsError, Sweep, Workspace};
 #[allow(unused_imports)]
 use crate::alloc_prelude::*;
 use crate::linalg::cholesky_solve_in_place;
@@ -23,6 +23,8 @@ pub fn mass_matrix_inverse<'w, T: Real>(
 ) -> Result<&'w DMatrix<T>, DynamicsError> {
     check_configuration(model, q)?;
     ws.reserve_inverse(model);
+    // Parent placements only.
+    ws.sweep = Sweep::None;
     let nv = model.nv();
     for (i, joint) in model.joints.iter().enumerate() {
         ws.parent_placement[i] = joint.placement.compose(&joint.joint_transform(q));

@@ -32,7 +32,7 @@ pub use frames::{
 pub use kinematics::{forward_kinematics, kinetic_energy, link_poses, potential_energy};
 pub use minv::mass_matrix_inverse;
 pub use rnea::{gravity, nle, rnea, rnea_with_gravity};
-pub use workspace::{Kinematics, Workspace};
+pub use workspace::{Kinematics, Sweep, Workspace};
 pub use wrenches::{aba_ext, nle_ext, rnea_ext, LinkWrench};
 
 use crate::constraints::{ConstraintSet, GroupLabel};
@@ -100,6 +100,18 @@ pub enum DynamicsError {
         index: usize,
         /// The frame.
         frame: crate::FrameId,
+    },
+    /// A reader of frames, the centre of mass or the centroidal momentum was called on a workspace that
+    /// does not hold the kinematics it reads (see [`Sweep`]): a call is missing before it, and the numbers
+    /// in the workspace are another state's.
+    #[error("{reader} needs {} first; the workspace holds {holds}", .needs.call())]
+    KinematicsNotComputed {
+        /// The function called.
+        reader: &'static str,
+        /// What it reads.
+        needs: Sweep,
+        /// What the workspace holds.
+        holds: Sweep,
     },
     /// An aggregate link's reduced inertia is not positive definite.
     #[error("{group}: the reduced inertia of the aggregate link is not positive definite")]
@@ -172,6 +184,8 @@ pub(crate) fn check_configuration<T: Real>(model: &Model<T>, q: &[T]) -> Result<
 /// The first forward sweep shared by RNEA and ABA: `ᵖX_i(q)`, `V(k)`, and `a(k) = V(k) ×ₘ H*θ̇(k)`.
 #[inline(always)]
 pub(crate) fn velocity_sweep<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, q: &[T], v: &[T]) {
+    // New parent placements without world placements (a caller that adds them says so).
+    ws.sweep = Sweep::None;
     for (i, (joint, body)) in model.joints.iter().zip(&model.bodies).enumerate() {
         let x = parent_placement(joint, q);
         let vj = joint.joint_motion(v);

@@ -3,7 +3,7 @@
 
 use super::{
     check_configuration, check_input, gravity_in, parent_placement, per_coordinate, velocity_sweep,
-    DynamicsError, Workspace,
+    DynamicsError, Sweep, Workspace,
 };
 #[allow(unused_imports)]
 use crate::alloc_prelude::*;
@@ -94,6 +94,8 @@ pub fn gravity<'w, T: Real>(
     q: &[T],
 ) -> Result<&'w [T], DynamicsError> {
     check_configuration(model, q)?;
+    // Parent placements and accelerations with gravity, no world placements.
+    ws.sweep = Sweep::None;
     // Outward: ᵖX_i(q) and a(i) = −g in body i's frame, a pure linear acceleration (`Rᵀ a(parent)`).
     for (i, (joint, body)) in model.joints.iter().zip(&model.bodies).enumerate() {
         let x = parent_placement(joint, q);

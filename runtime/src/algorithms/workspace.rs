@@ -1,3 +1,4 @@
+use super::DynamicsError;
 #[allow(unused_imports)]
 use crate::alloc_prelude::*;
 use crate::constraints::GroupWorkspace;
@@ -17,6 +18,64 @@ pub struct Kinematics<'w, T: Real> {
     /// Spatial acceleration of each body, in its own frame (after [`crate::constraint_kinematics`]: the
     /// velocity-product accelerations at q̈ = 0, without gravity).
     pub acceleration: &'w [Motion<T>],
+}
+
+/// Which kinematics a [`Workspace`] holds: what the last call that wrote them left valid, each level with
+/// everything of the levels before it. Every algorithm that writes the workspace's placements, velocities
+/// or accelerations records what it leaves ([`Workspace::sweep`]); the readers of frames, the centre of
+/// mass and the centroidal momentum check it and fail with [`DynamicsError::KinematicsNotComputed`]
+/// (naming the call to make first) rather than return numbers of another state.
+///
+/// A plain enum, not a scalar: code generation traces the same sequence of calls, so the checks pass
+/// while tracing as they do at run time and add nothing to generated code.
+///
+/// | Call | Leaves |
+/// |---|---|
+/// | [`crate::forward_kinematics`]`(q, v)` | `Velocities` |
+/// | [`crate::forward_kinematics_acceleration`]`(q, v, qdd)`; [`crate::constraint_kinematics`]`(q, v)` (at `qdd = 0`) | `Accelerations` |
+/// | [`crate::kkt_forward_dynamics`], [`crate::constraints::constraint_violation`] | `Velocities` |
+/// | [`crate::embedding_map_in`], [`crate::constraints::complete_velocity`], [`crate::constraints::y1_condition`] | `Placements` |
+/// | [`crate::aba`], [`crate::rnea`], [`crate::nle`], [`crate::gravity`] and their `_ext` / `_with_gravity` forms, [`crate::crba`], [`crate::reduced_mass_matrix_in`], [`crate::mass_matrix_inverse`], [`crate::constraints::complete_configuration`], [`crate::constraints::completion_step`] | `None` |
+///
+/// [`crate::kinetic_energy`], [`crate::potential_energy`], [`crate::link_poses`] and the building blocks
+/// of [`crate::constraints`] read the workspace without checking; writes to its public fields by hand are
+/// not recorded.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum Sweep {
+    /// No world placements: a fresh workspace, or the last call left only parent placements (`crba`,
+    /// `mass_matrix_inverse`) or accelerations with gravity (`aba`, `rnea`, `nle`, `gravity`).
+    #[default]
+    None,
+    /// Each body's placement in its parent and in the world at the call's `q`; the velocities and
+    /// accelerations are not those of a `v` the caller gave (position-level constraint work zeroes them).
+    Placements,
+    /// Also each body's spatial velocity at the call's `v`.
+    Velocities,
+    /// Also each body's spatial acceleration without gravity at the call's `qdd` (`qdd = 0` for
+    /// [`crate::constraint_kinematics`]: the velocity-product accelerations).
+    Accelerations,
+}
+
+impl Sweep {
+    /// The call that leaves (at least) this state.
+    pub fn call(self) -> &'static str {
+        match self {
+            Sweep::None => "nothing",
+            Sweep::Placements | Sweep::Velocities => "forward_kinematics(q, v)",
+            Sweep::Accelerations => "forward_kinematics_acceleration(q, v, qdd)",
+        }
+    }
+}
+
+impl core::fmt::Display for Sweep {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(match self {
+            Sweep::None => "no world placements (it is new, or the last call was aba, rnea, nle, gravity, crba, mass_matrix_inverse, reduced_mass_matrix or a configuration completion)",
+            Sweep::Placements => "world placements but no velocities (the last call was position-level: embedding_map, complete_velocity, y1_condition)",
+            Sweep::Velocities => "placements and velocities but no accelerations without gravity (the last call was forward_kinematics, kkt_forward_dynamics or constraint_violation)",
+            Sweep::Accelerations => "placements, velocities and accelerations without gravity",
+        })
+    }
 }
 
 /// Scratch of the aggregate links: per group, its embedding maps and articulated-body quantities; for
@@ -86,6 +145,9 @@ pub struct Workspace<T: Real> {
     pub reduced_mass_matrix: DMatrix<T>,
     /// `M X` (scratch of the reduced mass matrix).
     pub(crate) mass_times_x: DMatrix<T>,
+    /// Which of `parent_placement`, `world_placement`, `velocity` and `acceleration` are valid, and for
+    /// which call (see [`Sweep`]).
+    pub(crate) sweep: Sweep,
 }
 
 impl<T: Real> Workspace<T> {
@@ -137,6 +199,7 @@ impl<T: Real> Workspace<T> {
             embedding: DMatrix::zeros(0, 0),
             reduced_mass_matrix: DMatrix::zeros(0, 0),
             mass_times_x: DMatrix::zeros(0, 0),
+            sweep: Sweep::None,
         }
     }
 
@@ -146,6 +209,25 @@ impl<T: Real> Workspace<T> {
             world_placement: &self.world_placement,
             velocity: &self.velocity,
             acceleration: &self.acceleration,
+        }
+    }
+
+    /// Which kinematics the workspace holds (see [`Sweep`]).
+    pub fn sweep(&self) -> Sweep {
+        self.sweep
+    }
+
+    /// Fails unless the workspace holds at least `needs`: `reader` is the function asking, named in the
+    /// error with the call to make first.
+    pub(crate) fn require(&self, reader: &'static str, needs: Sweep) -> Result<(), DynamicsError> {
+        if self.sweep >= needs {
+            Ok(())
+        } else {
+            Err(DynamicsError::KinematicsNotComputed {
+                reader,
+                needs,
+                holds: self.sweep,
+            })
         }
     }
 

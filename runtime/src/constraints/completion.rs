@@ -9,7 +9,7 @@ use super::embedding::{fill_y1, group_rows, member, y1_condition_of};
 use super::{embed, jacobian, relative_residual, residuals_scaled};
 use crate::algorithms::{
     check_configuration, check_input, constraint_kinematics, position_kinematics, DynamicsError,
-    Workspace,
+    Sweep, Workspace,
 };
 #[allow(unused_imports)]
 use crate::alloc_prelude::*;
@@ -61,6 +61,8 @@ pub fn constraint_violation<T: Real>(
         }
         vel = max_nan(vel, relative_residual(sum, magnitude).to_f64());
     }
+    // Accelerations at qdd = 0, a qdd the caller never gave.
+    ws.sweep = Sweep::Velocities;
     Ok((pos, vel))
 }
 
@@ -198,6 +200,8 @@ fn newton_step<T: Real>(
         for (d, &b) in g.dependent.iter().enumerate() {
             q[model.joints[b].q_index] += gw.col[d] * limit;
         }
+        // The placements are those of `q` before the step.
+        ws.sweep = Sweep::None;
     }
     Ok(worst)
 }
