@@ -98,10 +98,12 @@ pub(crate) fn subtract_wrenches<T: Real>(
 ///     .unwrap();
 /// let model = b.build().unwrap();
 /// let mut ws = Workspace::new(&model);
-/// // Hanging straight down, a hand pushes the bob along y with 2 N: a moment of 0.5 × 2 N·m about x.
-/// let push = LinkWrench::new(model.frame("bob").unwrap(), Vector3::new(0.0, 2.0, 0.0), Vector3::zeros());
+/// // Hanging straight down, a hand pushes the bob (0.5 m below the link's origin, the pivot) along y with
+/// // 2 N: about the link origin that is 2 N and a moment r × f = (0, 0, −0.5) × (0, 2, 0) = (1, 0, 0) N·m.
+/// let bob = model.frame("bob").unwrap();
+/// let push = LinkWrench::new(bob, Vector3::new(0.0, 2.0, 0.0), Vector3::new(1.0, 0.0, 0.0));
 /// let qdd = aba_ext(&model, &mut ws, &[0.0], &[0.0], &[0.0], &[push]).unwrap();
-/// assert!((qdd[0] - 0.5 * 2.0 / (0.25 + 1e-3)).abs() < 1e-12);
+/// assert!((qdd[0] - 1.0 / (0.25 + 1e-3)).abs() < 1e-12);
 /// ```
 pub fn aba_ext<'w, T: Real>(
     model: &Model<T>,
