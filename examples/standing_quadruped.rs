@@ -310,24 +310,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     );
     assert_eq!(allocations, 0, "the loop allocated");
     assert!(worst < 0.05 && slip < 0.01, "the robot did not stand");
-    // The generated accelerations against the interpreted solver at the last state.
-    let mut ws = Workspace::new(&model);
-    let wrenches: Vec<_> = feet
-        .iter()
-        .zip(&f_ext)
-        .map(|(f, w)| {
-            LinkWrench::new(
-                model.frame(f).expect("foot"),
-                Vector3::new(w[0], w[1], w[2]),
-                Vector3::new(w[3], w[4], w[5]),
-            )
-        })
-        .collect();
-    let interpreted = aba_ext(&model, &mut ws, &q, &v, &tau, &wrenches)?.to_vec();
     gen::aba_ext(&q, &v, &tau, &f_ext, &mut qdd);
-    let error = relative_error(&qdd, &interpreted);
-    println!("  generated vs interpreted aba_ext at the last state: {error:.1e}");
-    assert!(error < 1e-12);
+    against_interpreted(&model, &feet, &f_ext, (&q, &v, &tau), &qdd, 1e-12)?;
 
     closed_loop_knees(&ground)
 }
@@ -459,10 +443,23 @@ fn closed_loop_knees(ground: &Ground) -> Result<(), Box<dyn std::error::Error>> 
     );
     assert_eq!(allocations, 0, "the loop allocated");
     assert!(worst < 0.05 && slip < 0.01, "the robot did not stand");
-    let mut ws = Workspace::new(&model);
+    let _ = gen::aba_ext(&q, &v, &tau, &f_ext, &mut qdd);
+    against_interpreted(&model, &feet, &f_ext, (&q, &v, &tau), &qdd, 1e-10)
+}
+
+/// The generated accelerations `qdd` at the last state `(q, v, tau)` with the feet's `f_ext` rows against
+/// the interpreted solver's `aba_ext`, to `tolerance`.
+fn against_interpreted(
+    model: &Model<f64>,
+    feet: &[&str],
+    f_ext: &[[f64; 6]],
+    (q, v, tau): (&[f64], &[f64], &[f64]),
+    qdd: &[f64],
+    tolerance: f64,
+) -> Result<(), Box<dyn std::error::Error>> {
     let wrenches: Vec<_> = feet
         .iter()
-        .zip(&f_ext)
+        .zip(f_ext)
         .map(|(f, w)| {
             LinkWrench::new(
                 model.frame(f).expect("foot"),
@@ -471,10 +468,10 @@ fn closed_loop_knees(ground: &Ground) -> Result<(), Box<dyn std::error::Error>> 
             )
         })
         .collect();
-    let interpreted = aba_ext(&model, &mut ws, &q, &v, &tau, &wrenches)?.to_vec();
-    let _ = gen::aba_ext(&q, &v, &tau, &f_ext, &mut qdd);
-    let error = relative_error(&qdd, &interpreted);
+    let mut ws = Workspace::new(model);
+    let interpreted = aba_ext(model, &mut ws, q, v, tau, &wrenches)?;
+    let error = relative_error(qdd, interpreted);
     println!("  generated vs interpreted aba_ext at the last state: {error:.1e}");
-    assert!(error < 1e-10);
+    assert!(error < tolerance);
     Ok(())
 }
