@@ -53,6 +53,9 @@ def main():
     if plain and ext:
         lines += ["", f"Generated `aba_ext` with four foot wrenches takes {ext / plain:.2f}× the time of the generated "
                   "`aba` (target ≤ 1.2×): each wrench is 18 operations on its body's bias force, links without one cost nothing."]
+    lines += ["", "Run to run on this shared machine (2026-12-02, four sessions): foot Jacobian + J̇v 0.06–0.07×, "
+              "`aba_ext`/`aba` 1.02–1.17×, A_g 0.28–0.46× `ccrba`; the generated functions' own times move by up to "
+              "30 % between builds (code layout, see \"Readable generated code\" above)."]
     lines += ["", "A_g is not yet at issue 11's 0.25× of `ccrba`. Splitting Ȧ_g v into `centroidal_bias` "
               "(1.93 → 0.67 µs), composite inertias in each body's frame (the CRBA's, where the joint placements keep "
               "the transforms sparse) and one com-centred transform per column (1,958 operations) got it here; "
