@@ -3,10 +3,12 @@
 //! Each file beside this one is a module of it rather than a binary of its own: every test binary links
 //! the whole of embedyn and instantiates its generic solver for its scalars again, so fifteen binaries
 //! cost fifteen links and fifteen copies of the same optimized code, and `cargo test` runs binaries one
-//! after another where the tests of one binary run in parallel. Three stay apart, for reasons of their own:
+//! after another where the tests of one binary run in parallel. Four stay apart, for reasons of their own:
 //! `no_allocation` (its counting global allocator must see no other test's allocations), `hostile_names`
-//! (`#![deny(warnings)]` over the whole crate the macro expands into) and `ui` (trybuild compiles crates
-//! of its own). `autotests = false` in Cargo.toml lists the binaries.
+//! (`#![deny(warnings)]` over the whole crate the macro expands into), `ui` (trybuild compiles crates
+//! of its own) and `generated_code` (tests/generated_code.rs: the modules that are mostly `robot!`
+//! expansions, so that rustc compiles the two halves of the generated code at once on two cores).
+//! `autotests = false` in Cargo.toml lists the binaries.
 
 mod common;
 
@@ -22,11 +24,8 @@ mod energy;
 mod extremes;
 mod fuzz_corpus;
 mod fuzz_findings;
-mod generated;
-mod generated_chain;
 mod generated_contact;
 mod gravity_nle;
-mod limits;
 mod loop_simulation;
 mod model_scale;
 mod pinocchio_reference;
