@@ -12,11 +12,10 @@ use embedyn_codegen::{Loaded, ModelOptions};
 use embedyn_runtime::constraints::{constraint_violation, singularity_threshold};
 use embedyn_runtime::nalgebra::{DMatrix, Matrix3xX, Matrix6xX, Vector3};
 use embedyn_runtime::{
-    aba, aba_ext, center_of_mass, centroidal_momentum, centroidal_momentum_matrix, com_jacobian,
-    crba, difference, embedding_map, forward_kinematics, forward_kinematics_acceleration,
-    frame_classical_acceleration, frame_jacobian, gravity, integrate, nle, nle_ext,
-    reduced_mass_matrix, rnea, rnea_ext, DynamicsError, FrameId, JointType, LinkWrench, Model,
-    Real, Workspace,
+    aba_ext, center_of_mass, centroidal_momentum, centroidal_momentum_matrix, com_jacobian, crba,
+    difference, embedding_map, forward_kinematics, forward_kinematics_acceleration,
+    frame_classical_acceleration, frame_jacobian, gravity, integrate, nle_ext, reduced_mass_matrix,
+    rnea_ext, DynamicsError, FrameId, JointType, LinkWrench, Model, Real, Workspace,
 };
 use serde::Serialize;
 use std::ops::Range;
@@ -585,7 +584,7 @@ fn generated_outputs(
             None => embedding_f64(model, &mut ws, q, i),
         }
     };
-    let independent = independent_indices(model);
+    let independent: Vec<usize> = model.independent_coordinates().collect();
     let mut out = Vec::with_capacity(outputs.len());
     for (i, (o, row)) in outputs.iter().zip(rows).enumerate() {
         let mut o = o.clone();
@@ -745,18 +744,6 @@ fn fits<T: Real>(name: &'static str, x: &[f64], sample: usize) -> Result<(), Cli
     Ok(())
 }
 
-/// v indices of the independent joints, in joint order.
-pub(super) fn independent_indices<T: Real>(model: &Model<T>) -> Vec<usize> {
-    model
-        .independent_joints()
-        .iter()
-        .flat_map(|&j| {
-            let joint = &model.joints[j];
-            joint.v_index..joint.v_index + joint.nv()
-        })
-        .collect()
-}
-
 fn eval_in<T: Real>(
     model: &Model<T>,
     query: &Query,
@@ -764,7 +751,7 @@ fn eval_in<T: Real>(
     samples: &Samples,
 ) -> Result<Evaluated, CliError> {
     let mut ws = Workspace::new(model);
-    let independent = independent_indices(model);
+    let independent: Vec<usize> = model.independent_coordinates().collect();
     let pick = |x: &[f64]| -> Vec<f64> { independent.iter().map(|&i| x[i]).collect() };
     let frames: Vec<FrameId> = model.frames().collect();
     let mut out = Vec::with_capacity(samples.len());
@@ -792,10 +779,8 @@ fn eval_in<T: Real>(
                 let v = v()?;
                 let tau = cast::<T>(samples.vector(i, "tau")?);
                 let f_ext = wrenches(model, &frames, samples.wrenches(i)?, i)?;
-                let qdd = match f_ext.is_empty() {
-                    true => aba(model, &mut ws, &q, &v, &tau),
-                    false => aba_ext(model, &mut ws, &q, &v, &tau, &f_ext),
-                };
+                // (Without wrenches `aba_ext` is `aba`.)
+                let qdd = aba_ext(model, &mut ws, &q, &v, &tau, &f_ext);
                 let qdd = finite(qdd.map_err(at)?, i, "qdd")?;
                 Output::Aba {
                     qdd_independent: pick(&qdd),
@@ -810,15 +795,9 @@ fn eval_in<T: Real>(
                 let tau = match a {
                     Algo::Rnea => {
                         let qdd = cast::<T>(samples.vector(i, "qdd")?);
-                        match f_ext.is_empty() {
-                            true => rnea(model, &mut ws, &q, &v()?, &qdd),
-                            false => rnea_ext(model, &mut ws, &q, &v()?, &qdd, &f_ext),
-                        }
+                        rnea_ext(model, &mut ws, &q, &v()?, &qdd, &f_ext)
                     }
-                    Algo::Nle => match f_ext.is_empty() {
-                        true => nle(model, &mut ws, &q, &v()?),
-                        false => nle_ext(model, &mut ws, &q, &v()?, &f_ext),
-                    },
+                    Algo::Nle => nle_ext(model, &mut ws, &q, &v()?, &f_ext),
                     Algo::Gravity => gravity(model, &mut ws, &q),
                     other => return Err(not_evaluated(other)),
                 };

@@ -112,7 +112,7 @@ pub fn tradeoff(
         })
         .collect::<Result<_, CliError>>()?;
 
-    let independent = independent_v(&exact);
+    let independent: Vec<usize> = exact.independent_coordinates().collect();
     let mut variants = Vec::new();
     for ((rotors, model), (q_of, v_of)) in rotor_choices.into_iter().zip(&models).zip(&restrictions)
     {
@@ -240,18 +240,6 @@ fn measure_variant(
         });
     }
     Ok(variants)
-}
-
-/// The v indices of `model`'s independent coordinates, in joint order.
-fn independent_v(model: &Model<f64>) -> Vec<usize> {
-    model
-        .independent_joints()
-        .iter()
-        .flat_map(|&j| {
-            let joint = &model.joints[j];
-            joint.v_index..joint.v_index + joint.nv()
-        })
-        .collect()
 }
 
 /// For each q and v entry of `variant`, the index of the same coordinate in `exact` (joints matched by

@@ -676,6 +676,16 @@ impl<T: Real> Model<T> {
             .collect()
     }
 
+    /// The `v` indices of the independent coordinates, in joint order (`v_independent[k] =
+    /// v[independent_coordinates()[k]]` for a `v` on the velocity constraints). Never allocates.
+    pub fn independent_coordinates(&self) -> impl Iterator<Item = usize> + '_ {
+        self.joints
+            .iter()
+            .enumerate()
+            .filter(|&(j, _)| self.is_independent(j))
+            .flat_map(|(_, joint)| joint.v_index..joint.v_index + joint.nv())
+    }
+
     /// Number of independent velocity coordinates.
     pub fn independent_nv(&self) -> usize {
         (0..self.joints.len())

@@ -49,13 +49,27 @@ pub fn aba<'w, T: Real>(
     v: &[T],
     tau: &[T],
 ) -> Result<&'w [T], DynamicsError> {
+    forward_dynamics(model, ws, q, v, tau, &[])
+}
+
+/// [`aba`] and [`super::aba_ext`]: the inputs checked, then the sweeps of Eq. 9 (with the aggregate links
+/// of a model with constraints), the wrenches `f_ext` in the bias forces.
+pub(crate) fn forward_dynamics<'w, T: Real>(
+    model: &Model<T>,
+    ws: &'w mut Workspace<T>,
+    q: &[T],
+    v: &[T],
+    tau: &[T],
+    f_ext: &[super::LinkWrench<T>],
+) -> Result<&'w [T], DynamicsError> {
     check_configuration(model, q)?;
     check_input("v", v, model.nv())?;
     check_input("tau", tau, model.nv())?;
+    super::wrenches::check_wrenches(model, f_ext)?;
     if model.has_constraints() {
-        return super::embedded::aba(model, ws, q, v, tau, &[]);
+        return super::embedded::aba(model, ws, q, v, tau, f_ext);
     }
-    articulate(model, ws, q, v, tau, &[]);
+    articulate(model, ws, q, v, tau, f_ext);
     for i in 0..model.nbodies() {
         forward_step(model, ws, i)?;
     }

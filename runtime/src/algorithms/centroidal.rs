@@ -51,7 +51,7 @@ pub fn center_of_mass<T: Real>(
         let inertia = &body.inertia;
         let v = &ws.velocity[i];
         mass += inertia.mass;
-        moment += x.rotation * inertia.first_moment + x.translation * inertia.mass;
+        moment += inertia.first_moment_in(x);
         // m × (velocity of the body's centre of mass) = m v + ω × h, in the body frame.
         momentum += x.rotation * (v.linear * inertia.mass + v.angular.cross(&inertia.first_moment));
     }
@@ -99,7 +99,7 @@ fn world_first_moments<T: Real>(model: &Model<T>, ws: &mut Workspace<T>) -> Spat
         let inertia = &body.inertia;
         ws.composite[i] = SpatialInertia {
             mass: inertia.mass,
-            first_moment: x.rotation * inertia.first_moment + x.translation * inertia.mass,
+            first_moment: inertia.first_moment_in(x),
             rotational: nalgebra::Matrix3::zeros(),
         };
     }
@@ -175,10 +175,7 @@ pub fn centroidal_momentum_matrix<T: Real>(
         for k in 0..joint.nv() {
             let local = ws.composite[i].mul_motion(&joint.subspace_column(k));
             let f = about_com.act_force(&local);
-            for r in 0..3 {
-                a_g[(r, joint.v_index + k)] = f.linear[r];
-                a_g[(r + 3, joint.v_index + k)] = f.angular[r];
-            }
+            super::frames::write_column(a_g, joint.v_index + k, &f.linear, &f.angular);
         }
     }
     Ok(com)
@@ -261,7 +258,7 @@ fn com_of<T: Real>(model: &Model<T>, ws: &Workspace<T>) -> Vector3<T> {
     for (i, body) in model.bodies.iter().enumerate() {
         let x = &ws.world_placement[i];
         mass += body.inertia.mass;
-        moment += x.rotation * body.inertia.first_moment + x.translation * body.inertia.mass;
+        moment += body.inertia.first_moment_in(x);
     }
     moment * inverse_mass(mass)
 }

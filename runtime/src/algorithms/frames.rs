@@ -16,7 +16,7 @@ use crate::alloc_prelude::*;
 use crate::model::{FrameId, Model};
 use crate::spatial::{Motion, Transform};
 use crate::Real;
-use nalgebra::Matrix6xX;
+use nalgebra::{Matrix6xX, Vector3};
 
 /// Where a frame quantity is expressed (Pinocchio's `ReferenceFrame`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
@@ -81,17 +81,12 @@ pub fn forward_kinematics_acceleration<T: Real>(
     Ok(())
 }
 
-/// The frame's body pose in the world and the frame's pose in the body (`None` for a link fixed to the
-/// world, whose pose in the world is the second).
-fn frame_parts<'a, T: Real>(
-    model: &'a Model<T>,
-    ws: &'a Workspace<T>,
-    frame: FrameId,
-) -> Result<(Option<&'a Transform<T>>, &'a Transform<T>), DynamicsError> {
-    let in_body = model
+/// The frame's pose in its body (in the world for a link fixed to the world, `frame.body == None`); an
+/// error for a frame of another model.
+fn in_body<T: Real>(model: &Model<T>, frame: FrameId) -> Result<&Transform<T>, DynamicsError> {
+    model
         .frame_in_body(frame)
-        .ok_or(DynamicsError::UnknownFrame { index: 0, frame })?;
-    Ok((frame.body.map(|b| &ws.world_placement[b]), in_body))
+        .ok_or(DynamicsError::UnknownFrame { index: 0, frame })
 }
 
 /// The world pose of a frame, from the last forward kinematics.
@@ -106,9 +101,10 @@ pub fn frame_placement<T: Real>(
     frame: FrameId,
 ) -> Result<Transform<T>, DynamicsError> {
     ws.require("frame_placement", Sweep::Placements)?;
-    Ok(match frame_parts(model, ws, frame)? {
-        (Some(body), in_body) => body.compose(in_body),
-        (None, in_world) => *in_world,
+    let in_body = in_body(model, frame)?;
+    Ok(match frame.body {
+        Some(b) => ws.world_placement[b].compose(in_body),
+        None => *in_body,
     })
 }
 
@@ -144,14 +140,10 @@ pub fn frame_velocity<T: Real>(
     reference: Reference,
 ) -> Result<Motion<T>, DynamicsError> {
     ws.require("frame_velocity", Sweep::Velocities)?;
-    Ok(match frame_parts(model, ws, frame)? {
-        (Some(body), in_body) => express(
-            body,
-            in_body,
-            &ws.velocity[frame.body.unwrap_or(0)],
-            reference,
-        ),
-        (None, _) => Motion::zero(),
+    let in_body = in_body(model, frame)?;
+    Ok(match frame.body {
+        Some(b) => express(&ws.world_placement[b], in_body, &ws.velocity[b], reference),
+        None => Motion::zero(),
     })
 }
 
@@ -174,10 +166,11 @@ pub fn frame_classical_acceleration<T: Real>(
     reference: Reference,
 ) -> Result<Motion<T>, DynamicsError> {
     ws.require("frame_classical_acceleration", Sweep::Accelerations)?;
-    let (Some(body), in_body) = frame_parts(model, ws, frame)? else {
+    let in_body = in_body(model, frame)?;
+    let Some(b) = frame.body else {
         return Ok(Motion::zero());
     };
-    let b = frame.body.unwrap_or(0);
+    let body = &ws.world_placement[b];
     let vel = express(body, in_body, &ws.velocity[b], reference);
     let acc = express(body, in_body, &ws.acceleration[b], reference);
     Ok(Motion::new(
@@ -207,10 +200,11 @@ pub fn frame_jacobian<T: Real>(
     ws.require("frame_jacobian", Sweep::Placements)?;
     super::check_len("jacobian columns", jacobian.ncols(), model.nv())?;
     jacobian.fill(T::zero());
-    let (Some(body), in_body) = frame_parts(model, ws, frame)? else {
+    let in_body = in_body(model, frame)?;
+    let Some(b) = frame.body else {
         return Ok(());
     };
-    let world = body.compose(in_body);
+    let world = ws.world_placement[b].compose(in_body);
     let origin = world.translation;
     let mut next = frame.body;
     while let Some(i) = next {
@@ -226,17 +220,22 @@ pub fn frame_jacobian<T: Real>(
                 }
                 Reference::Local => world.inv_act_motion(&s),
             };
-            write_column(jacobian, joint.v_index + k, &col);
+            write_column(jacobian, joint.v_index + k, &col.linear, &col.angular);
         }
         next = joint.parent;
     }
     Ok(())
 }
 
-/// Writes a motion as a Jacobian column, linear rows first.
-fn write_column<T: Real>(jacobian: &mut Matrix6xX<T>, c: usize, m: &Motion<T>) {
+/// Writes a six-vector as column `c` of a 6 × nv matrix, linear rows first (the layout of Jacobians and `A_g`).
+pub(super) fn write_column<T: Real>(
+    matrix: &mut Matrix6xX<T>,
+    c: usize,
+    linear: &Vector3<T>,
+    angular: &Vector3<T>,
+) {
     for r in 0..3 {
-        jacobian[(r, c)] = m.linear[r];
-        jacobian[(r + 3, c)] = m.angular[r];
+        matrix[(r, c)] = linear[r];
+        matrix[(r + 3, c)] = angular[r];
     }
 }

@@ -70,7 +70,7 @@ pub fn potential_energy<T: Real>(model: &Model<T>, ws: &Workspace<T>) -> T {
         .iter()
         .zip(&ws.world_placement)
         .fold(T::zero(), |e, (b, x)| {
-            let mc = x.rotation * b.inertia.first_moment + x.translation * b.inertia.mass;
+            let mc = b.inertia.first_moment_in(x);
             e - model.gravity.dot(&mc)
         })
 }

@@ -51,10 +51,27 @@ pub fn rnea_with_gravity<'w, T: Real>(
     qdd: &[T],
     gravity: bool,
 ) -> Result<&'w [T], DynamicsError> {
+    inverse_dynamics(model, ws, q, v, Some(qdd), gravity, &[])
+}
+
+/// [`rnea_with_gravity`], [`nle`] and their forms with wrenches ([`super::rnea_ext`],
+/// [`super::nle_ext`]): the inputs checked (`qdd` where given), then [`rnea_terms`].
+pub(crate) fn inverse_dynamics<'w, T: Real>(
+    model: &Model<T>,
+    ws: &'w mut Workspace<T>,
+    q: &[T],
+    v: &[T],
+    qdd: Option<&[T]>,
+    gravity: bool,
+    f_ext: &[super::LinkWrench<T>],
+) -> Result<&'w [T], DynamicsError> {
     check_configuration(model, q)?;
     check_input("v", v, model.nv())?;
-    check_input("qdd", qdd, model.nv())?;
-    Ok(rnea_terms(model, ws, q, v, Some(qdd), gravity, &[]))
+    if let Some(qdd) = qdd {
+        check_input("qdd", qdd, model.nv())?;
+    }
+    super::wrenches::check_wrenches(model, f_ext)?;
+    Ok(rnea_terms(model, ws, q, v, qdd, gravity, f_ext))
 }
 
 /// The generalized gravity `g(q)`: the joint forces that hold the model still at `q` against the
@@ -127,7 +144,7 @@ pub fn gravity<'w, T: Real>(
         }
         if let Some(p) = joint.parent {
             let x = &ws.parent_placement[i];
-            let h = x.rotation * c.first_moment + x.translation * c.mass;
+            let h = c.first_moment_in(x);
             ws.composite[p].mass += c.mass;
             ws.composite[p].first_moment += h;
         }
@@ -168,16 +185,14 @@ pub fn nle<'w, T: Real>(
     q: &[T],
     v: &[T],
 ) -> Result<&'w [T], DynamicsError> {
-    check_configuration(model, q)?;
-    check_input("v", v, model.nv())?;
-    Ok(rnea_terms(model, ws, q, v, None, true, &[]))
+    inverse_dynamics(model, ws, q, v, None, true, &[])
 }
 
 /// The Newton–Euler sweeps; without `qdd` its terms are left out rather than multiplied by zero (no
 /// joint accelerations, no armature). The environment's wrenches `f_ext` take their part of each body's
 /// force. Inputs are checked by the caller.
 #[inline(always)]
-pub(crate) fn rnea_terms<'w, T: Real>(
+fn rnea_terms<'w, T: Real>(
     model: &Model<T>,
     ws: &'w mut Workspace<T>,
     q: &[T],

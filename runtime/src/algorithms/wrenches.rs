@@ -7,8 +7,7 @@
 //! bias force; nothing else changes, so the call costs a few operations per wrench over the plain one,
 //! and in generated code a link without a wrench costs nothing.
 
-use super::aba::{articulate, forward_step};
-use super::{check_configuration, check_input, DynamicsError, Workspace};
+use super::{DynamicsError, Workspace};
 #[allow(unused_imports)]
 use crate::alloc_prelude::*;
 use crate::model::{FrameId, Model};
@@ -113,18 +112,7 @@ pub fn aba_ext<'w, T: Real>(
     tau: &[T],
     f_ext: &[LinkWrench<T>],
 ) -> Result<&'w [T], DynamicsError> {
-    check_configuration(model, q)?;
-    check_input("v", v, model.nv())?;
-    check_input("tau", tau, model.nv())?;
-    check_wrenches(model, f_ext)?;
-    if model.has_constraints() {
-        return super::embedded::aba(model, ws, q, v, tau, f_ext);
-    }
-    articulate(model, ws, q, v, tau, f_ext);
-    for i in 0..model.nbodies() {
-        forward_step(model, ws, i)?;
-    }
-    Ok(&ws.qdd)
+    super::aba::forward_dynamics(model, ws, q, v, tau, f_ext)
 }
 
 /// Inverse dynamics with external wrenches: `τ = M qdd + C(q, v) + g(q) − Σ Jᵀ f` (Pinocchio's `rnea`
@@ -137,19 +125,7 @@ pub fn rnea_ext<'w, T: Real>(
     qdd: &[T],
     f_ext: &[LinkWrench<T>],
 ) -> Result<&'w [T], DynamicsError> {
-    check_configuration(model, q)?;
-    check_input("v", v, model.nv())?;
-    check_input("qdd", qdd, model.nv())?;
-    check_wrenches(model, f_ext)?;
-    Ok(super::rnea::rnea_terms(
-        model,
-        ws,
-        q,
-        v,
-        Some(qdd),
-        true,
-        f_ext,
-    ))
+    super::rnea::inverse_dynamics(model, ws, q, v, Some(qdd), true, f_ext)
 }
 
 /// The nonlinear effects with external wrenches, `C(q, v) v + g(q) − Σ Jᵀ f` ([`rnea_ext`] at `qdd = 0`).
@@ -161,8 +137,5 @@ pub fn nle_ext<'w, T: Real>(
     v: &[T],
     f_ext: &[LinkWrench<T>],
 ) -> Result<&'w [T], DynamicsError> {
-    check_configuration(model, q)?;
-    check_input("v", v, model.nv())?;
-    check_wrenches(model, f_ext)?;
-    Ok(super::rnea::rnea_terms(model, ws, q, v, None, true, f_ext))
+    super::rnea::inverse_dynamics(model, ws, q, v, None, true, f_ext)
 }

@@ -66,6 +66,14 @@ impl<T: Real> SpatialInertia<T> {
         )
     }
 
+    /// The first moment `m c` in the parent frame of `x`, about its origin (the body frame being `x`'s child
+    /// frame): [`SpatialInertia::act`]'s first moment alone — what centre-of-mass sums and the weight of a
+    /// subtree need.
+    #[inline(always)]
+    pub fn first_moment_in(&self, x: &Transform<T>) -> Vector3<T> {
+        x.rotation * self.first_moment + x.translation * self.mass
+    }
+
     /// The same inertia expressed in the parent frame of `x` (the body frame being `x`'s child frame).
     pub fn act(&self, x: &Transform<T>) -> SpatialInertia<T> {
         let r = &x.rotation;
