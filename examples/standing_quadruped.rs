@@ -270,7 +270,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut f_ext = [[0.0; 6]; 4];
     let mut anchors = [None; 4];
     let start_feet = feet_xy(&q, &v, &foot_functions);
-    let (mut slip, mut lowest) = (0.0f64, 0.0f64);
+    let mut lowest = 0.0f64;
     let before = ALLOCATIONS.load(Ordering::Relaxed);
     let start = Instant::now();
     for _ in 0..STEPS {
@@ -293,12 +293,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
     let elapsed = start.elapsed();
     let allocations = ALLOCATIONS.load(Ordering::Relaxed) - before;
-    for (a, b) in start_feet.iter().zip(feet_xy(&q, &v, &foot_functions)) {
-        slip = slip.max(((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2)).sqrt());
-    }
-    let worst = actuated
-        .iter()
-        .fold(0.0f64, |m, &(iq, _)| m.max((q[iq] - q_ref[iq]).abs()));
+    let (slip, worst) = settled(
+        &start_feet,
+        &feet_xy(&q, &v, &foot_functions),
+        (&q, &q_ref),
+        &actuated,
+    );
     println!(
         "  1 s at {} kHz: {:.2} µs per step (4 × frame_<foot> + aba_ext + integrate), {allocations} allocations;\n  \
          joints back within {worst:.1e} rad of the pose, base at {:.4} m, deepest foot {:.1} mm, foot slip ≤ {:.1} mm",
@@ -327,6 +327,23 @@ fn feet_xy<const NQ: usize, const NV: usize>(
         foot(q, v, &mut pose, &mut jacobian, &mut bias);
         [pose[9], pose[10]]
     })
+}
+
+/// How far the feet slid (m) and the actuated joints `(q index, v index)` ended from the pose (rad).
+fn settled(
+    start_feet: &[[f64; 2]; 4],
+    end_feet: &[[f64; 2]; 4],
+    (q, q_ref): (&[f64], &[f64]),
+    actuated: &[(usize, usize)],
+) -> (f64, f64) {
+    let slip = start_feet
+        .iter()
+        .zip(end_feet)
+        .fold(0.0f64, |m, (a, b)| m.max((a[0] - b[0]).hypot(a[1] - b[1])));
+    let worst = actuated
+        .iter()
+        .fold(0.0f64, |m, &(iq, _)| m.max((q[iq] - q_ref[iq]).abs()));
+    (slip, worst)
 }
 
 /// The same with four-bar knees: the state lives on the loop constraints, so each step integrates all
@@ -360,14 +377,9 @@ fn closed_loop_knees(ground: &Ground) -> Result<(), Box<dyn std::error::Error>> 
         (qi::HR_HIP_FLEXION, vi::HR_HIP_FLEXION),
         (qi::HR_KNEE_CRANK_JOINT, vi::HR_KNEE_CRANK_JOINT),
     ];
-    // The independent velocities: the base's six, then the actuated joints (INDEPENDENT's order).
-    let mut independent = [0usize; NI];
-    for (k, slot) in independent.iter_mut().take(6).enumerate() {
-        *slot = vi::FLOATING_BASE + k;
-    }
-    for (k, &(_, iv)) in actuated.iter().enumerate() {
-        independent[6 + k] = iv;
-    }
+    // The independent velocities (the base's six, then the actuated joints), the columns of X.
+    let independent: Vec<usize> = model.independent_coordinates().collect();
+    assert_eq!(independent.len(), NI);
     let foot_functions: [FrameFn<NQ, NV>; 4] = [
         gen::frame_fl_foot,
         gen::frame_fr_foot,
@@ -393,7 +405,7 @@ fn closed_loop_knees(ground: &Ground) -> Result<(), Box<dyn std::error::Error>> 
     let mut f_ext = [[0.0; 6]; 4];
     let mut anchors = [None; 4];
     let start_feet = feet_xy(&q, &v, &foot_functions);
-    let (mut worst_cond, mut worst_residual, mut slip) = (0.0f64, 0.0f64, 0.0f64);
+    let (mut worst_cond, mut worst_residual) = (0.0f64, 0.0f64);
     let before = ALLOCATIONS.load(Ordering::Relaxed);
     let start = Instant::now();
     for _ in 0..STEPS {
@@ -426,12 +438,12 @@ fn closed_loop_knees(ground: &Ground) -> Result<(), Box<dyn std::error::Error>> 
     }
     let elapsed = start.elapsed();
     let allocations = ALLOCATIONS.load(Ordering::Relaxed) - before;
-    for (a, b) in start_feet.iter().zip(feet_xy(&q, &v, &foot_functions)) {
-        slip = slip.max(((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2)).sqrt());
-    }
-    let worst = actuated
-        .iter()
-        .fold(0.0f64, |m, &(iq, _)| m.max((q[iq] - q_ref[iq]).abs()));
+    let (slip, worst) = settled(
+        &start_feet,
+        &feet_xy(&q, &v, &foot_functions),
+        (&q, &q_ref),
+        &actuated,
+    );
     println!(
         "  1 s at {} kHz: {:.2} µs per step (4 × frame_<foot> + aba_ext + integrate + complete + embedding), \
          {allocations} allocations;\n  loops closed to {worst_residual:.1e}, cond(Y1) ≤ {worst_cond:.1}; \

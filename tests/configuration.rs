@@ -4,7 +4,7 @@
 //! of every body's pose along integrate(q, ε v) against the body velocities of forward kinematics.
 
 use crate::common::{self, load_model, Rng};
-use crate::pinocchio_reference::coordinate_maps;
+use crate::pinocchio_reference::{coordinate_maps, vecf};
 use embedyn::random::SplitMix64;
 use embedyn::{
     difference, forward_kinematics, integrate, random_configuration, JointType, Model, Workspace,
@@ -28,14 +28,6 @@ mod ur5 {
 }
 
 const TOL: f64 = 1e-9;
-
-fn vecf(v: &Value) -> Vec<f64> {
-    v.as_array()
-        .unwrap()
-        .iter()
-        .map(|x| x.as_f64().unwrap())
-        .collect()
-}
 
 /// The largest difference of two configurations, each floating joint's quaternion up to its sign,
 /// relative as docs/conventions.md defines it.

@@ -5,8 +5,8 @@
 //! accelerations in the three references; com, vcom, J_com, A_g, h_g and Ȧ_g v.
 
 use crate::common::load_model;
-use crate::pinocchio_reference::{coordinate_maps, reference};
-use embedyn::nalgebra::{Matrix3xX, Matrix6xX, Vector3};
+use crate::pinocchio_reference::{coordinate_maps, reference, vecf};
+use embedyn::nalgebra::{Const, Dyn, Matrix3xX, Matrix6xX, OMatrix, Vector3};
 use embedyn::{
     aba_ext, center_of_mass, centroidal_momentum, centroidal_momentum_matrix,
     centroidal_momentum_rate, com_jacobian, forward_kinematics, forward_kinematics_acceleration,
@@ -31,14 +31,6 @@ pub const ROBOTS: [(&str, &str, bool); 3] = [
         true,
     ),
 ];
-
-pub fn vecf(v: &Value) -> Vec<f64> {
-    v.as_array()
-        .unwrap()
-        .iter()
-        .map(|x| x.as_f64().unwrap())
-        .collect()
-}
 
 pub fn rows(v: &Value) -> Vec<Vec<f64>> {
     v.as_array().unwrap().iter().map(vecf).collect()
@@ -113,14 +105,16 @@ impl Contact {
     }
 }
 
-fn row_major6(j: &Matrix6xX<f64>) -> Vec<f64> {
-    (0..6)
-        .flat_map(|r| (0..j.ncols()).map(move |c| j[(r, c)]))
+/// An `R × nv` matrix (a Jacobian, `A_g`, `J_com`) row-major, as the reference files write matrices.
+pub fn row_major<const R: usize>(m: &OMatrix<f64, Const<R>, Dyn>) -> Vec<f64> {
+    (0..R)
+        .flat_map(|r| (0..m.ncols()).map(move |c| m[(r, c)]))
         .collect()
 }
 
-fn linear_angular(m: &embedyn::Motion<f64>) -> Vec<f64> {
-    m.linear.iter().chain(m.angular.iter()).copied().collect()
+/// A six-vector as the reference files write it: linear, then angular.
+pub fn linear_angular(linear: &Vector3<f64>, angular: &Vector3<f64>) -> Vec<f64> {
+    linear.iter().chain(angular.iter()).copied().collect()
 }
 
 /// `aba`, `rnea` and `nle` with wrenches on feet, flanges, body links and a link fixed to the world.
@@ -192,17 +186,17 @@ fn frame_kinematics_match_pinocchio() {
                 for (key, reference) in references {
                     let want = &f[key];
                     frame_jacobian(model, &ws, frame, reference, &mut j).unwrap();
-                    let e = relative_error(&row_major6(&j), &r.columns(&want["J"]));
+                    let e = relative_error(&row_major(&j), &r.columns(&want["J"]));
                     worst[1] = worst[1].max(e);
                     assert!(e < TOL, "{name} {link} {key}: J {e:e}");
                     let vel = frame_velocity(model, &ws, frame, reference).unwrap();
                     worst[2] = worst[2].max(relative_error(
-                        &linear_angular(&vel),
+                        &linear_angular(&vel.linear, &vel.angular),
                         &vecf(&want["velocity"]),
                     ));
                     let acc = frame_classical_acceleration(model, &ws, frame, reference).unwrap();
                     let e = relative_error(
-                        &linear_angular(&acc),
+                        &linear_angular(&acc.linear, &acc.angular),
                         &vecf(&want["classical_acceleration"]),
                     );
                     worst[3] = worst[3].max(e);
@@ -242,20 +236,16 @@ fn center_of_mass_and_centroidal_momentum_match_pinocchio() {
             worst[1] = worst[1].max(relative_error(c.vcom.as_slice(), &vecf(&s["vcom"])));
             let com = com_jacobian(model, &mut ws, &mut j_com).unwrap();
             worst[0] = worst[0].max(relative_error(com.as_slice(), &vecf(&s["com"])));
-            let ours: Vec<f64> = (0..3)
-                .flat_map(|i| (0..model.nv()).map(move |k| (i, k)))
-                .map(|(i, k)| j_com[(i, k)])
-                .collect();
-            worst[2] = worst[2].max(relative_error(&ours, &r.columns(&s["J_com"])));
+            worst[2] = worst[2].max(relative_error(&row_major(&j_com), &r.columns(&s["J_com"])));
             centroidal_momentum_matrix(model, &mut ws, &mut a_g).unwrap();
-            worst[3] = worst[3].max(relative_error(&row_major6(&a_g), &r.columns(&s["A_g"])));
+            worst[3] = worst[3].max(relative_error(&row_major(&a_g), &r.columns(&s["A_g"])));
             let h = centroidal_momentum(model, &mut ws).unwrap();
-            let h: Vec<f64> = h.linear.iter().chain(h.angular.iter()).copied().collect();
+            let h = linear_angular(&h.linear, &h.angular);
             worst[4] = worst[4].max(relative_error(&h, &vecf(&s["h_g"])));
             forward_kinematics_acceleration(model, &mut ws, &q, &v, &vec![0.0; model.nv()])
                 .unwrap();
             let dh = centroidal_momentum_rate(model, &mut ws).unwrap();
-            let dh: Vec<f64> = dh.linear.iter().chain(dh.angular.iter()).copied().collect();
+            let dh = linear_angular(&dh.linear, &dh.angular);
             worst[5] = worst[5].max(relative_error(&dh, &vecf(&s["dA_g_v"])));
         }
         println!(

@@ -116,14 +116,7 @@ fn jacobian_times_velocity_is_the_frame_velocity() {
                 worst = worst.max(e);
                 if let Some(x) = &x {
                     // The independent velocities of a consistent v: v = X v_R exactly on independent rows.
-                    let v_r: Vec<f64> = model
-                        .independent_joints()
-                        .iter()
-                        .flat_map(|&i| {
-                            let jt = &model.joints[i];
-                            v[jt.v_index..jt.v_index + jt.nv()].to_vec()
-                        })
-                        .collect();
+                    let v_r: Vec<f64> = model.independent_coordinates().map(|i| v[i]).collect();
                     let jxv = matrix6(&j) * x * DVector::from_column_slice(&v_r);
                     let e = relative_error(jxv.as_slice(), vel.as_slice());
                     assert!(e < 1e-10, "{}: J X v_R {e:e}", model.name);
@@ -284,14 +277,7 @@ fn center_of_mass_and_momentum_invariants() {
         worst[2] = worst[2].max(relative_error(agv.as_slice(), h_g.as_slice()));
         if model.has_constraints() {
             let x = embedding_map(&model, &mut Workspace::new(&model), &q).unwrap();
-            let v_r: Vec<f64> = model
-                .independent_joints()
-                .iter()
-                .flat_map(|&i| {
-                    let jt = &model.joints[i];
-                    v[jt.v_index..jt.v_index + jt.nv()].to_vec()
-                })
-                .collect();
+            let v_r: Vec<f64> = model.independent_coordinates().map(|i| v[i]).collect();
             let e = relative_error(
                 (matrix6(&a_g) * x * DVector::from_column_slice(&v_r)).as_slice(),
                 h_g.as_slice(),

@@ -8,7 +8,8 @@
 
 use crate::common::{load_model, Rng};
 use crate::constraint_embedding::consistent_state;
-use crate::contact::{vecf, Contact};
+use crate::contact::{linear_angular, row_major, Contact};
+use crate::pinocchio_reference::vecf;
 use embedyn::nalgebra::{Matrix3xX, Matrix6xX, Vector3};
 use embedyn::{
     aba, aba_ext, center_of_mass, centroidal_momentum, centroidal_momentum_matrix,
@@ -166,18 +167,6 @@ fn ur5_functions() -> Generated {
         frames: ["tool0" => frame_tool0, "wrist_3_link" => frame_wrist_3_link,
                  "forearm_link" => frame_forearm_link, "ee_link" => frame_ee_link,
                  "base_link" => frame_base_link])
-}
-
-fn row_major<const R: usize>(
-    m: &embedyn::nalgebra::OMatrix<f64, embedyn::nalgebra::Const<R>, embedyn::nalgebra::Dyn>,
-) -> Vec<f64> {
-    (0..R)
-        .flat_map(|r| (0..m.ncols()).map(move |c| m[(r, c)]))
-        .collect()
-}
-
-fn linear_angular(linear: &Vector3<f64>, angular: &Vector3<f64>) -> Vec<f64> {
-    linear.iter().chain(angular.iter()).copied().collect()
 }
 
 /// The wrenches of `rows` on `links`, as the interpreted solver takes them.

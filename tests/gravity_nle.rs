@@ -6,6 +6,7 @@
 
 use crate::common::{load_model, Rng};
 use crate::constraint_embedding::{consistent_state, LOOP_MODELS};
+use crate::pinocchio_reference::vecf;
 use embedyn::{embedding_map, gravity, nle, relative_error, rnea, Model, Workspace};
 use serde_json::Value;
 
@@ -49,14 +50,6 @@ generated! {
     solo12_floating: "tests/data/pinocchio/solo12_floating.urdf", floating;
     armature_arm: "tests/data/pinocchio/armature_arm.urdf";
     solo12_armature_floating: "tests/data/pinocchio/solo12_armature_floating.urdf", floating;
-}
-
-fn vecf(v: &Value) -> Vec<f64> {
-    v.as_array()
-        .unwrap()
-        .iter()
-        .map(|x| x.as_f64().unwrap())
-        .collect()
 }
 
 /// Both engines' `gravity` and `nle` against Pinocchio's on every sample of `tests/data/pinocchio/NAME.json`

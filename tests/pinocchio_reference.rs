@@ -10,7 +10,8 @@ use serde_json::Value;
 
 const TOL: f64 = 1e-9;
 
-fn vecf(v: &Value) -> Vec<f64> {
+/// A JSON array of numbers (the reference files' vectors).
+pub fn vecf(v: &Value) -> Vec<f64> {
     v.as_array()
         .unwrap()
         .iter()
