@@ -2,17 +2,25 @@
 # Issue 11's speed targets in one session: Pinocchio 4.1 (frame Jacobian + classical acceleration, centre of
 # mass Jacobian, ccrba, dccrba, aba with four foot wrenches) and embedyn's generated code (benches/contact.rs)
 # on the floating ANYmal B, then the table "Contacts, frames and momentum" in BENCHMARKS.md
-# (bench/contact_table.py). Usage: bench/contact.sh
+# (bench/contact_table.py). Each side runs from COPIES fresh copies of its binary (default 5) and the table
+# gives the medians: see bench/placement.py for why. Usage: bench/contact.sh [COPIES]
 set -euo pipefail
 cd "$(dirname "$0")/.."
+copies="${1:-5}"
 mkdir -p bench/results target
 eval "$(bench/peers/build_pinocchio.sh)"
-"$PINOCCHIO_BENCH" --floating --frame LF_FOOT --wrenches LF_FOOT,RF_FOOT,LH_FOOT,RH_FOOT models/peers/anymal_b.urdf \
-  | sed 's/"model": "anymal_b"/"model": "anymal_b_floating"/' > bench/results/pinocchio_contact.jsonl
-if ! cargo bench --bench contact > target/cargo_bench_contact.log 2>&1; then
+python3 bench/placement.py command "$copies" bench/results/pinocchio_contact.jsonl "$PINOCCHIO_BENCH" \
+  --floating --frame LF_FOOT --wrenches LF_FOOT,RF_FOOT,LH_FOOT,RH_FOOT models/peers/anymal_b.urdf
+sed -i 's/"model": "anymal_b"/"model": "anymal_b_floating"/' bench/results/pinocchio_contact.jsonl
+if ! cargo bench --bench contact --no-run --message-format=json > target/cargo_bench_contact.json 2> target/cargo_bench_contact.log; then
   tail -20 target/cargo_bench_contact.log >&2
   echo "cargo bench failed (log: target/cargo_bench_contact.log); BENCHMARKS.md not updated" >&2
   exit 1
 fi
-grep -E "^gen|time:" target/cargo_bench_contact.log >&2 || true
+bin=$(python3 -c 'import json,sys
+for line in open(sys.argv[1]):
+    m = json.loads(line)
+    if m.get("reason") == "compiler-artifact" and m.get("target", {}).get("name") == "contact" and m.get("executable"):
+        print(m["executable"])' target/cargo_bench_contact.json)
+python3 bench/placement.py criterion "$bin" "$copies" bench/results/contact_copies.json
 python3 bench/contact_table.py

@@ -14,10 +14,11 @@
 use super::{check_len, DynamicsError, Sweep, Workspace};
 #[allow(unused_imports)]
 use crate::alloc_prelude::*;
+use crate::model::JointType;
 use crate::model::Model;
 use crate::spatial::{Force, SpatialInertia, Transform};
 use crate::Real;
-use nalgebra::{Matrix3xX, Matrix6xX, Vector3};
+use nalgebra::{Matrix3, Matrix3xX, Matrix6xX, Vector3};
 
 /// The centre of mass of the model's bodies and its velocity, with their total mass.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -167,7 +168,12 @@ pub fn centroidal_momentum_matrix<T: Real>(
     check_len("A_g columns", a_g.ncols(), model.nv())?;
     let total = body_composites(model, ws);
     let com = total.first_moment * inverse_mass(total.mass);
+    let lone_free_flyer = lone_free_flyer(model);
     for (i, joint) in model.joints.iter().enumerate() {
+        if lone_free_flyer == Some(i) {
+            free_flyer_columns(&ws.composite[i], &ws.world_placement[i], a_g, joint.v_index);
+            continue;
+        }
         // The body's pose relative to a frame at the centre of mass with world axes: one transform takes
         // a body-frame momentum to the world's axes and about the centre of mass.
         let x = &ws.world_placement[i];
@@ -179,6 +185,55 @@ pub fn centroidal_momentum_matrix<T: Real>(
         }
     }
     Ok(com)
+}
+
+/// The free-flying root joint when it is the model's only root, so that its subtree is the whole model.
+fn lone_free_flyer<T: Real>(model: &Model<T>) -> Option<usize> {
+    let mut roots = model
+        .joints
+        .iter()
+        .enumerate()
+        .filter(|(_, j)| j.parent.is_none());
+    match (roots.next(), roots.next()) {
+        (Some((i, j)), None) if j.joint_type == JointType::Floating => Some(i),
+        _ => None,
+    }
+}
+
+/// The six columns of `A_g` of a free flyer that carries the whole model, whose composite inertia in
+/// the body frame is `whole` and whose pose is `x`. About the model's own centre of mass, the momentum
+/// of the rigid whole moving with body velocity `(v, ω)` is `(m R v, R I_c ω)` with `c = h/m` the centre
+/// of mass in the body frame and `I_c` the rotational inertia about it, plus the linear `R (ω × h)`: the
+/// generic column (a full force transform, whose angular part for the linear velocities is a difference
+/// of equal terms) costs about three times as much.
+fn free_flyer_columns<T: Real>(
+    whole: &SpatialInertia<T>,
+    x: &Transform<T>,
+    a_g: &mut Matrix6xX<T>,
+    v_index: usize,
+) {
+    let r = &x.rotation;
+    let h = &whole.first_moment;
+    let c = h * inverse_mass(whole.mass);
+    // I_c = I_o − m (|c|² 1 − c cᵀ) = I_o − ((h·c) 1 − h cᵀ), symmetric: six entries.
+    let i_o = &whole.rotational;
+    let xx = i_o[(0, 0)] - (h.y * c.y + h.z * c.z);
+    let yy = i_o[(1, 1)] - (h.x * c.x + h.z * c.z);
+    let zz = i_o[(2, 2)] - (h.x * c.x + h.y * c.y);
+    let xy = i_o[(0, 1)] + h.x * c.y;
+    let xz = i_o[(0, 2)] + h.x * c.z;
+    let yz = i_o[(1, 2)] + h.y * c.z;
+    let i_c = Matrix3::new(xx, xy, xz, xy, yy, yz, xz, yz, zz);
+    let zero = Vector3::zeros();
+    for k in 0..3 {
+        // v = [v_lin; ω], the free flyer's order.
+        let linear = r.column(k) * whole.mass;
+        super::frames::write_column(a_g, v_index + k, &linear, &zero);
+        let e = Vector3::ith(k, T::one());
+        let linear = r * e.cross(h);
+        let angular = r * i_c.column(k);
+        super::frames::write_column(a_g, v_index + 3 + k, &linear, &angular);
+    }
 }
 
 /// A world-axes force about the world origin, taken about the point `c` instead.
