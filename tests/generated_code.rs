@@ -7,4 +7,5 @@ mod common;
 
 mod generated;
 mod generated_chain;
+mod generated_derivatives;
 mod limits;

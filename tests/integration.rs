@@ -19,6 +19,7 @@ mod constraint_embedding;
 mod contact;
 mod contact_invariants;
 mod contact_sweep;
+mod derivatives;
 mod dynamics_oracles;
 mod energy;
 mod extremes;

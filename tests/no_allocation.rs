@@ -7,11 +7,13 @@ use common::{load_model, Rng};
 use embedyn::constraints::{complete_configuration, complete_velocity};
 use embedyn::nalgebra::{Matrix3xX, Matrix6xX, Vector3};
 use embedyn::{
-    aba, aba_ext, center_of_mass, centroidal_momentum, centroidal_momentum_matrix,
-    centroidal_momentum_rate, com_jacobian, crba, difference, embedding_map_in, forward_kinematics,
-    forward_kinematics_acceleration, frame_classical_acceleration, frame_jacobian, frame_placement,
-    frame_velocity, gravity, integrate, mass_matrix_inverse, nle, nle_ext, random_configuration,
-    reduced_mass_matrix_in, rnea, rnea_ext, DynamicsError, LinkWrench, Reference, Workspace,
+    aba, aba_derivatives, aba_derivatives_independent, aba_ext, center_of_mass,
+    centroidal_momentum, centroidal_momentum_matrix, centroidal_momentum_rate, com_jacobian, crba,
+    difference, embedding_map_in, forward_kinematics, forward_kinematics_acceleration,
+    frame_classical_acceleration, frame_jacobian, frame_placement, frame_velocity, gravity,
+    integrate, mass_matrix_inverse, nle, nle_ext, random_configuration, reduced_mass_matrix_in,
+    rnea, rnea_derivatives, rnea_ext, AbaDerivatives, DerivativeWorkspace, DynamicsError,
+    LinkWrench, ManifoldDerivatives, Reference, RneaDerivatives, Workspace,
 };
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -64,8 +66,14 @@ fn algorithm_calls_do_not_allocate() {
             .map(|f| LinkWrench::new(f, Vector3::new(1.0, 2.0, 3.0), Vector3::new(0.1, 0.2, 0.3)));
         let mut jacobian = Matrix6xX::zeros(model.nv());
         let mut j_com = Matrix3xX::zeros(model.nv());
+        // Derivatives: one workspace and the outputs, made once.
+        let mut dws = DerivativeWorkspace::new(&model);
+        let mut forward = AbaDerivatives::new(&model);
+        let mut inverse = RneaDerivatives::new(&model);
         let before = ALLOCATIONS.load(Ordering::SeqCst);
         for _ in 0..3 {
+            aba_derivatives(&model, &mut dws, &q, &v, &tau, &wrenches, &mut forward).unwrap();
+            rnea_derivatives(&model, &mut dws, &q, &v, &tau, &wrenches, &mut inverse).unwrap();
             let _ = aba_ext(&model, &mut ws, &q, &v, &tau, &wrenches).unwrap();
             let _ = rnea_ext(&model, &mut ws, &q, &v, &tau, &wrenches).unwrap();
             let _ = nle_ext(&model, &mut ws, &q, &v, &wrenches).unwrap();
@@ -141,8 +149,14 @@ fn algorithm_calls_do_not_allocate() {
             Vector3::zeros(),
         )];
         let mut jacobian = Matrix6xX::zeros(model.nv());
+        let mut dws = DerivativeWorkspace::new(&model);
+        let mut forward = AbaDerivatives::new(&model);
+        let mut manifold = ManifoldDerivatives::new(&model);
         let before = ALLOCATIONS.load(Ordering::SeqCst);
         for _ in 0..3 {
+            aba_derivatives(&model, &mut dws, &q, &v, &tau, &wrenches, &mut forward).unwrap();
+            aba_derivatives_independent(&model, &mut dws, &q, &v, &tau, &wrenches, &mut manifold)
+                .unwrap();
             let _ = aba(&model, &mut ws, &q, &v, &tau).unwrap();
             let _ = aba_ext(&model, &mut ws, &q, &v, &tau, &wrenches).unwrap();
             let _ = rnea_ext(&model, &mut ws, &q, &v, &tau, &wrenches).unwrap();

@@ -1,12 +1,14 @@
 // Pinocchio peer benchmark for embedyn.
 //
-// Usage: pinocchio_bench [--floating] [--repeats N] [--batch B] [--frame LINK] [--wrenches A,B,…] URDF...
+// Usage: pinocchio_bench [--floating] [--repeats N] [--batch B] [--frame LINK] [--wrenches A,B,…]
+//                        [--derivatives] URDF...
 //
 // With --frame: also times the frame Jacobian with its bias (computeFrameJacobian in
 // LOCAL_WORLD_ALIGNED, then forwardKinematics(q, v, 0) and getFrameClassicalAcceleration), and the
 // centre of mass and centroidal momentum (jacobianCenterOfMass, ccrba, dccrba). With --wrenches:
 // aba with a wrench on each of those links (moved into its joint's frame inside the timed call, as a
-// caller holding link-frame wrenches must).
+// caller holding link-frame wrenches must). With --derivatives: computeABADerivatives and
+// computeRNEADerivatives (Carpentier and Mansard's analytical derivatives).
 //
 // For every URDF: build the Pinocchio model (free-flyer root with --floating, fixed base
 // otherwise), pre-generate kStates random states, then time aba, rnea, crba and
@@ -20,6 +22,8 @@
 // -march=native; the URDF parser comes from the wheel's prebuilt libpinocchio_parsers).
 
 #include <pinocchio/algorithm/aba.hpp>
+#include <pinocchio/algorithm/aba-derivatives.hpp>
+#include <pinocchio/algorithm/rnea-derivatives.hpp>
 #include <pinocchio/algorithm/center-of-mass.hpp>
 #include <pinocchio/algorithm/centroidal.hpp>
 #include <pinocchio/algorithm/frames.hpp>
@@ -55,6 +59,7 @@ struct Options {
   int batch = 0;  // 0: calibrate per algorithm to about kBatchTargetNs per batch
   std::string frame;                  // --frame: time its Jacobian and bias, com and centroidal
   std::vector<std::string> wrenches;  // --wrenches: time aba with a wrench on each of these links
+  bool derivatives = false;           // --derivatives: time the analytical derivatives
   std::vector<std::string> urdfs;
 };
 
@@ -73,7 +78,7 @@ struct Stats {
 double g_checksum = 0.0;
 
 void usage(const char* argv0) {
-  std::fprintf(stderr, "usage: %s [--floating] [--repeats N] [--batch B] [--frame LINK] [--wrenches A,B,...] URDF...\n", argv0);
+  std::fprintf(stderr, "usage: %s [--floating] [--repeats N] [--batch B] [--frame LINK] [--wrenches A,B,...] [--derivatives] URDF...\n", argv0);
 }
 
 bool parse_args(int argc, char** argv, Options& opt) {
@@ -99,6 +104,8 @@ bool parse_args(int argc, char** argv, Options& opt) {
         if (end > start) opt.wrenches.push_back(list.substr(start, end - start));
         start = end + 1;
       }
+    } else if (arg == "--derivatives") {
+      opt.derivatives = true;
     } else if (arg == "-h" || arg == "--help") {
       return false;
     } else if (!arg.empty() && arg[0] == '-') {
@@ -356,6 +363,22 @@ int run_one(const Options& opt, const std::string& path) {
     });
     report_stats(stem, "aba_fext", aba_fext);
     std::snprintf(buf, sizeof buf, ", \"aba_fext\": %.1f, \"wrench_links\": %zu", aba_fext.median, fids.size());
+    extra += buf;
+  }
+
+  if (opt.derivatives) {
+    const Stats aba_d = time_it(opt, [&](int i, int k) {
+      pinocchio::computeABADerivatives(model, data, s.q[i], s.v[i], s.tau[i]);
+      g_checksum += data.ddq_dq(k % nv, (k / nv) % nv) + data.Minv(0, k % nv);
+    });
+    const Stats rnea_d = time_it(opt, [&](int i, int k) {
+      pinocchio::computeRNEADerivatives(model, data, s.q[i], s.v[i], s.a[i]);
+      g_checksum += data.dtau_dq(k % nv, (k / nv) % nv) + data.M(0, k % nv);
+    });
+    report_stats(stem, "aba_derivatives", aba_d);
+    report_stats(stem, "rnea_derivatives", rnea_d);
+    std::snprintf(buf, sizeof buf, ", \"aba_derivatives\": %.1f, \"rnea_derivatives\": %.1f", aba_d.median,
+                  rnea_d.median);
     extra += buf;
   }
 

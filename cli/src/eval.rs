@@ -12,10 +12,12 @@ use embedyn_codegen::{Loaded, ModelOptions};
 use embedyn_runtime::constraints::{constraint_violation, singularity_threshold};
 use embedyn_runtime::nalgebra::{DMatrix, Matrix3xX, Matrix6xX, Vector3};
 use embedyn_runtime::{
-    aba_ext, center_of_mass, centroidal_momentum, centroidal_momentum_matrix, com_jacobian, crba,
-    difference, embedding_map, forward_kinematics, forward_kinematics_acceleration,
-    frame_classical_acceleration, frame_jacobian, gravity, integrate, nle_ext, reduced_mass_matrix,
-    rnea_ext, DynamicsError, FrameId, JointType, LinkWrench, Model, Real, Workspace,
+    aba_derivatives, aba_derivatives_independent, aba_ext, center_of_mass, centroidal_momentum,
+    centroidal_momentum_matrix, com_jacobian, crba, difference, embedding_map, forward_kinematics,
+    forward_kinematics_acceleration, frame_classical_acceleration, frame_jacobian, gravity,
+    integrate, nle_ext, reduced_mass_matrix, rnea_derivatives, rnea_ext, AbaDerivatives,
+    DerivativeWorkspace, DynamicsError, FrameId, JointType, LinkWrench, ManifoldDerivatives, Model,
+    Real, RneaDerivatives, Workspace,
 };
 use serde::Serialize;
 use std::ops::Range;
@@ -156,11 +158,38 @@ enum Output {
         #[serde(rename = "A_g_independent", skip_serializing_if = "Option::is_none")]
         a_g_independent: Option<Vec<Vec<f64>>>,
     },
+    /// `aba_derivatives`: `q̈` and its derivatives over the spanning tree (rows `q̈ᵢ`, columns directions in
+    /// `v` order; `∂/∂q` in the tangent space); for a model with constraints also those of the independent
+    /// accelerations along the constraint manifold.
+    AbaDerivatives {
+        qdd: Vec<f64>,
+        dqdd_dq: Vec<Vec<f64>>,
+        dqdd_dv: Vec<Vec<f64>>,
+        dqdd_dtau: Vec<Vec<f64>>,
+        #[serde(skip_serializing_if = "Option::is_none")]
+        dqdd_independent_dq_independent: Option<Vec<Vec<f64>>>,
+        #[serde(skip_serializing_if = "Option::is_none")]
+        dqdd_independent_dv_independent: Option<Vec<Vec<f64>>>,
+        #[serde(skip_serializing_if = "Option::is_none")]
+        dqdd_independent_dtau: Option<Vec<Vec<f64>>>,
+    },
+    /// `rnea_derivatives`: `τ` and its derivatives (`∂τ/∂q̈ = M`).
+    RneaDerivatives {
+        tau: Vec<f64>,
+        dtau_dq: Vec<Vec<f64>>,
+        dtau_dv: Vec<Vec<f64>>,
+        dtau_dqdd: Vec<Vec<f64>>,
+    },
 }
 
 /// Whether the algorithm's samples may carry external wrenches (`f_ext`).
 fn takes_wrenches(algo: EvalAlgo) -> bool {
-    matches!(algo, EvalAlgo::Dynamics(Algo::Aba | Algo::Rnea | Algo::Nle))
+    matches!(
+        algo,
+        EvalAlgo::Dynamics(Algo::Aba | Algo::Rnea | Algo::Nle)
+            | EvalAlgo::AbaDerivatives
+            | EvalAlgo::RneaDerivatives
+    )
 }
 
 /// Whether the algorithm works on the configuration space (`integrate`, `difference`): on the spanning
@@ -203,6 +232,20 @@ pub fn eval(
     let model64 = loaded.model::<f64>(options)?;
     let frame = query.frame(&model64)?;
     let samples = read_samples(&model64, query, input)?;
+    if engine == Engine::Generated
+        && matches!(
+            query.algo,
+            EvalAlgo::AbaDerivatives | EvalAlgo::RneaDerivatives
+        )
+    {
+        return Err(CliError::BadOption {
+            option: "--engine",
+            message: format!(
+                "`--algo {}` has no generated code yet: use `--engine interpreted`",
+                query.algo.name()
+            ),
+        });
+    }
     if engine == Engine::Generated {
         // Before anything is compiled.
         samples.check_all()?;
@@ -239,6 +282,8 @@ fn read_samples(model64: &Model<f64>, query: &Query, input: &str) -> Result<Samp
         ),
         EvalAlgo::Jacobian | EvalAlgo::Com => (vec![("q", nq), ("v", nv)], &["v"]),
         EvalAlgo::Centroidal => (vec![("q", nq), ("v", nv)], &[]),
+        EvalAlgo::AbaDerivatives => (vec![("q", nq), ("v", nv), ("tau", nv)], &[]),
+        EvalAlgo::RneaDerivatives => (vec![("q", nq), ("v", nv), ("qdd", nv)], &[]),
     };
     let links: Vec<&str> = model64
         .frames()
@@ -340,6 +385,15 @@ impl Plan {
             }
             EvalAlgo::Com => Algo::Com,
             EvalAlgo::Centroidal => Algo::Centroidal,
+            EvalAlgo::AbaDerivatives | EvalAlgo::RneaDerivatives => {
+                return Err(CliError::BadOption {
+                    option: "--engine",
+                    message: format!(
+                        "`--algo {}` has no generated code yet: use `--engine interpreted`",
+                        query.algo.name()
+                    ),
+                })
+            }
         };
         plan.arm = match plan.function {
             Algo::Frame => {
@@ -757,6 +811,9 @@ fn eval_in<T: Real>(
     let mut out = Vec::with_capacity(samples.len());
     let algo = match query.algo {
         EvalAlgo::Dynamics(algo) => algo,
+        EvalAlgo::AbaDerivatives | EvalAlgo::RneaDerivatives => {
+            return derivatives_in(model, query.algo, &frames, samples)
+        }
         other => {
             let mut kinematics = Kinematics::new(model, query.reference, frame);
             for i in 0..samples.len() {
@@ -850,6 +907,82 @@ fn eval_in<T: Real>(
             other => return Err(not_evaluated(other)),
         };
         out.push(value);
+    }
+    Ok(Evaluated::new(model, out))
+}
+
+/// `aba_derivatives` or `rnea_derivatives` on every sample (one workspace for all).
+fn derivatives_in<T: Real>(
+    model: &Model<T>,
+    algo: EvalAlgo,
+    frames: &[FrameId],
+    samples: &Samples,
+) -> Result<Evaluated, CliError> {
+    let mut dws = DerivativeWorkspace::new(model);
+    let mut forward = AbaDerivatives::new(model);
+    let mut inverse = RneaDerivatives::new(model);
+    let mut manifold = ManifoldDerivatives::new(model);
+    let mut out = Vec::with_capacity(samples.len());
+    for i in 0..samples.len() {
+        let at = |e: DynamicsError| CliError::Dynamics {
+            sample: i,
+            error: e,
+        };
+        let q = samples.vector(i, "q")?;
+        check_quaternions(model, q, i)?;
+        let q = cast::<T>(q);
+        let v = cast::<T>(samples.vector(i, "v")?);
+        let f_ext = wrenches(model, frames, samples.wrenches(i)?, i)?;
+        let rows = |m: &DMatrix<T>, name| {
+            matrix_rows(|r, c| m[(r, c)], 0..m.nrows(), m.ncols(), None, i, name)
+        };
+        out.push(match algo {
+            EvalAlgo::AbaDerivatives => {
+                let tau = cast::<T>(samples.vector(i, "tau")?);
+                aba_derivatives(model, &mut dws, &q, &v, &tau, &f_ext, &mut forward).map_err(at)?;
+                let on_manifold = if model.has_constraints() {
+                    aba_derivatives_independent(
+                        model,
+                        &mut dws,
+                        &q,
+                        &v,
+                        &tau,
+                        &f_ext,
+                        &mut manifold,
+                    )
+                    .map_err(at)?;
+                    Some(&manifold)
+                } else {
+                    None
+                };
+                Output::AbaDerivatives {
+                    qdd: finite(forward.qdd.as_slice(), i, "qdd")?,
+                    dqdd_dq: rows(&forward.dqdd_dq, "dqdd_dq")?,
+                    dqdd_dv: rows(&forward.dqdd_dv, "dqdd_dv")?,
+                    dqdd_dtau: rows(&forward.dqdd_dtau, "dqdd_dtau")?,
+                    dqdd_independent_dq_independent: on_manifold
+                        .map(|m| rows(&m.dqdd_dq, "dqdd_independent_dq_independent"))
+                        .transpose()?,
+                    dqdd_independent_dv_independent: on_manifold
+                        .map(|m| rows(&m.dqdd_dv, "dqdd_independent_dv_independent"))
+                        .transpose()?,
+                    dqdd_independent_dtau: on_manifold
+                        .map(|m| rows(&m.dqdd_dtau, "dqdd_independent_dtau"))
+                        .transpose()?,
+                }
+            }
+            _ => {
+                let qdd = cast::<T>(samples.vector(i, "qdd")?);
+                rnea_derivatives(model, &mut dws, &q, &v, &qdd, &f_ext, &mut inverse)
+                    .map_err(at)?;
+                Output::RneaDerivatives {
+                    tau: finite(inverse.tau.as_slice(), i, "tau")?,
+                    dtau_dq: rows(&inverse.dtau_dq, "dtau_dq")?,
+                    dtau_dv: rows(&inverse.dtau_dv, "dtau_dv")?,
+                    dtau_dqdd: rows(&inverse.dtau_dqdd, "dtau_dqdd")?,
+                }
+            }
+        });
     }
     Ok(Evaluated::new(model, out))
 }
@@ -1016,6 +1149,12 @@ impl<'m, T: Real> Kinematics<'m, T> {
                 }
             }
             EvalAlgo::Dynamics(other) => return Err(not_evaluated(other)),
+            EvalAlgo::AbaDerivatives | EvalAlgo::RneaDerivatives => {
+                return Err(InternalError::FieldNotRead {
+                    field: algo.name().into(),
+                }
+                .into())
+            }
         })
     }
 }

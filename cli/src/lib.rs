@@ -303,6 +303,10 @@ pub enum EvalAlgo {
     Com,
     /// `centroidal`: the centroidal momentum matrix, momentum and bias.
     Centroidal,
+    /// `aba_derivatives`: forward dynamics and its derivatives (interpreted engine).
+    AbaDerivatives,
+    /// `rnea_derivatives`: inverse dynamics and its derivatives (interpreted engine).
+    RneaDerivatives,
 }
 
 impl From<Algo> for EvalAlgo {
@@ -312,10 +316,11 @@ impl From<Algo> for EvalAlgo {
 }
 
 impl EvalAlgo {
-    /// The frame and centroidal algorithms, with their `--algo` help: the command line's names for them
-    /// (the generated engine runs the generated `frame_<link>`, `com` and `centroidal`). (Should the
+    /// The frame, centroidal and derivative algorithms, with their `--algo` help: the command line's names
+    /// for them (the generated engine runs the generated `frame_<link>`, `com` and `centroidal`; the
+    /// derivatives are interpreted only, for now). (Should the
     /// descriptors offer one of these names, this entry is the one `--algo` means.)
-    const KINEMATIC: [(EvalAlgo, &'static str, &'static str); 3] = [
+    const KINEMATIC: [(EvalAlgo, &'static str, &'static str); 5] = [
         (
             EvalAlgo::Jacobian,
             "jacobian",
@@ -330,6 +335,16 @@ impl EvalAlgo {
             EvalAlgo::Centroidal,
             "centroidal",
             "Centroidal momentum matrix A_g and momentum h_g (Pinocchio's ccrba)",
+        ),
+        (
+            EvalAlgo::AbaDerivatives,
+            "aba_derivatives",
+            "Forward dynamics and its derivatives dqdd/dq, dqdd/dv, dqdd/dtau (interpreted engine)",
+        ),
+        (
+            EvalAlgo::RneaDerivatives,
+            "rnea_derivatives",
+            "Inverse dynamics and its derivatives dtau/dq, dtau/dv, dtau/dqdd = M (interpreted engine)",
         ),
     ];
 

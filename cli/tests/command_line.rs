@@ -4,6 +4,7 @@
 mod cli;
 mod configuration;
 mod contact;
+mod derivatives;
 mod edges;
 mod scale;
 mod scene;

@@ -9,7 +9,7 @@ use serde_json::{json, Value};
 const TOL: f64 = 1e-9;
 
 /// CONTRACT §2: max|a − b| / max(1, max|b|).
-fn relative_error(a: &[f64], b: &[f64]) -> f64 {
+pub fn relative_error(a: &[f64], b: &[f64]) -> f64 {
     assert_eq!(a.len(), b.len());
     let scale = b.iter().fold(1.0f64, |m, x| m.max(x.abs()));
     a.iter()
@@ -18,7 +18,7 @@ fn relative_error(a: &[f64], b: &[f64]) -> f64 {
         / scale
 }
 
-fn vecf(v: &Value) -> Vec<f64> {
+pub fn vecf(v: &Value) -> Vec<f64> {
     v.as_array()
         .unwrap_or_else(|| panic!("not an array: {v}"))
         .iter()
@@ -32,22 +32,27 @@ fn rows(v: &Value) -> Vec<Vec<f64>> {
 
 /// A reference robot: its `eval` arguments, Pinocchio's JSON and the coordinate maps (our index →
 /// Pinocchio's), by joint name from `embedyn info` and the JSON's `joints`.
-struct Robot {
-    name: &'static str,
+pub struct Robot {
+    pub name: &'static str,
     args: Vec<String>,
-    json: Value,
+    pub json: Value,
     q_map: Vec<usize>,
     v_map: Vec<usize>,
 }
 
 impl Robot {
     fn load(name: &'static str, urdf: &str, floating: bool) -> Robot {
+        Robot::with_reference(name, urdf, floating, "contact")
+    }
+
+    /// The robot with Pinocchio's reference `tests/data/pinocchio/{name}_{kind}.json`.
+    pub fn with_reference(name: &'static str, urdf: &str, floating: bool, kind: &str) -> Robot {
         let mut args = vec![repo(urdf)];
         if floating {
             args.push("--floating".into());
         }
         let text =
-            std::fs::read_to_string(repo(&format!("tests/data/pinocchio/{name}_contact.json")))
+            std::fs::read_to_string(repo(&format!("tests/data/pinocchio/{name}_{kind}.json")))
                 .unwrap();
         let json: Value = serde_json::from_str(&text).unwrap();
         let mut info_args = vec!["info"];
@@ -80,16 +85,16 @@ impl Robot {
         }
     }
 
-    fn samples(&self) -> &[Value] {
+    pub fn samples(&self) -> &[Value] {
         self.json["samples"].as_array().unwrap()
     }
 
-    fn q(&self, s: &Value) -> Vec<f64> {
+    pub fn q(&self, s: &Value) -> Vec<f64> {
         let x = vecf(&s["q"]);
         self.q_map.iter().map(|&i| x[i]).collect()
     }
 
-    fn v(&self, x: &Value) -> Vec<f64> {
+    pub fn v(&self, x: &Value) -> Vec<f64> {
         let x = vecf(x);
         self.v_map.iter().map(|&i| x[i]).collect()
     }
@@ -102,8 +107,18 @@ impl Robot {
             .collect()
     }
 
+    /// A Pinocchio nv × nv matrix in our row and column order, row-major.
+    pub fn square(&self, m: &Value) -> Vec<f64> {
+        let rows = rows(m);
+        self.v_map
+            .iter()
+            .flat_map(|&r| self.v_map.iter().map(move |&c| (r, c)))
+            .map(|(r, c)| rows[r][c])
+            .collect()
+    }
+
     /// `embedyn eval` on this robot with `extra` arguments.
-    fn eval(&self, extra: &[&str], samples: Vec<Value>) -> Vec<Value> {
+    pub fn eval(&self, extra: &[&str], samples: Vec<Value>) -> Vec<Value> {
         let mut args = vec!["eval"];
         args.extend(self.args.iter().map(String::as_str));
         args.extend(extra);
@@ -124,7 +139,7 @@ fn robots() -> [Robot; 2] {
 }
 
 /// Rows of a JSON matrix, flattened.
-fn flat_rows(v: &Value) -> Vec<f64> {
+pub fn flat_rows(v: &Value) -> Vec<f64> {
     rows(v).concat()
 }
 
@@ -347,7 +362,7 @@ fn new_algorithms_in_f32_are_close_to_f64() {
 
 /// Runs `embedyn args` expecting failure with exit status `code`: the message on stderr, no panic, nothing
 /// on stdout.
-fn refused(args: &[&str], stdin: &str, code: i32) -> String {
+pub fn refused(args: &[&str], stdin: &str, code: i32) -> String {
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_embedyn"))
         .args(args)
         .stdin(std::process::Stdio::piped())

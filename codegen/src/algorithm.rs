@@ -9,11 +9,12 @@ use crate::trace::Sym;
 use embedyn_runtime::constraints::{completion_step, constraint_condition};
 use embedyn_runtime::nalgebra::{Matrix3xX, Matrix6xX, Vector3};
 use embedyn_runtime::{
-    aba, aba_ext, center_of_mass, centroidal_momentum_matrix, centroidal_momentum_rate,
-    com_jacobian, crba, difference, embedding_map_in, forward_kinematics,
+    aba, aba_derivatives, aba_ext, center_of_mass, centroidal_momentum_matrix,
+    centroidal_momentum_rate, com_jacobian, crba, difference, embedding_map_in, forward_kinematics,
     forward_kinematics_acceleration, frame_classical_acceleration, frame_jacobian, frame_placement,
     gravity, integrate, link_poses, mass_matrix_inverse, nle, nle_ext, reduced_mass_matrix_in,
-    rnea, rnea_ext, DynamicsError, FrameId, LinkWrench, Model, Real, Reference, Workspace,
+    rnea, rnea_derivatives, rnea_ext, AbaDerivatives, DerivativeWorkspace, DynamicsError, FrameId,
+    LinkWrench, Model, Real, Reference, RneaDerivatives, Workspace,
 };
 
 /// The algorithms code can be generated for; [`Algorithm::spec`] describes each.
@@ -57,6 +58,10 @@ pub enum Algorithm {
     Centroidal,
     /// `centroidal_bias`: `Ȧ_g v`.
     CentroidalBias,
+    /// `aba_derivatives`: forward dynamics and its derivatives with respect to `q`, `v` and `τ`.
+    AbaDerivatives,
+    /// `rnea_derivatives`: inverse dynamics and its derivatives with respect to `q`, `v` and `q̈`.
+    RneaDerivatives,
 }
 
 /// A length of an argument or an output, in the model's terms.
@@ -1142,6 +1147,126 @@ pub const ALGORITHMS: &[AlgorithmSpec] = &[
             Ok(())
         },
     },
+    AlgorithmSpec {
+        algorithm: Algorithm::AbaDerivatives,
+        name: "aba_derivatives",
+        traced_name: "aba_derivatives",
+        wrapper: None,
+        summary: "`q̈` and its derivatives `∂q̈/∂q`, `∂q̈/∂v`, `∂q̈/∂τ` (only when asked for)",
+        doc: "Forward dynamics `qdd = aba(q, v, tau)` and its derivatives (`nv × nv`, row `i` is `qdd[i]`, column `k` a direction in `v` order): `dqdd_dq` in the tangent space (column `k` along `integrate(q, ε e_k)`, Pinocchio's convention), `dqdd_dv` and `dqdd_dtau` (`M⁻¹`). Forward-mode dual numbers through the algorithm, unrolled.",
+        doc_with_constraints: Some("Forward dynamics `qdd = aba(q, v, tau)` over the spanning tree and its derivatives as a function of every spanning coordinate (`nv × nv`, tangent space); for a `q`, `v` on the constraints."),
+        inputs: &[Q, V, TAU],
+        outputs: &[
+            OutputSpec {
+                name: "qdd",
+                shape: Shape::Vector(Dim::Nv),
+                unit: "rad/s² or m/s²",
+            },
+            OutputSpec {
+                name: "dqdd_dq",
+                shape: Shape::Matrix(Dim::Nv, Dim::Nv),
+                unit: "1/s² or m/s² per rad",
+            },
+            OutputSpec {
+                name: "dqdd_dv",
+                shape: Shape::Matrix(Dim::Nv, Dim::Nv),
+                unit: "1/s",
+            },
+            OutputSpec {
+                name: "dqdd_dtau",
+                shape: Shape::Matrix(Dim::Nv, Dim::Nv),
+                unit: "1/kg, 1/(kg·m) or 1/(kg·m²)",
+            },
+        ],
+        returns: Returns::Nothing,
+        needs_constraints: false,
+        generated: WhenGenerated::OnRequest,
+        parameter: Parameter::None,
+        readme_note: " — forward dynamics and its derivatives `∂q̈/∂q`, `∂q̈/∂v`, `∂q̈/∂τ` (tangent space)",
+        readme_note_with_constraints: None,
+        cli: None,
+        growth: Growth::Quadratic,
+        predicted_operations: |c| 600.0 * c.nv * c.nv,
+        trace: |model, _, inputs, _| {
+            let mut dws = DerivativeWorkspace::new(model);
+            let mut d = AbaDerivatives::new(model);
+            aba_derivatives(model, &mut dws, &inputs[0], &inputs[1], &inputs[2], &[], &mut d)?;
+            Ok(Traced {
+                outputs: vec![
+                    d.qdd.iter().copied().collect(),
+                    row_major(&d.dqdd_dq),
+                    row_major(&d.dqdd_dv),
+                    row_major(&d.dqdd_dtau),
+                ],
+                returned: None,
+            })
+        },
+        interpreted: |model, _, inputs, _| {
+            let mut dws = DerivativeWorkspace::new(model);
+            let mut d = AbaDerivatives::new(model);
+            aba_derivatives(model, &mut dws, inputs[0], inputs[1], inputs[2], &[], &mut d)
+        },
+    },
+    AlgorithmSpec {
+        algorithm: Algorithm::RneaDerivatives,
+        name: "rnea_derivatives",
+        traced_name: "rnea_derivatives",
+        wrapper: None,
+        summary: "`τ` and its derivatives `∂τ/∂q`, `∂τ/∂v`, `∂τ/∂q̈ = M` (only when asked for)",
+        doc: "Inverse dynamics `tau = rnea(q, v, qdd)` and its derivatives (`nv × nv`, row `i` is `tau[i]`, column `k` a direction in `v` order): `dtau_dq` in the tangent space (column `k` along `integrate(q, ε e_k)`), `dtau_dv` and `dtau_dqdd` (the mass matrix). Forward-mode dual numbers through the algorithm, unrolled.",
+        doc_with_constraints: None,
+        inputs: &[Q, V, QDD],
+        outputs: &[
+            OutputSpec {
+                name: "tau",
+                shape: Shape::Vector(Dim::Nv),
+                unit: "N·m or N",
+            },
+            OutputSpec {
+                name: "dtau_dq",
+                shape: Shape::Matrix(Dim::Nv, Dim::Nv),
+                unit: "N·m/rad, N/rad, N·m/m or N/m",
+            },
+            OutputSpec {
+                name: "dtau_dv",
+                shape: Shape::Matrix(Dim::Nv, Dim::Nv),
+                unit: "N·m·s/rad or N·s/m",
+            },
+            OutputSpec {
+                name: "dtau_dqdd",
+                shape: Shape::Matrix(Dim::Nv, Dim::Nv),
+                unit: MASS_UNIT,
+            },
+        ],
+        returns: Returns::Nothing,
+        needs_constraints: false,
+        generated: WhenGenerated::OnRequest,
+        parameter: Parameter::None,
+        readme_note: " — inverse dynamics and its derivatives `∂τ/∂q`, `∂τ/∂v`, `∂τ/∂q̈ = M` (tangent space)",
+        readme_note_with_constraints: None,
+        cli: None,
+        growth: Growth::Quadratic,
+        predicted_operations: |c| 300.0 * c.nv * c.nv,
+        trace: |model, _, inputs, _| {
+            let mut dws = DerivativeWorkspace::new(model);
+            let mut d = RneaDerivatives::new(model);
+            rnea_derivatives(model, &mut dws, &inputs[0], &inputs[1], &inputs[2], &[], &mut d)?;
+            Ok(Traced {
+                outputs: vec![
+                    d.tau.iter().copied().collect(),
+                    row_major(&d.dtau_dq),
+                    row_major(&d.dtau_dv),
+                    row_major(&d.dtau_dqdd),
+                ],
+                returned: None,
+            })
+        },
+        interpreted: |model, _, inputs, _| {
+            let mut dws = DerivativeWorkspace::new(model);
+            let mut d = RneaDerivatives::new(model);
+            rnea_derivatives(model, &mut dws, inputs[0], inputs[1], inputs[2], &[], &mut d)
+        },
+    },
 ];
 
 /// The wrenches of `f_ext`'s rows (`[fx, fy, fz, tx, ty, tz]`, row-major) on `frames`, in order.
@@ -1195,7 +1320,7 @@ const _: () = {
         assert!(ALGORITHMS[i].algorithm as usize == i);
         i += 1;
     }
-    assert!(Algorithm::CentroidalBias as usize + 1 == ALGORITHMS.len());
+    assert!(Algorithm::RneaDerivatives as usize + 1 == ALGORITHMS.len());
 };
 
 impl Algorithm {
@@ -1510,7 +1635,7 @@ mod tests {
         let e = Algorithm::from_name("abba").unwrap_err().to_string();
         assert_eq!(
             e,
-            "unknown function `abba` (expected kinematics, aba, rnea, gravity, nle, crba, minv, complete, embedding, crba_independent, integrate, difference, aba_ext, rnea_ext, nle_ext, frame, com, centroidal, centroidal_bias)"
+            "unknown function `abba` (expected kinematics, aba, rnea, gravity, nle, crba, minv, complete, embedding, crba_independent, integrate, difference, aba_ext, rnea_ext, nle_ext, frame, com, centroidal, centroidal_bias, aba_derivatives, rnea_derivatives)"
         );
     }
 

@@ -6,6 +6,7 @@ use crate::alloc_prelude::*;
 pub(crate) mod aba;
 mod centroidal;
 mod crba;
+mod derivatives;
 mod embedded;
 mod frames;
 mod kinematics;
@@ -20,6 +21,10 @@ pub use centroidal::{
     com_jacobian, CenterOfMass,
 };
 pub use crba::crba;
+pub use derivatives::{
+    aba_derivatives, aba_derivatives_independent, rnea_derivatives, AbaDerivatives,
+    DerivativeWorkspace, ManifoldDerivatives, RneaDerivatives,
+};
 pub(crate) use embedded::position_kinematics;
 pub use embedded::{
     constraint_kinematics, embedding_map, embedding_map_in, kkt_forward_dynamics,

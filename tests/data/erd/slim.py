@@ -22,6 +22,7 @@ COPIES = {
     "icub": ("icub_description/robots/icub.urdf", "robotology/icub-models", "CC-BY-SA-4.0"),
     "romeo": ("romeo_description/urdf/romeo.urdf", "laas/romeo", "BSD"),
     "romeo_laas_small": ("romeo_description/urdf/romeo_laas_small.urdf", "laas/romeo", "BSD"),
+    "talos_reduced": ("talos_data/robots/talos_reduced.urdf", "pal-robotics/talos_robot", "Apache-2.0"),
 }
 
 DROPPED_ANYWHERE = {"visual", "collision", "gazebo", "sensor", "calibration", "safety_controller"}

@@ -1,0 +1,76 @@
+#!/usr/bin/env python3
+"""Writes the section "Derivatives (issue 12)" of BENCHMARKS.md from bench/results/derivatives_copies.json
+(benches/derivatives.rs through bench/placement.py) and bench/results/pinocchio_derivatives_*.jsonl (both from
+bench/derivatives.sh, one session), with each generated function's operation count (`embedyn generate`)."""
+import datetime, json, os, platform, re, statistics, subprocess, tempfile
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+ROBOTS = [("z1", "models/peers/z1.urdf", False, "pinocchio_derivatives_z1.jsonl"),
+          ("anymal_b_floating", "models/peers/anymal_b.urdf", True, "pinocchio_derivatives_anymal.jsonl")]
+CALLS = [("aba", "aba", "aba", None),
+         ("aba_derivatives", "aba_derivatives", "computeABADerivatives", 0.25),
+         ("rnea_derivatives", "rnea_derivatives", "computeRNEADerivatives", None)]
+
+
+def operations(urdf, floating, function):
+    """Arithmetic operations of one generated f64 function (binary operators and negations)."""
+    with tempfile.TemporaryDirectory() as out:
+        args = ["cargo", "run", "-q", "--release", "-p", "embedyn-cli", "--", "generate", urdf, "--only", function,
+                "--scalar", "f64", "--out", out] + (["--floating"] if floating else [])
+        subprocess.run(args, cwd=ROOT, check=True, capture_output=True)
+        text = open(os.path.join(out, "src", "lib.rs")).read()
+    body = text[text.index("pub mod f64"):]
+    return len(re.findall(r" [-+*/] ", body)) + len(re.findall(r"= -[a-z(]", body))
+
+
+def spread(xs):
+    return f"{min(xs):,.0f}–{max(xs):,.0f}"
+
+
+def main():
+    with open(os.path.join(ROOT, "bench", "results", "derivatives_copies.json")) as f:
+        runs = json.load(f)
+    copies = runs["copies"]
+    lines = [
+        "## Derivatives (issue 12)",
+        "",
+        f"Generated f64 code vs Pinocchio 4.1's analytical derivatives in one session ({datetime.date.today()}, "
+        f"{platform.machine()}, `bench/derivatives.sh`), each side from {copies} fresh copies of its binary "
+        "(medians, and the range over copies). The generated derivatives are forward-mode dual numbers through "
+        "`aba` and `rnea`, traced and folded (docs/conventions.md, \"Derivatives\").",
+        "",
+        "| robot | call | operations | embedyn generated (ns) | range | Pinocchio (ns) | range | ratio | target |",
+        "|---|---|---:|---:|---:|---:|---:|---:|---:|",
+    ]
+    for robot, urdf, floating, pin_file in ROBOTS:
+        with open(os.path.join(ROOT, "bench", "results", pin_file)) as f:
+            pin = json.loads([l for l in f if l.startswith("{")][-1])
+        for call, ours_name, theirs_label, target in CALLS:
+            xs = runs["benches"].get(f"gen_{ours_name}/{robot}")
+            theirs = pin.get(call)
+            their_range = pin.get(f"{call}_range")
+            ops = operations(urdf, floating, ours_name)
+            if not xs or not theirs:
+                continue
+            ours = statistics.median(xs)
+            lines.append(
+                f"| {robot} | `{ours_name}` / `{theirs_label}` | {ops:,} | {ours:,.0f} | {spread(xs)} | {theirs:,.0f} | "
+                f"{spread(their_range) if their_range else ''} | {ours / theirs:.2f} | {f'≤ {target}' if target else ''} |")
+    lines += ["", "Forward mode costs each direction a pass of the algorithm's tangent arithmetic: on the floating "
+              "ANYmal B the 18 directions of q take 19.6k operations of `aba_derivatives`, those of v 20.1k and those "
+              "of τ 8.0k (beside the value pass's 4.4k); of `rnea_derivatives` 7.0k, 11.8k and 4.4k (measured by "
+              "generating each group alone). That is about Pinocchio's analytical time, not issue 12's 0.25×: the "
+              "analytical recursions, the tree's sparsity in ∂τ and M⁻¹, and lanes are the next steps."]
+    section = "\n".join(lines) + "\n"
+    path = os.path.join(ROOT, "BENCHMARKS.md")
+    text = open(path).read()
+    pattern = re.compile(r"## Derivatives \(issue 12\)\n.*?(?=\n## |\Z)", re.S)
+    if pattern.search(text):
+        text = pattern.sub(section.rstrip("\n") + "\n", text)
+    else:
+        text = text.rstrip("\n") + "\n\n" + section
+    open(path, "w").write(text)
+    print(section)
+
+
+main()

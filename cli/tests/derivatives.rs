@@ -1,0 +1,118 @@
+//! `eval --algo aba_derivatives` and `rnea_derivatives` (CONTRACT §3) through the command line: against
+//! Pinocchio 4.1's analytical derivatives (tests/data/pinocchio/derivatives.py: a fixed UR5 and a floating
+//! ANYmal B, with the contact references' external wrenches) to 1e-9 relative; the manifold fields of a
+//! loop model; the generated engine's refusal.
+
+use crate::cli::{json_of, repo};
+use crate::contact::{flat_rows, refused, relative_error, vecf, Robot};
+use serde_json::{json, Value};
+
+const TOL: f64 = 1e-9;
+
+fn robots() -> [Robot; 2] {
+    [
+        Robot::with_reference("ur5", "tests/data/pinocchio/ur5.urdf", false, "derivatives"),
+        Robot::with_reference(
+            "anymal_b_floating",
+            "tests/data/pinocchio/anymal_b.urdf",
+            true,
+            "derivatives",
+        ),
+    ]
+}
+
+#[test]
+fn derivatives_match_pinocchio() {
+    for r in robots() {
+        let samples = r.samples();
+        let state = |s: &Value, key: &str, field: &str| json!({"q": r.q(s), "v": r.v(&s["v"]), key: r.v(&s[field]), "f_ext": s["f_ext"].clone()});
+        let aba = r.eval(
+            &["--algo", "aba_derivatives"],
+            samples.iter().map(|s| state(s, "tau", "tau")).collect(),
+        );
+        let rnea = r.eval(
+            &["--algo", "rnea_derivatives"],
+            samples
+                .iter()
+                .map(|s| state(s, "qdd", "qdd_for_rnea"))
+                .collect(),
+        );
+        let mut worst = 0.0f64;
+        for (k, s) in samples.iter().enumerate() {
+            worst = worst.max(relative_error(&vecf(&aba[k]["qdd"]), &r.v(&s["qdd"])));
+            worst = worst.max(relative_error(&vecf(&rnea[k]["tau"]), &r.v(&s["tau_rnea"])));
+            for field in ["dqdd_dq", "dqdd_dv", "dqdd_dtau"] {
+                worst = worst.max(relative_error(
+                    &flat_rows(&aba[k][field]),
+                    &r.square(&s[field]),
+                ));
+            }
+            for field in ["dtau_dq", "dtau_dv", "dtau_dqdd"] {
+                worst = worst.max(relative_error(
+                    &flat_rows(&rnea[k][field]),
+                    &r.square(&s[field]),
+                ));
+            }
+            // A tree has no manifold fields.
+            assert!(aba[k].get("dqdd_independent_dq_independent").is_none());
+        }
+        println!("{}: derivatives {worst:.1e}", r.name);
+        assert!(worst < TOL, "{}: {worst:e}", r.name);
+    }
+}
+
+/// A four-bar: the spanning-tree matrices (nv × nv), the manifold ones (ni × ni, ni × nv), and
+/// `∂q̈_I/∂τ` equal to the independent rows of `∂q̈/∂τ` (the same derivative).
+#[test]
+fn loop_models_report_manifold_derivatives() {
+    let model = repo("models/loops/four_bar_internal.urdf");
+    let info = json_of(&["info", &model], "");
+    let nv = info["nv"].as_u64().unwrap() as usize;
+    let ni = info["independent_nv"].as_u64().unwrap() as usize;
+    let independent: Vec<usize> = info["joints"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|j| j["independent"] == json!(true))
+        .map(|j| j["v_index"].as_u64().unwrap() as usize)
+        .collect();
+    // A consistent state from `complete`.
+    let guess = json!({"samples": [{"q": vec![0.2; nv], "v": vec![0.3; nv]}]});
+    let state = json_of(&["complete", &model], &guess.to_string())["samples"][0].clone();
+    let input = json!({"samples": [{"q": state["q"], "v": state["v"], "tau": vec![0.5; nv]}]});
+    let out = &json_of(
+        &["eval", &model, "--algo", "aba_derivatives"],
+        &input.to_string(),
+    )["samples"][0];
+    let shape = |v: &Value| (v.as_array().unwrap().len(), v[0].as_array().unwrap().len());
+    assert_eq!(shape(&out["dqdd_dq"]), (nv, nv));
+    assert_eq!(shape(&out["dqdd_independent_dq_independent"]), (ni, ni));
+    assert_eq!(shape(&out["dqdd_independent_dv_independent"]), (ni, ni));
+    assert_eq!(shape(&out["dqdd_independent_dtau"]), (ni, nv));
+    for (r, &i) in independent.iter().enumerate() {
+        let a = vecf(&out["dqdd_independent_dtau"][r]);
+        let b = vecf(&out["dqdd_dtau"][i]);
+        assert!(relative_error(&a, &b) < 1e-14, "{a:?} {b:?}");
+    }
+}
+
+/// Derivatives have no generated code yet: the generated engine refuses with a usage error (exit 2)
+/// saying what to use instead, before building anything.
+#[test]
+fn the_generated_engine_refuses_derivatives() {
+    let model = repo("models/arm7.urdf");
+    let input = json!({"samples": [{"q": vec![0.1; 7], "v": vec![0.0; 7], "tau": vec![0.0; 7]}]});
+    let stderr = refused(
+        &[
+            "eval",
+            &model,
+            "--algo",
+            "aba_derivatives",
+            "--engine",
+            "generated",
+        ],
+        &input.to_string(),
+        2,
+    );
+    assert!(stderr.contains("--engine interpreted"), "{stderr}");
+}

@@ -1,0 +1,463 @@
+//! Derivatives of forward and inverse dynamics (CONTRACT §3 `aba_derivatives`, `rnea_derivatives`), by
+//! forward-mode dual numbers through the algorithms themselves.
+//!
+//! A pass runs [`aba_ext`](super::aba_ext) or [`rnea_ext`](super::rnea_ext) on [`Dual`] numbers whose
+//! tangents are seeded with up to [`DIRECTIONS`] input directions, and reads the outputs' tangents: the
+//! derivatives along those directions, exact to rounding (no step size). Derivatives with respect to `q`
+//! are in the tangent space, as Pinocchio defines them: column `k` is the derivative along
+//! `integrate(q, ε eₖ)`, which the pass obtains by running [`integrate`](crate::integrate) itself on the
+//! dual numbers (a free flyer's quaternion moves by its body-frame rotation).
+//!
+//! On a model with loops, couplings or mimic joints the spanning-tree derivatives differentiate the
+//! embedded dynamics as a function of all spanning coordinates; [`aba_derivatives_independent`] moves
+//! along the constraint manifold instead: the configuration along `X eₖ` (the manifold's tangent), the
+//! dependent velocities following the independent ones through the velocity constraints at the moved
+//! configuration ([`crate::constraints::complete_velocity`] on dual numbers, the implicit-function
+//! theorem in one linear solve).
+//!
+//! The value pass runs on the scalar `T` first, so every input check and every error (a singular loop,
+//! an inconsistent state) is that of [`crate::aba`] or [`crate::rnea`]; the dual passes then repeat the
+//! arithmetic with the tangents.
+
+use super::{check_len, DynamicsError, LinkWrench, Workspace};
+#[allow(unused_imports)]
+use crate::alloc_prelude::*;
+use crate::dual::Dual;
+use crate::model::Model;
+use crate::Real;
+use nalgebra::{DMatrix, DVector};
+
+/// Directions per dual pass: the derivatives with respect to `q`, `v` and `τ` of an `nv`-coordinate model
+/// take `⌈3 nv / DIRECTIONS⌉` passes.
+pub const DIRECTIONS: usize = 8;
+
+type D<T> = Dual<T, DIRECTIONS>;
+
+/// What the derivatives need besides the model: the model and a workspace on dual numbers, the dual
+/// inputs and a workspace on `T` for the value pass. Made once per model ([`DerivativeWorkspace::new`]);
+/// the calls then do not allocate.
+pub struct DerivativeWorkspace<T: Real> {
+    plain: Workspace<T>,
+    model: Model<D<T>>,
+    ws: Workspace<D<T>>,
+    q0: Vec<D<T>>,
+    q: Vec<D<T>>,
+    v: Vec<D<T>>,
+    u: Vec<D<T>>,
+    step: Vec<D<T>>,
+    wrenches: Vec<LinkWrench<D<T>>>,
+    x: DMatrix<T>,
+}
+
+impl<T: Real> DerivativeWorkspace<T> {
+    /// A workspace for `model`'s derivatives.
+    pub fn new(model: &Model<T>) -> Self {
+        let dual: Model<D<T>> = model.cast();
+        // Everything the calls may need, so that they never allocate.
+        let mut ws = Workspace::new(&dual);
+        ws.reserve_all(&dual);
+        let mut plain = Workspace::new(model);
+        plain.reserve_all(model);
+        let zero = Dual::constant(T::zero());
+        DerivativeWorkspace {
+            plain,
+            ws,
+            q0: vec![zero; model.nq()],
+            q: vec![zero; model.nq()],
+            v: vec![zero; model.nv()],
+            u: vec![zero; model.nv()],
+            step: vec![zero; model.nv()],
+            wrenches: Vec::with_capacity(model.frames().count()),
+            x: DMatrix::zeros(model.nv(), model.independent_nv()),
+            model: dual,
+        }
+    }
+}
+
+/// `aba`'s result and its derivatives (each `nv × nv`; row `i` is `q̈ᵢ`, column `k` a direction in `v`
+/// order).
+#[derive(Clone, Debug, PartialEq)]
+pub struct AbaDerivatives<T: Real> {
+    /// `q̈ = aba(q, v, τ)`.
+    pub qdd: DVector<T>,
+    /// `∂q̈/∂q` (tangent space: column `k` along `integrate(q, ε eₖ)`).
+    pub dqdd_dq: DMatrix<T>,
+    /// `∂q̈/∂v`.
+    pub dqdd_dv: DMatrix<T>,
+    /// `∂q̈/∂τ` (`M⁻¹` for a tree).
+    pub dqdd_dtau: DMatrix<T>,
+}
+
+impl<T: Real> AbaDerivatives<T> {
+    /// Zeros of `model`'s sizes.
+    pub fn new(model: &Model<T>) -> Self {
+        let nv = model.nv();
+        AbaDerivatives {
+            qdd: DVector::zeros(nv),
+            dqdd_dq: DMatrix::zeros(nv, nv),
+            dqdd_dv: DMatrix::zeros(nv, nv),
+            dqdd_dtau: DMatrix::zeros(nv, nv),
+        }
+    }
+}
+
+/// `rnea`'s result and its derivatives (each `nv × nv`; row `i` is `τᵢ`, column `k` a direction in `v`
+/// order).
+#[derive(Clone, Debug, PartialEq)]
+pub struct RneaDerivatives<T: Real> {
+    /// `τ = rnea(q, v, q̈)`.
+    pub tau: DVector<T>,
+    /// `∂τ/∂q` (tangent space).
+    pub dtau_dq: DMatrix<T>,
+    /// `∂τ/∂v`.
+    pub dtau_dv: DMatrix<T>,
+    /// `∂τ/∂q̈`: the mass matrix `M`.
+    pub dtau_dqdd: DMatrix<T>,
+}
+
+impl<T: Real> RneaDerivatives<T> {
+    /// Zeros of `model`'s sizes.
+    pub fn new(model: &Model<T>) -> Self {
+        let nv = model.nv();
+        RneaDerivatives {
+            tau: DVector::zeros(nv),
+            dtau_dq: DMatrix::zeros(nv, nv),
+            dtau_dv: DMatrix::zeros(nv, nv),
+            dtau_dqdd: DMatrix::zeros(nv, nv),
+        }
+    }
+}
+
+/// The derivatives of the independent accelerations along the constraint manifold of a model with
+/// loops, couplings or mimic joints (`ni` independent coordinates, in the order of
+/// [`Model::independent_coordinates`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ManifoldDerivatives<T: Real> {
+    /// `q̈_I`, the independent accelerations.
+    pub qdd_independent: DVector<T>,
+    /// `∂q̈_I/∂q_I` (`ni × ni`): the configuration moving along the manifold, the independent velocities
+    /// held and the dependent ones following them.
+    pub dqdd_dq: DMatrix<T>,
+    /// `∂q̈_I/∂v_I` (`ni × ni`), the dependent velocities following.
+    pub dqdd_dv: DMatrix<T>,
+    /// `∂q̈_I/∂τ` (`ni × nv`, over the spanning tree's generalized forces).
+    pub dqdd_dtau: DMatrix<T>,
+}
+
+impl<T: Real> ManifoldDerivatives<T> {
+    /// Zeros of `model`'s sizes.
+    pub fn new(model: &Model<T>) -> Self {
+        let (nv, ni) = (model.nv(), model.independent_nv());
+        ManifoldDerivatives {
+            qdd_independent: DVector::zeros(ni),
+            dqdd_dq: DMatrix::zeros(ni, ni),
+            dqdd_dv: DMatrix::zeros(ni, ni),
+            dqdd_dtau: DMatrix::zeros(ni, nv),
+        }
+    }
+}
+
+/// Which input a direction moves, and along what (a vector in `v` order).
+#[derive(Clone, Copy)]
+enum Seed {
+    /// The configuration along `integrate(q, ε eₖ)`.
+    Configuration(usize),
+    /// The velocity along `eₖ`.
+    Velocity(usize),
+    /// `τ` (or `q̈`) along `eₖ`.
+    Input(usize),
+    /// The configuration along column `k` of the embedding map (the manifold's tangent).
+    ManifoldConfiguration(usize),
+    /// The velocity along column `k` of the embedding map.
+    ManifoldVelocity(usize),
+}
+
+/// Which algorithm a pass differentiates.
+#[derive(Clone, Copy, PartialEq)]
+enum Pass {
+    ForwardDynamics,
+    InverseDynamics,
+}
+
+/// The derivatives of forward dynamics, `aba(q, v, τ)` with the wrenches `f_ext` held fixed, over the
+/// spanning tree's coordinates, into `out`.
+///
+/// ```
+/// # use embedyn_runtime as embedyn; // the facade `embedyn` re-exports this crate
+/// use embedyn::nalgebra::{Matrix3, Vector3};
+/// use embedyn::{aba_derivatives, AbaDerivatives, DerivativeWorkspace, JointType, Model, SpatialInertia, Transform};
+/// // A 1 kg pendulum 0.5 m below its pivot: θ̈ = −m g l sin θ / (m l² + I) + τ / (m l² + I).
+/// let mut b = Model::<f64>::builder("pendulum");
+/// let inertia = SpatialInertia::from_com(1.0, Vector3::new(0.0, 0.0, -0.5), Matrix3::identity() * 1e-3);
+/// b.add_body(None, "pivot", JointType::Revolute, Vector3::x(), Transform::identity(), "bob", inertia)
+///     .unwrap();
+/// let model = b.build().unwrap();
+/// let mut dws = DerivativeWorkspace::new(&model);
+/// let mut d = AbaDerivatives::new(&model);
+/// aba_derivatives(&model, &mut dws, &[0.3], &[0.0], &[0.0], &[], &mut d).unwrap();
+/// let inertia_about_pivot = 0.25 + 1e-3;
+/// assert!((d.dqdd_dq[(0, 0)] + 9.81 * 0.5 * 0.3f64.cos() / inertia_about_pivot).abs() < 1e-12);
+/// assert!((d.dqdd_dtau[(0, 0)] - 1.0 / inertia_about_pivot).abs() < 1e-12);
+/// ```
+///
+/// # Errors
+/// Those of [`crate::aba_ext`] at `(q, v, τ)`.
+pub fn aba_derivatives<T: Real>(
+    model: &Model<T>,
+    dws: &mut DerivativeWorkspace<T>,
+    q: &[T],
+    v: &[T],
+    tau: &[T],
+    f_ext: &[LinkWrench<T>],
+    out: &mut AbaDerivatives<T>,
+) -> Result<(), DynamicsError> {
+    check_out(model, out.qdd.len(), out.dqdd_dq.shape(), "AbaDerivatives")?;
+    let qdd = super::aba_ext(model, &mut dws.plain, q, v, tau, f_ext)?;
+    out.qdd.copy_from_slice(qdd);
+    let outputs = [&mut out.dqdd_dq, &mut out.dqdd_dv, &mut out.dqdd_dtau];
+    spanning_passes(
+        model,
+        dws,
+        Pass::ForwardDynamics,
+        (q, v, tau),
+        f_ext,
+        outputs,
+    )
+}
+
+/// The derivatives of inverse dynamics, `rnea(q, v, q̈)` with the wrenches `f_ext` held fixed, into
+/// `out` (`∂τ/∂q̈` is the mass matrix).
+///
+/// # Errors
+/// Those of [`crate::rnea_ext`] at `(q, v, q̈)`.
+pub fn rnea_derivatives<T: Real>(
+    model: &Model<T>,
+    dws: &mut DerivativeWorkspace<T>,
+    q: &[T],
+    v: &[T],
+    qdd: &[T],
+    f_ext: &[LinkWrench<T>],
+    out: &mut RneaDerivatives<T>,
+) -> Result<(), DynamicsError> {
+    check_out(model, out.tau.len(), out.dtau_dq.shape(), "RneaDerivatives")?;
+    let tau = super::rnea_ext(model, &mut dws.plain, q, v, qdd, f_ext)?;
+    out.tau.copy_from_slice(tau);
+    let outputs = [&mut out.dtau_dq, &mut out.dtau_dv, &mut out.dtau_dqdd];
+    spanning_passes(
+        model,
+        dws,
+        Pass::InverseDynamics,
+        (q, v, qdd),
+        f_ext,
+        outputs,
+    )
+}
+
+/// The derivatives of the independent accelerations along the constraint manifold (see
+/// [`ManifoldDerivatives`]); `q` and `v` must satisfy the constraints, as for [`crate::aba`]. On a model
+/// without constraints they are [`aba_derivatives`]' matrices.
+///
+/// # Errors
+/// Those of [`crate::aba_ext`] at `(q, v, τ)`, and [`DynamicsError::SingularConstraint`] from the
+/// embedding map.
+pub fn aba_derivatives_independent<T: Real>(
+    model: &Model<T>,
+    dws: &mut DerivativeWorkspace<T>,
+    q: &[T],
+    v: &[T],
+    tau: &[T],
+    f_ext: &[LinkWrench<T>],
+    out: &mut ManifoldDerivatives<T>,
+) -> Result<(), DynamicsError> {
+    let (nv, ni) = (model.nv(), model.independent_nv());
+    check_len("ManifoldDerivatives rows", out.qdd_independent.len(), ni)?;
+    check_len("ManifoldDerivatives columns", out.dqdd_dq.ncols(), ni)?;
+    check_len("ManifoldDerivatives τ columns", out.dqdd_dtau.ncols(), nv)?;
+    let qdd = super::aba_ext(model, &mut dws.plain, q, v, tau, f_ext)?;
+    for (r, i) in model.independent_coordinates().enumerate() {
+        out.qdd_independent[r] = qdd[i];
+    }
+    let x = super::embedding_map_in(model, &mut dws.plain, q)?;
+    dws.x.copy_from(x);
+    let seed = |c: usize| {
+        if c < ni {
+            Seed::ManifoldConfiguration(c)
+        } else if c < 2 * ni {
+            Seed::ManifoldVelocity(c - ni)
+        } else {
+            Seed::Input(c - 2 * ni)
+        }
+    };
+    passes(
+        model,
+        dws,
+        Pass::ForwardDynamics,
+        (q, v, tau),
+        f_ext,
+        2 * ni + nv,
+        seed,
+        |c, result, lane| {
+            let (matrix, col) = if c < ni {
+                (&mut out.dqdd_dq, c)
+            } else if c < 2 * ni {
+                (&mut out.dqdd_dv, c - ni)
+            } else {
+                (&mut out.dqdd_dtau, c - 2 * ni)
+            };
+            for (r, i) in model.independent_coordinates().enumerate() {
+                matrix[(r, col)] = result[i].eps[lane];
+            }
+        },
+    )
+}
+
+fn check_out<T: Real>(
+    model: &Model<T>,
+    len: usize,
+    shape: (usize, usize),
+    name: &'static str,
+) -> Result<(), DynamicsError> {
+    check_len(name, len, model.nv())?;
+    check_len(name, shape.0, model.nv())?;
+    check_len(name, shape.1, model.nv())
+}
+
+/// The `3 nv` spanning directions (configuration, velocity, then τ or q̈), each output tangent written as
+/// a column of `outputs[0..3]`.
+fn spanning_passes<T: Real>(
+    model: &Model<T>,
+    dws: &mut DerivativeWorkspace<T>,
+    pass: Pass,
+    inputs: (&[T], &[T], &[T]),
+    f_ext: &[LinkWrench<T>],
+    outputs: [&mut DMatrix<T>; 3],
+) -> Result<(), DynamicsError> {
+    let nv = model.nv();
+    let seed = |c: usize| match c / nv {
+        0 => Seed::Configuration(c % nv),
+        1 => Seed::Velocity(c % nv),
+        _ => Seed::Input(c % nv),
+    };
+    let [dq, dv, du] = outputs;
+    passes(
+        model,
+        dws,
+        pass,
+        inputs,
+        f_ext,
+        3 * nv,
+        seed,
+        |c, result, lane| {
+            let matrix = match c / nv {
+                0 => &mut *dq,
+                1 => &mut *dv,
+                _ => &mut *du,
+            };
+            for (r, x) in result.iter().enumerate() {
+                matrix[(r, c % nv)] = x.eps[lane];
+            }
+        },
+    )
+}
+
+/// Directions `0..total` (`seed(c)` says what direction `c` moves) in passes of [`DIRECTIONS`]; after
+/// each pass `write(c, output, lane)` for each of its directions.
+#[allow(clippy::too_many_arguments)]
+fn passes<T: Real>(
+    model: &Model<T>,
+    dws: &mut DerivativeWorkspace<T>,
+    pass: Pass,
+    (q, v, u): (&[T], &[T], &[T]),
+    f_ext: &[LinkWrench<T>],
+    total: usize,
+    seed: impl Fn(usize) -> Seed,
+    mut write: impl FnMut(usize, &[D<T>], usize),
+) -> Result<(), DynamicsError> {
+    let mut seeds = [Seed::Input(0); DIRECTIONS];
+    let mut start = 0;
+    while start < total {
+        let n = DIRECTIONS.min(total - start);
+        for (lane, s) in seeds.iter_mut().take(n).enumerate() {
+            *s = seed(start + lane);
+        }
+        let result = dual_pass(model, dws, pass, q, v, u, f_ext, &seeds[..n])?;
+        for lane in 0..n {
+            write(start + lane, result, lane);
+        }
+        start += n;
+    }
+    Ok(())
+}
+
+/// One pass on dual numbers: the inputs seeded along `seeds` (one lane each), the algorithm run, its
+/// output returned (`q̈` or `τ` over the spanning tree, tangents in the lanes).
+#[allow(clippy::too_many_arguments)]
+fn dual_pass<'w, T: Real>(
+    model: &Model<T>,
+    dws: &'w mut DerivativeWorkspace<T>,
+    pass: Pass,
+    q: &[T],
+    v: &[T],
+    u: &[T],
+    f_ext: &[LinkWrench<T>],
+    seeds: &[Seed],
+) -> Result<&'w [D<T>], DynamicsError> {
+    let nv = model.nv();
+    for (d, &x) in dws.q0.iter_mut().zip(q) {
+        *d = Dual::constant(x);
+    }
+    for i in 0..nv {
+        dws.step[i] = Dual::constant(T::zero());
+        dws.v[i] = Dual::constant(v[i]);
+        dws.u[i] = Dual::constant(u[i]);
+    }
+    let mut follow_velocity = false;
+    for (lane, seed) in seeds.iter().enumerate() {
+        match *seed {
+            Seed::Configuration(k) => dws.step[k].eps[lane] = T::one(),
+            Seed::Velocity(k) => dws.v[k].eps[lane] = T::one(),
+            Seed::Input(k) => dws.u[k].eps[lane] = T::one(),
+            Seed::ManifoldConfiguration(k) => {
+                for i in 0..nv {
+                    dws.step[i].eps[lane] = dws.x[(i, k)];
+                }
+                follow_velocity = true;
+            }
+            Seed::ManifoldVelocity(k) => {
+                for i in 0..nv {
+                    dws.v[i].eps[lane] = dws.x[(i, k)];
+                }
+                follow_velocity = true;
+            }
+        }
+    }
+    crate::configuration::integrate(&dws.model, &dws.q0, &dws.step, &mut dws.q)?;
+    if follow_velocity {
+        // The dependent velocities at the moved configuration: X(q(ε)) v_I, whose tangent holds ∂X v_I.
+        crate::constraints::complete_velocity(&dws.model, &mut dws.ws, &dws.q, &mut dws.v)?;
+    }
+    dws.wrenches.clear();
+    dws.wrenches.extend(f_ext.iter().map(|w| LinkWrench {
+        frame: w.frame,
+        force: w.force.map(Dual::constant),
+        torque: w.torque.map(Dual::constant),
+    }));
+    match pass {
+        Pass::ForwardDynamics => super::aba_ext(
+            &dws.model,
+            &mut dws.ws,
+            &dws.q,
+            &dws.v,
+            &dws.u,
+            &dws.wrenches,
+        ),
+        Pass::InverseDynamics => super::rnea_ext(
+            &dws.model,
+            &mut dws.ws,
+            &dws.q,
+            &dws.v,
+            &dws.u,
+            &dws.wrenches,
+        ),
+    }
+}

@@ -1,0 +1,398 @@
+//! Derivatives of forward and inverse dynamics (issue 12) against independent oracles: central finite
+//! differences along `integrate` (the free flyer moves on SE(3)), on trees and, along the constraint
+//! manifold through `complete`, on every loop, coupling and mimic model; and the invariants
+//! `∂q̈/∂τ · M = I`, `∂τ/∂q̈ = M` and `∂q̈/∂q = −M⁻¹ ∂τ/∂q` at `q̈ = aba(q, v, τ)` (and the same for `v`).
+
+use crate::common::{load_model, random_tree, Rng};
+use crate::constraint_embedding::{consistent_state, LOOP_MODELS};
+use embedyn::constraints::{complete_configuration, complete_velocity};
+use embedyn::nalgebra::{DMatrix, DVector, Vector3};
+use embedyn::{
+    aba, aba_derivatives, aba_derivatives_independent, aba_ext, crba, integrate, rnea_derivatives,
+    rnea_ext, AbaDerivatives, DerivativeWorkspace, FrameId, LinkWrench, ManifoldDerivatives, Model,
+    RneaDerivatives, Workspace,
+};
+
+/// A model with a state: (name, model, q, v, and τ or q̈).
+type Case = (&'static str, Model<f64>, Vec<f64>, Vec<f64>, Vec<f64>);
+
+/// Trees: the quadruped and arm bundled, the floating ANYmal B with its merged feet, random branching
+/// trees fixed and floating; a random state each.
+pub fn trees() -> Vec<Case> {
+    let mut rng = Rng::new(21);
+    let mut out = Vec::new();
+    for (path, floating) in [
+        ("models/quadruped.urdf", false),
+        ("models/arm7.urdf", false),
+        ("tests/data/pinocchio/anymal_b.urdf", true),
+    ] {
+        let model = load_model::<f64>(path, floating);
+        let q = rng.configuration(&model);
+        let v = rng.vec(model.nv(), -1.5, 1.5);
+        let u = rng.vec(model.nv(), -3.0, 3.0);
+        out.push((path, model, q, v, u));
+    }
+    for (name, n, floating) in [
+        ("random tree", 9, false),
+        ("random floating tree", 12, true),
+    ] {
+        let model = random_tree(&mut rng, n, floating);
+        let q = rng.configuration(&model);
+        let v = rng.vec(model.nv(), -1.5, 1.5);
+        let u = rng.vec(model.nv(), -3.0, 3.0);
+        out.push((name, model, q, v, u));
+    }
+    out
+}
+
+/// Central-difference steps. The configuration enters nonlinearly: a small step (truncation ~h², rounding
+/// ~ε/h). Accelerations and forces are quadratic in the velocities and affine in τ (and in `v_I` along
+/// the manifold: the dependent velocities are linear in the independent ones at a fixed configuration),
+/// where a central difference is exact for any step, so a large one keeps rounding small.
+const H_Q: f64 = 1e-6;
+const H_V: f64 = 1e-2;
+const H_TAU: f64 = 1.0;
+
+/// `q ⊕ s eₖ`.
+fn moved(model: &Model<f64>, q: &[f64], k: usize, s: f64) -> Vec<f64> {
+    let mut step = vec![0.0; model.nv()];
+    step[k] = s;
+    let mut out = vec![0.0; model.nq()];
+    integrate(model, q, &step, &mut out).unwrap();
+    out
+}
+
+fn with(x: &[f64], k: usize, s: f64) -> Vec<f64> {
+    let mut y = x.to_vec();
+    y[k] += s;
+    y
+}
+
+/// Largest entry of `a − b` over the largest of `b` (at least 1).
+fn rel(a: &DMatrix<f64>, b: &DMatrix<f64>) -> f64 {
+    (a - b).abs().max() / b.abs().max().max(1.0)
+}
+
+/// The central difference of `f` in each of `n` directions, as the columns of a matrix.
+fn central(
+    rows: usize,
+    n: usize,
+    h: f64,
+    mut f: impl FnMut(usize, f64) -> Vec<f64>,
+) -> DMatrix<f64> {
+    let columns: Vec<_> = (0..n)
+        .map(|k| {
+            let (p, m) = (f(k, h), f(k, -h));
+            DVector::from_iterator(rows, p.iter().zip(&m).map(|(a, b)| (a - b) / (2.0 * h)))
+        })
+        .collect();
+    DMatrix::from_columns(&columns)
+}
+
+/// A wrench on one of the model's links (the last body's), so that the derivatives are taken with the
+/// wrench held in the link's frame.
+fn one_wrench(model: &Model<f64>) -> Vec<LinkWrench<f64>> {
+    let body = model.nbodies() - 1;
+    let frame = FrameId {
+        body: Some(body),
+        link: 0,
+    };
+    vec![LinkWrench::new(
+        frame,
+        Vector3::new(3.0, -2.0, 5.0),
+        Vector3::new(0.4, 0.1, -0.3),
+    )]
+}
+
+#[test]
+fn aba_derivatives_match_finite_differences_on_trees() {
+    for (name, model, q, v, tau) in trees() {
+        let f_ext = one_wrench(&model);
+        let nv = model.nv();
+        let mut dws = DerivativeWorkspace::new(&model);
+        let mut d = AbaDerivatives::new(&model);
+        aba_derivatives(&model, &mut dws, &q, &v, &tau, &f_ext, &mut d).unwrap();
+        let mut ws = Workspace::new(&model);
+        let mut qdd = |q: &[f64], v: &[f64], t: &[f64]| {
+            aba_ext(&model, &mut ws, q, v, t, &f_ext).unwrap().to_vec()
+        };
+        assert_eq!(d.qdd.as_slice(), qdd(&q, &v, &tau).as_slice(), "{name}");
+        let dq = central(nv, nv, H_Q, |k, s| qdd(&moved(&model, &q, k, s), &v, &tau));
+        let dv = central(nv, nv, H_V, |k, s| qdd(&q, &with(&v, k, s), &tau));
+        let dt = central(nv, nv, H_TAU, |k, s| qdd(&q, &v, &with(&tau, k, s)));
+        let errors = [
+            rel(&d.dqdd_dq, &dq),
+            rel(&d.dqdd_dv, &dv),
+            rel(&d.dqdd_dtau, &dt),
+        ];
+        assert!(
+            errors[0] < 1e-7 && errors[1] < 1e-11 && errors[2] < 1e-11,
+            "{name}: {errors:?}"
+        );
+    }
+}
+
+#[test]
+fn rnea_derivatives_match_finite_differences_and_the_mass_matrix() {
+    for (name, model, q, v, qdd) in trees() {
+        let f_ext = one_wrench(&model);
+        let nv = model.nv();
+        let mut dws = DerivativeWorkspace::new(&model);
+        let mut d = RneaDerivatives::new(&model);
+        rnea_derivatives(&model, &mut dws, &q, &v, &qdd, &f_ext, &mut d).unwrap();
+        let mut ws = Workspace::new(&model);
+        let mut tau = |q: &[f64], v: &[f64], a: &[f64]| {
+            rnea_ext(&model, &mut ws, q, v, a, &f_ext).unwrap().to_vec()
+        };
+        let dq = central(nv, nv, H_Q, |k, s| tau(&moved(&model, &q, k, s), &v, &qdd));
+        let dv = central(nv, nv, H_V, |k, s| tau(&q, &with(&v, k, s), &qdd));
+        let errors = [rel(&d.dtau_dq, &dq), rel(&d.dtau_dv, &dv)];
+        assert!(errors[0] < 1e-7 && errors[1] < 1e-11, "{name}: {errors:?}");
+        let mut ws = Workspace::new(&model);
+        let m = crba(&model, &mut ws, &q).unwrap().clone();
+        assert!(rel(&d.dtau_dqdd, &m) < 1e-14, "{name}: ∂τ/∂q̈ is not M");
+    }
+}
+
+/// `∂q̈/∂τ = M⁻¹`, and the derivatives of forward dynamics are those of inverse dynamics moved through
+/// `M⁻¹` at the accelerations forward dynamics gives (`∂q̈/∂x = −M⁻¹ ∂τ/∂x`, differentiating
+/// `τ = rnea(q, v, aba(q, v, τ))`): two algorithms, one answer.
+#[test]
+fn forward_derivatives_are_minus_m_inverse_times_inverse_derivatives() {
+    for (name, model, q, v, tau) in trees() {
+        let mut dws = DerivativeWorkspace::new(&model);
+        let mut fd = AbaDerivatives::new(&model);
+        aba_derivatives(&model, &mut dws, &q, &v, &tau, &[], &mut fd).unwrap();
+        let mut id = RneaDerivatives::new(&model);
+        let qdd = fd.qdd.as_slice().to_vec();
+        rnea_derivatives(&model, &mut dws, &q, &v, &qdd, &[], &mut id).unwrap();
+        let identity = DMatrix::identity(model.nv(), model.nv());
+        assert!(
+            rel(&(&fd.dqdd_dtau * &id.dtau_dqdd), &identity) < 1e-10,
+            "{name}: M⁻¹ M ≠ I"
+        );
+        let dq = -&fd.dqdd_dtau * &id.dtau_dq;
+        let dv = -&fd.dqdd_dtau * &id.dtau_dv;
+        assert!(
+            rel(&fd.dqdd_dq, &dq) < 1e-10,
+            "{name}: ∂q̈/∂q {}",
+            rel(&fd.dqdd_dq, &dq)
+        );
+        assert!(
+            rel(&fd.dqdd_dv, &dv) < 1e-10,
+            "{name}: ∂q̈/∂v {}",
+            rel(&fd.dqdd_dv, &dv)
+        );
+    }
+}
+
+/// Along the constraint manifold: the independent coordinates moved, the dependent ones completed
+/// (`complete_configuration` from the unmoved state, then `complete_velocity` with the independent
+/// velocities held), on every loop, coupling and mimic model.
+#[test]
+fn manifold_derivatives_match_finite_differences_through_complete() {
+    let mut rng = Rng::new(22);
+    for &(path, floating) in LOOP_MODELS.iter() {
+        let model = load_model::<f64>(path, floating);
+        let mut ws = Workspace::new(&model);
+        let (q, v) = consistent_state(&model, &mut ws, &mut rng);
+        let tau = rng.vec(model.nv(), -2.0, 2.0);
+        let (nv, ni) = (model.nv(), model.independent_nv());
+        let independent: Vec<usize> = model.independent_coordinates().collect();
+        let mut dws = DerivativeWorkspace::new(&model);
+        let mut d = ManifoldDerivatives::new(&model);
+        aba_derivatives_independent(&model, &mut dws, &q, &v, &tau, &[], &mut d).unwrap();
+
+        let mut qdd_independent = |q: &[f64], v: &[f64], t: &[f64]| -> Vec<f64> {
+            let qdd = aba(&model, &mut ws, q, v, t).unwrap();
+            independent.iter().map(|&i| qdd[i]).collect()
+        };
+        let mut ws2 = Workspace::new(&model);
+        // The state moved along independent coordinate r by s: q_I ⊕ s e_r, q_D completed, v_D following.
+        let mut on_manifold = |r: usize, s: f64, move_velocity: bool| -> (Vec<f64>, Vec<f64>) {
+            let k = independent[r];
+            let (mut q1, mut v1) = if move_velocity {
+                (q.clone(), with(&v, k, s))
+            } else {
+                (moved(&model, &q, k, s), v.clone())
+            };
+            let residual = complete_configuration(&model, &mut ws2, &mut q1).unwrap();
+            assert!(residual < 1e-12, "{path}: completion residual {residual}");
+            complete_velocity(&model, &mut ws2, &q1, &mut v1).unwrap();
+            (q1, v1)
+        };
+        let dq = central(ni, ni, H_Q, |r, s| {
+            let (q1, v1) = on_manifold(r, s, false);
+            qdd_independent(&q1, &v1, &tau)
+        });
+        let dv = central(ni, ni, H_V, |r, s| {
+            let (q1, v1) = on_manifold(r, s, true);
+            qdd_independent(&q1, &v1, &tau)
+        });
+        let dt = central(ni, nv, H_TAU, |k, s| {
+            qdd_independent(&q, &v, &with(&tau, k, s))
+        });
+        let errors = [
+            rel(&d.dqdd_dq, &dq),
+            rel(&d.dqdd_dv, &dv),
+            rel(&d.dqdd_dtau, &dt),
+        ];
+        assert!(
+            errors[0] < 1e-6 && errors[1] < 1e-9 && errors[2] < 1e-10,
+            "{path} (floating {floating}): {errors:?}"
+        );
+    }
+}
+
+/// The reference robots of tests/data/pinocchio/derivatives.py: (reference name, URDF, floating).
+pub const PINOCCHIO_ROBOTS: [(&str, &str, bool); 4] = [
+    ("ur5", "tests/data/pinocchio/ur5.urdf", false),
+    (
+        "solo12_floating",
+        "tests/data/pinocchio/solo12_floating.urdf",
+        true,
+    ),
+    (
+        "anymal_b_floating",
+        "tests/data/pinocchio/anymal_b.urdf",
+        true,
+    ),
+    (
+        "talos_reduced_floating",
+        "tests/data/erd/talos_reduced.urdf",
+        true,
+    ),
+];
+
+/// One reference sample in our coordinates: (q, v, τ, q̈ for rnea, wrenches) and a reader of its
+/// matrices (`field` → our row and column order).
+pub struct PinocchioSample {
+    pub q: Vec<f64>,
+    pub v: Vec<f64>,
+    pub tau: Vec<f64>,
+    pub qdd_for_rnea: Vec<f64>,
+    pub f_ext: Vec<LinkWrench<f64>>,
+    json: serde_json::Value,
+    v_map: Vec<usize>,
+}
+
+impl PinocchioSample {
+    /// The reference matrix `field` (Pinocchio's v order) in ours.
+    pub fn matrix(&self, field: &str) -> DMatrix<f64> {
+        let rows = self.json[field].as_array().unwrap();
+        let n = self.v_map.len();
+        DMatrix::from_fn(n, n, |i, k| {
+            rows[self.v_map[i]][self.v_map[k]].as_f64().unwrap()
+        })
+    }
+
+    /// The reference vector `field` in our order.
+    pub fn vector(&self, field: &str) -> Vec<f64> {
+        let x = crate::pinocchio_reference::vecf(&self.json[field]);
+        self.v_map.iter().map(|&p| x[p]).collect()
+    }
+}
+
+/// The samples of `<name>_derivatives.json` for `model`.
+pub fn pinocchio_samples(name: &str, model: &Model<f64>) -> Vec<PinocchioSample> {
+    use crate::pinocchio_reference::{coordinate_maps, vecf};
+    let path = crate::common::repo_path(&format!("tests/data/pinocchio/{name}_derivatives.json"));
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
+    let (q_map, v_map) = coordinate_maps(name, model, &json);
+    json["samples"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| {
+            let in_q = |x: Vec<f64>| q_map.iter().map(|&p| x[p]).collect::<Vec<f64>>();
+            let in_v = |x: Vec<f64>| v_map.iter().map(|&p| x[p]).collect::<Vec<f64>>();
+            let f_ext = s["f_ext"]
+                .as_object()
+                .map(|links| {
+                    links
+                        .iter()
+                        .map(|(link, w)| {
+                            // A link fixed to the world is a frame too: its wrench has no effect.
+                            let frame = model
+                                .frame(link)
+                                .unwrap_or_else(|| panic!("{name}: no link {link}"));
+                            let f = vecf(&w["force"]);
+                            let t = vecf(&w["torque"]);
+                            LinkWrench::new(
+                                frame,
+                                Vector3::new(f[0], f[1], f[2]),
+                                Vector3::new(t[0], t[1], t[2]),
+                            )
+                        })
+                        .collect()
+                })
+                .unwrap_or_default();
+            PinocchioSample {
+                q: in_q(vecf(&s["q"])),
+                v: in_v(vecf(&s["v"])),
+                tau: in_v(vecf(&s["tau"])),
+                qdd_for_rnea: in_v(vecf(&s["qdd_for_rnea"])),
+                f_ext,
+                json: s.clone(),
+                v_map: v_map.clone(),
+            }
+        })
+        .collect()
+}
+
+/// Against Pinocchio 4.1's analytical derivatives (`computeABADerivatives`, `computeRNEADerivatives`, with
+/// the external wrenches of the contact references): a fixed arm, two floating quadrupeds and a floating
+/// humanoid, every matrix to 1e-9 relative (observed about 1e-13).
+#[test]
+fn derivatives_match_pinocchio() {
+    for (name, urdf, floating) in PINOCCHIO_ROBOTS {
+        let model = load_model::<f64>(urdf, floating);
+        let mut dws = DerivativeWorkspace::new(&model);
+        let mut fd = AbaDerivatives::new(&model);
+        let mut id = RneaDerivatives::new(&model);
+        for (k, s) in pinocchio_samples(name, &model).iter().enumerate() {
+            aba_derivatives(&model, &mut dws, &s.q, &s.v, &s.tau, &s.f_ext, &mut fd).unwrap();
+            rnea_derivatives(
+                &model,
+                &mut dws,
+                &s.q,
+                &s.v,
+                &s.qdd_for_rnea,
+                &s.f_ext,
+                &mut id,
+            )
+            .unwrap();
+            let qdd = DMatrix::from_column_slice(model.nv(), 1, &s.vector("qdd"));
+            let tau = DMatrix::from_column_slice(model.nv(), 1, &s.vector("tau_rnea"));
+            let checks = [
+                (
+                    "qdd",
+                    rel(
+                        &DMatrix::from_column_slice(model.nv(), 1, fd.qdd.as_slice()),
+                        &qdd,
+                    ),
+                ),
+                ("dqdd_dq", rel(&fd.dqdd_dq, &s.matrix("dqdd_dq"))),
+                ("dqdd_dv", rel(&fd.dqdd_dv, &s.matrix("dqdd_dv"))),
+                ("dqdd_dtau", rel(&fd.dqdd_dtau, &s.matrix("dqdd_dtau"))),
+                (
+                    "tau",
+                    rel(
+                        &DMatrix::from_column_slice(model.nv(), 1, id.tau.as_slice()),
+                        &tau,
+                    ),
+                ),
+                ("dtau_dq", rel(&id.dtau_dq, &s.matrix("dtau_dq"))),
+                ("dtau_dv", rel(&id.dtau_dv, &s.matrix("dtau_dv"))),
+                ("dtau_dqdd", rel(&id.dtau_dqdd, &s.matrix("dtau_dqdd"))),
+            ];
+            for (field, e) in checks {
+                assert!(
+                    e < 1e-9,
+                    "{name} sample {k}: {field} differs from Pinocchio by {e:e}"
+                );
+            }
+        }
+    }
+}

@@ -1,0 +1,170 @@
+//! Generated `aba_derivatives` and `rnea_derivatives` (issue 12): against Pinocchio 4.1's analytical
+//! derivatives on the UR5 (tests/data/pinocchio/ur5_derivatives.json, the states without their wrenches:
+//! generated derivative functions take none), f64 to 1e-9 relative and f32 to 1e-3; and against the
+//! interpreted derivatives on a four-bar (the spanning tree's derivatives of the embedded dynamics).
+
+use crate::common::{load_model, repo_path, Rng};
+use embedyn::constraints::{complete_configuration, complete_velocity};
+use embedyn::nalgebra::DMatrix;
+use embedyn::{aba_derivatives, AbaDerivatives, DerivativeWorkspace, Model, Workspace};
+use serde_json::Value;
+
+mod ur5 {
+    embedyn::robot!(
+        "tests/data/pinocchio/ur5.urdf",
+        only(aba_derivatives, rnea_derivatives)
+    );
+}
+mod four_bar {
+    embedyn::robot!(
+        "models/loops/four_bar_internal.urdf",
+        f64_only,
+        only(aba_derivatives)
+    );
+}
+
+const N: usize = ur5::NV;
+
+fn numbers(v: &Value) -> Vec<f64> {
+    v.as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect()
+}
+
+/// `max|a − b| / max(1, max|b|)` over a generated matrix and a reference one.
+fn rel<const R: usize, const C: usize>(a: &[[f64; C]; R], b: &DMatrix<f64>) -> f64 {
+    let mut diff = 0.0f64;
+    for r in 0..R {
+        for c in 0..C {
+            diff = diff.max((a[r][c] - b[(r, c)]).abs());
+        }
+    }
+    diff / b.abs().max().max(1.0)
+}
+
+fn rel_vec(a: &[f64], b: &[f64]) -> f64 {
+    embedyn::relative_error(a, b)
+}
+
+/// The reference matrix `m` (rows of Pinocchio's v order) in ours (`map[ours] = theirs`).
+fn matrix(m: &Value, map: &[usize]) -> DMatrix<f64> {
+    let rows: Vec<Vec<f64>> = m.as_array().unwrap().iter().map(numbers).collect();
+    DMatrix::from_fn(map.len(), map.len(), |r, c| rows[map[r]][map[c]])
+}
+
+fn widen<const R: usize, const C: usize>(m: &[[f32; C]; R]) -> [[f64; C]; R] {
+    m.map(|row| row.map(f64::from))
+}
+
+#[test]
+fn generated_derivatives_match_pinocchio_on_the_ur5() {
+    let text =
+        std::fs::read_to_string(repo_path("tests/data/pinocchio/ur5_derivatives.json")).unwrap();
+    let json: Value = serde_json::from_str(&text).unwrap();
+    // Our joint order by name → Pinocchio's v index (a fixed arm: q and v alike).
+    let model: Model<f64> = load_model("tests/data/pinocchio/ur5.urdf", false);
+    let map: Vec<usize> = model
+        .joints
+        .iter()
+        .map(|j| {
+            json["joints"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .find(|p| p["name"].as_str() == Some(j.name.as_str()))
+                .unwrap()["idx_v"]
+                .as_u64()
+                .unwrap() as usize
+        })
+        .collect();
+    let ours = |x: Vec<f64>| -> [f64; N] { std::array::from_fn(|i| x[map[i]]) };
+    let samples = json["samples"].as_array().unwrap();
+    assert!(!samples.is_empty());
+    for (k, s) in samples.iter().enumerate() {
+        let reference = &s["without_f_ext"];
+        let (q, v) = (ours(numbers(&s["q"])), ours(numbers(&s["v"])));
+        let (tau, a) = (ours(numbers(&s["tau"])), ours(numbers(&s["qdd_for_rnea"])));
+        let mut qdd = [0.0; N];
+        let (mut dq, mut dv, mut dt) = ([[0.0; N]; N], [[0.0; N]; N], [[0.0; N]; N]);
+        ur5::f64::aba_derivatives(&q, &v, &tau, &mut qdd, &mut dq, &mut dv, &mut dt);
+        let mut t = [0.0; N];
+        let (mut tq, mut tv, mut m) = ([[0.0; N]; N], [[0.0; N]; N], [[0.0; N]; N]);
+        ur5::f64::rnea_derivatives(&q, &v, &a, &mut t, &mut tq, &mut tv, &mut m);
+        let errors = [
+            rel_vec(&qdd, &ours(numbers(&reference["qdd"]))),
+            rel(&dq, &matrix(&reference["dqdd_dq"], &map)),
+            rel(&dv, &matrix(&reference["dqdd_dv"], &map)),
+            rel(&dt, &matrix(&reference["dqdd_dtau"], &map)),
+            rel_vec(&t, &ours(numbers(&reference["tau_rnea"]))),
+            rel(&tq, &matrix(&reference["dtau_dq"], &map)),
+            rel(&tv, &matrix(&reference["dtau_dv"], &map)),
+            rel(&m, &matrix(&reference["dtau_dqdd"], &map)),
+        ];
+        assert!(errors.iter().all(|&e| e < 1e-9), "sample {k}: {errors:?}");
+
+        // f32: the same functions in single precision, to 1e-3 of Pinocchio's answer.
+        let narrow = |x: &[f64; N]| -> [f32; N] { x.map(|y| y as f32) };
+        let mut qdd32 = [0.0f32; N];
+        let (mut dq32, mut dv32, mut dt32) = ([[0.0f32; N]; N], [[0.0f32; N]; N], [[0.0f32; N]; N]);
+        ur5::f32::aba_derivatives(
+            &narrow(&q),
+            &narrow(&v),
+            &narrow(&tau),
+            &mut qdd32,
+            &mut dq32,
+            &mut dv32,
+            &mut dt32,
+        );
+        let errors32 = [
+            rel(&widen(&dq32), &matrix(&reference["dqdd_dq"], &map)),
+            rel(&widen(&dv32), &matrix(&reference["dqdd_dv"], &map)),
+            rel(&widen(&dt32), &matrix(&reference["dqdd_dtau"], &map)),
+        ];
+        assert!(
+            errors32.iter().all(|&e| e < 1e-3),
+            "sample {k}, f32: {errors32:?}"
+        );
+    }
+}
+
+/// On a four-bar the generated spanning-tree derivatives equal the interpreted ones (the same dual-number
+/// passes, traced) at consistent states.
+#[test]
+fn generated_derivatives_match_the_interpreted_on_a_loop() {
+    const NV: usize = four_bar::NV;
+    let model: Model<f64> = load_model("models/loops/four_bar_internal.urdf", false);
+    let mut ws = Workspace::new(&model);
+    let mut rng = Rng::new(5);
+    let mut dws = DerivativeWorkspace::new(&model);
+    let mut d = AbaDerivatives::new(&model);
+    for _ in 0..4 {
+        let mut q = model.neutral_configuration();
+        q[0] = rng.uniform(-0.5, 0.5);
+        complete_configuration(&model, &mut ws, &mut q).unwrap();
+        let mut v = rng.vec(NV, -1.0, 1.0);
+        complete_velocity(&model, &mut ws, &q, &mut v).unwrap();
+        let tau = rng.vec(NV, -1.0, 1.0);
+        aba_derivatives(&model, &mut dws, &q, &v, &tau, &[], &mut d).unwrap();
+        let arr = |x: &[f64]| -> [f64; NV] { std::array::from_fn(|i| x[i]) };
+        let mut qdd = [0.0; NV];
+        let (mut dq, mut dv, mut dt) = ([[0.0; NV]; NV], [[0.0; NV]; NV], [[0.0; NV]; NV]);
+        four_bar::f64::aba_derivatives(
+            &arr(&q),
+            &arr(&v),
+            &arr(&tau),
+            &mut qdd,
+            &mut dq,
+            &mut dv,
+            &mut dt,
+        );
+        let errors = [
+            rel_vec(&qdd, d.qdd.as_slice()),
+            rel(&dq, &d.dqdd_dq),
+            rel(&dv, &d.dqdd_dv),
+            rel(&dt, &d.dqdd_dtau),
+        ];
+        assert!(errors.iter().all(|&e| e < 1e-12), "{errors:?}");
+    }
+}
