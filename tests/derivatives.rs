@@ -9,8 +9,8 @@ use embedyn::constraints::{complete_configuration, complete_velocity};
 use embedyn::nalgebra::{DMatrix, DVector, Vector3};
 use embedyn::{
     aba, aba_derivatives, aba_derivatives_independent, aba_ext, crba, integrate, rnea_derivatives,
-    rnea_ext, AbaDerivatives, DerivativeWorkspace, FrameId, LinkWrench, ManifoldDerivatives, Model,
-    RneaDerivatives, Workspace,
+    rnea_ext, step, step_derivatives, AbaDerivatives, DerivativeWorkspace, FrameId, LinkWrench,
+    ManifoldDerivatives, Model, RneaDerivatives, StepDerivatives, Workspace,
 };
 
 /// A model with a state: (name, model, q, v, and τ or q̈).
@@ -394,5 +394,55 @@ fn derivatives_match_pinocchio() {
                 );
             }
         }
+    }
+}
+
+/// `step`'s Jacobian against central differences of `step` itself (configurations compared by
+/// `difference` against the undisturbed next configuration), on trees fixed and floating with a wrench;
+/// and its τ block `∂v'/∂τ = dt M⁻¹`.
+#[test]
+fn step_jacobian_matches_finite_differences_of_step() {
+    let dt = 0.01;
+    for (name, model, q, v, tau) in trees() {
+        let f_ext = one_wrench(&model);
+        let (nq, nv) = (model.nq(), model.nv());
+        let mut dws = DerivativeWorkspace::new(&model);
+        let mut d = StepDerivatives::new(&model);
+        step_derivatives(&model, &mut dws, &q, &v, &tau, dt, &f_ext, &mut d).unwrap();
+        let mut ws = Workspace::new(&model);
+        let q0 = d.q_next.as_slice().to_vec();
+        // The next state as one vector: [q' ⊖ q'₀; v'].
+        let mut next = |q: &[f64], v: &[f64], t: &[f64]| -> Vec<f64> {
+            let (mut q1, mut v1) = (vec![0.0; nq], vec![0.0; nv]);
+            step(&model, &mut ws, q, v, t, dt, &f_ext, &mut q1, &mut v1).unwrap();
+            let mut dq = vec![0.0; nv];
+            embedyn::difference(&model, &q0, &q1, &mut dq).unwrap();
+            dq.into_iter().chain(v1).collect()
+        };
+        assert!(next(&q, &v, &tau).iter().take(nv).all(|x| x.abs() < 1e-15));
+        let stacked = |top: &DMatrix<f64>, bottom: &DMatrix<f64>| {
+            let mut m = DMatrix::zeros(2 * nv, nv);
+            m.rows_mut(0, nv).copy_from(top);
+            m.rows_mut(nv, nv).copy_from(bottom);
+            m
+        };
+        let fq = central(2 * nv, nv, H_Q, |k, s| {
+            next(&moved(&model, &q, k, s), &v, &tau)
+        });
+        let fv = central(2 * nv, nv, 1e-5, |k, s| next(&q, &with(&v, k, s), &tau));
+        let ft = central(2 * nv, nv, 1e-3, |k, s| next(&q, &v, &with(&tau, k, s)));
+        let errors = [
+            rel(&stacked(&d.dq_next_dq, &d.dv_next_dq), &fq),
+            rel(&stacked(&d.dq_next_dv, &d.dv_next_dv), &fv),
+            rel(&stacked(&d.dq_next_dtau, &d.dv_next_dtau), &ft),
+        ];
+        assert!(errors.iter().all(|&e| e < 1e-7), "{name}: {errors:?}");
+        let mut ws = Workspace::new(&model);
+        let m = crba(&model, &mut ws, &q).unwrap().clone();
+        let identity = DMatrix::<f64>::identity(nv, nv);
+        assert!(
+            rel(&(&d.dv_next_dtau * &m / dt), &identity) < 1e-10,
+            "{name}: ∂v'/∂τ ≠ dt M⁻¹"
+        );
     }
 }

@@ -1,12 +1,16 @@
 //! Generated `aba_derivatives` and `rnea_derivatives` (issue 12): against Pinocchio 4.1's analytical
 //! derivatives on the UR5 (tests/data/pinocchio/ur5_derivatives.json, the states without their wrenches:
 //! generated derivative functions take none), f64 to 1e-9 relative and f32 to 1e-3; and against the
-//! interpreted derivatives on a four-bar (the spanning tree's derivatives of the embedded dynamics).
+//! interpreted derivatives on a four-bar (the spanning tree's derivatives of the embedded dynamics); the
+//! generated `step` and its Jacobian against the interpreted ones on the UR5.
 
 use crate::common::{load_model, repo_path, Rng};
 use embedyn::constraints::{complete_configuration, complete_velocity};
 use embedyn::nalgebra::DMatrix;
-use embedyn::{aba_derivatives, AbaDerivatives, DerivativeWorkspace, Model, Workspace};
+use embedyn::{
+    aba_derivatives, step_derivatives, AbaDerivatives, DerivativeWorkspace, Model, StepDerivatives,
+    Workspace,
+};
 use serde_json::Value;
 
 mod ur5 {
@@ -14,6 +18,9 @@ mod ur5 {
         "tests/data/pinocchio/ur5.urdf",
         only(aba_derivatives, rnea_derivatives)
     );
+}
+mod ur5_step {
+    embedyn::robot!("tests/data/pinocchio/ur5.urdf", f64_only, only(step));
 }
 mod four_bar {
     embedyn::robot!(
@@ -166,5 +173,53 @@ fn generated_derivatives_match_the_interpreted_on_a_loop() {
             rel(&dt, &d.dqdd_dtau),
         ];
         assert!(errors.iter().all(|&e| e < 1e-12), "{errors:?}");
+    }
+}
+
+/// The generated `step` (semi-implicit Euler and its Jacobian) equals the interpreted `step_derivatives`
+/// (the same dual-number passes, traced) on random UR5 states.
+#[test]
+fn generated_step_matches_the_interpreted() {
+    let model: Model<f64> = load_model("tests/data/pinocchio/ur5.urdf", false);
+    let mut rng = Rng::new(8);
+    let mut dws = DerivativeWorkspace::new(&model);
+    let mut d = StepDerivatives::new(&model);
+    let dt = 0.005;
+    for _ in 0..4 {
+        let q = rng.configuration(&model);
+        let v = rng.vec(N, -2.0, 2.0);
+        let tau = rng.vec(N, -5.0, 5.0);
+        step_derivatives(&model, &mut dws, &q, &v, &tau, dt, &[], &mut d).unwrap();
+        let arr = |x: &[f64]| -> [f64; N] { std::array::from_fn(|i| x[i]) };
+        let (mut q1, mut v1) = ([0.0; N], [0.0; N]);
+        let mut blocks = [[[0.0; N]; N]; 6];
+        let [a, b, c, e, f, g] = &mut blocks;
+        ur5_step::f64::step(
+            &arr(&q),
+            &arr(&v),
+            &arr(&tau),
+            dt,
+            &mut q1,
+            &mut v1,
+            a,
+            b,
+            c,
+            e,
+            f,
+            g,
+        );
+        let expected = [
+            &d.dq_next_dq,
+            &d.dq_next_dv,
+            &d.dq_next_dtau,
+            &d.dv_next_dq,
+            &d.dv_next_dv,
+            &d.dv_next_dtau,
+        ];
+        let mut worst = rel_vec(&q1, d.q_next.as_slice()).max(rel_vec(&v1, d.v_next.as_slice()));
+        for (generated, interpreted) in blocks.iter().zip(expected) {
+            worst = worst.max(rel(generated, interpreted));
+        }
+        assert!(worst < 1e-12, "{worst:e}");
     }
 }

@@ -12,8 +12,9 @@ use embedyn::{
     difference, embedding_map_in, forward_kinematics, forward_kinematics_acceleration,
     frame_classical_acceleration, frame_jacobian, frame_placement, frame_velocity, gravity,
     integrate, mass_matrix_inverse, nle, nle_ext, random_configuration, reduced_mass_matrix_in,
-    rnea, rnea_derivatives, rnea_ext, AbaDerivatives, DerivativeWorkspace, DynamicsError,
-    LinkWrench, ManifoldDerivatives, Reference, RneaDerivatives, Workspace,
+    rnea, rnea_derivatives, rnea_ext, step, step_derivatives, AbaDerivatives, DerivativeWorkspace,
+    DynamicsError, LinkWrench, ManifoldDerivatives, Reference, RneaDerivatives, StepDerivatives,
+    Workspace,
 };
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -70,8 +71,33 @@ fn algorithm_calls_do_not_allocate() {
         let mut dws = DerivativeWorkspace::new(&model);
         let mut forward = AbaDerivatives::new(&model);
         let mut inverse = RneaDerivatives::new(&model);
+        let mut stepped = StepDerivatives::new(&model);
+        let (mut q_next, mut v_next) = (vec![0.0; model.nq()], vec![0.0; model.nv()]);
         let before = ALLOCATIONS.load(Ordering::SeqCst);
         for _ in 0..3 {
+            step(
+                &model,
+                &mut ws,
+                &q,
+                &v,
+                &tau,
+                1e-3,
+                &wrenches,
+                &mut q_next,
+                &mut v_next,
+            )
+            .unwrap();
+            step_derivatives(
+                &model,
+                &mut dws,
+                &q,
+                &v,
+                &tau,
+                1e-3,
+                &wrenches,
+                &mut stepped,
+            )
+            .unwrap();
             aba_derivatives(&model, &mut dws, &q, &v, &tau, &wrenches, &mut forward).unwrap();
             rnea_derivatives(&model, &mut dws, &q, &v, &tau, &wrenches, &mut inverse).unwrap();
             let _ = aba_ext(&model, &mut ws, &q, &v, &tau, &wrenches).unwrap();

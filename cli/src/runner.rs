@@ -844,7 +844,7 @@ fn runner_calls(
                         let n = proc_macro2::Literal::usize_unsuffixed(n);
                         quote!(#n)
                     }
-                    Dim::Frames | Dim::WrenchLinks => return None,
+                    Dim::Frames | Dim::WrenchLinks | Dim::Scalar => return None,
                 })
             };
             let (mut setup, mut buffers, mut values) = (Vec::new(), Vec::new(), Vec::new());

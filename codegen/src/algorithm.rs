@@ -13,8 +13,9 @@ use embedyn_runtime::{
     centroidal_momentum_rate, com_jacobian, crba, difference, embedding_map_in, forward_kinematics,
     forward_kinematics_acceleration, frame_classical_acceleration, frame_jacobian, frame_placement,
     gravity, integrate, link_poses, mass_matrix_inverse, nle, nle_ext, reduced_mass_matrix_in,
-    rnea, rnea_derivatives, rnea_ext, AbaDerivatives, DerivativeWorkspace, DynamicsError, FrameId,
-    LinkWrench, Model, Real, Reference, RneaDerivatives, Workspace,
+    rnea, rnea_derivatives, rnea_ext, step_derivatives, AbaDerivatives, DerivativeWorkspace,
+    DynamicsError, FrameId, LinkWrench, Model, Real, Reference, RneaDerivatives, StepDerivatives,
+    Workspace,
 };
 
 /// The algorithms code can be generated for; [`Algorithm::spec`] describes each.
@@ -62,6 +63,8 @@ pub enum Algorithm {
     AbaDerivatives,
     /// `rnea_derivatives`: inverse dynamics and its derivatives with respect to `q`, `v` and `q̈`.
     RneaDerivatives,
+    /// `step`: one semi-implicit Euler step and its Jacobian.
+    Step,
 }
 
 /// A length of an argument or an output, in the model's terms.
@@ -79,6 +82,8 @@ pub enum Dim {
     WrenchLinks,
     /// A fixed length.
     Fixed(usize),
+    /// A single number passed by value (`dt: S`), not an array.
+    Scalar,
 }
 
 /// The sizes of one model that [`Dim`]s resolve to.
@@ -119,6 +124,7 @@ impl Dim {
             Dim::Frames => dims.frames,
             Dim::WrenchLinks => dims.wrench_links,
             Dim::Fixed(n) => n,
+            Dim::Scalar => 1,
         }
     }
 
@@ -131,6 +137,7 @@ impl Dim {
             Dim::Frames => "FRAMES.len()".into(),
             Dim::WrenchLinks => "WRENCH_LINKS.len()".into(),
             Dim::Fixed(n) => n.to_string(),
+            Dim::Scalar => "1".into(),
         }
     }
 }
@@ -350,6 +357,12 @@ const QDD: InputSpec = InputSpec {
     len: Dim::Nv,
     columns: None,
     unit: "rad/s² or m/s²",
+};
+const DT: InputSpec = InputSpec {
+    name: "dt",
+    len: Dim::Scalar,
+    columns: None,
+    unit: "s",
 };
 const Q1: InputSpec = InputSpec {
     name: "q1",
@@ -1267,6 +1280,91 @@ pub const ALGORITHMS: &[AlgorithmSpec] = &[
             rnea_derivatives(model, &mut dws, inputs[0], inputs[1], inputs[2], &[], &mut d)
         },
     },
+    AlgorithmSpec {
+        algorithm: Algorithm::Step,
+        name: "step",
+        traced_name: "step",
+        wrapper: None,
+        summary: "one semi-implicit Euler step `(q', v')` and its Jacobian with respect to `(q, v, τ)` (only when asked for)",
+        doc: "One step of semi-implicit Euler, `v_next = v + dt · aba(q, v, tau)` and `q_next = integrate(q, dt · v_next)`, and its Jacobian in blocks (`nv × nv`, tangent space: a column of `∂/∂q` is along `integrate(q, ε e_k)`, a row of `∂q_next` is an entry of `difference(q_next, ·)`): the linearization a multiple-shooting solver takes at each knot.",
+        doc_with_constraints: Some("One step of semi-implicit Euler over the spanning tree's coordinates (`q_next` satisfies the constraints to first order in `dt`), and its Jacobian in blocks (`nv × nv`, tangent space)."),
+        inputs: &[Q, V, TAU, DT],
+        outputs: &[
+            OutputSpec {
+                name: "q_next",
+                shape: Shape::Vector(Dim::Nq),
+                unit: "rad or m; a floating joint's [x y z qx qy qz qw]",
+            },
+            OutputSpec {
+                name: "v_next",
+                shape: Shape::Vector(Dim::Nv),
+                unit: "rad/s or m/s",
+            },
+            OutputSpec {
+                name: "dq_next_dq",
+                shape: Shape::Matrix(Dim::Nv, Dim::Nv),
+                unit: "per unit of the input",
+            },
+            OutputSpec {
+                name: "dq_next_dv",
+                shape: Shape::Matrix(Dim::Nv, Dim::Nv),
+                unit: "per unit of the input",
+            },
+            OutputSpec {
+                name: "dq_next_dtau",
+                shape: Shape::Matrix(Dim::Nv, Dim::Nv),
+                unit: "per unit of the input",
+            },
+            OutputSpec {
+                name: "dv_next_dq",
+                shape: Shape::Matrix(Dim::Nv, Dim::Nv),
+                unit: "per unit of the input",
+            },
+            OutputSpec {
+                name: "dv_next_dv",
+                shape: Shape::Matrix(Dim::Nv, Dim::Nv),
+                unit: "per unit of the input",
+            },
+            OutputSpec {
+                name: "dv_next_dtau",
+                shape: Shape::Matrix(Dim::Nv, Dim::Nv),
+                unit: "per unit of the input",
+            },
+        ],
+        returns: Returns::Nothing,
+        needs_constraints: false,
+        generated: WhenGenerated::OnRequest,
+        parameter: Parameter::None,
+        readme_note: " — one semi-implicit Euler step and its Jacobian with respect to `(q, v, tau)` (tangent space)",
+        readme_note_with_constraints: None,
+        cli: None,
+        growth: Growth::Quadratic,
+        predicted_operations: |c| 700.0 * c.nv * c.nv,
+        trace: |model, _, inputs, _| {
+            let mut dws = DerivativeWorkspace::new(model);
+            let mut d = StepDerivatives::new(model);
+            let dt = inputs[3][0];
+            step_derivatives(model, &mut dws, &inputs[0], &inputs[1], &inputs[2], dt, &[], &mut d)?;
+            Ok(Traced {
+                outputs: vec![
+                    d.q_next.iter().copied().collect(),
+                    d.v_next.iter().copied().collect(),
+                    row_major(&d.dq_next_dq),
+                    row_major(&d.dq_next_dv),
+                    row_major(&d.dq_next_dtau),
+                    row_major(&d.dv_next_dq),
+                    row_major(&d.dv_next_dv),
+                    row_major(&d.dv_next_dtau),
+                ],
+                returned: None,
+            })
+        },
+        interpreted: |model, _, inputs, _| {
+            let mut dws = DerivativeWorkspace::new(model);
+            let mut d = StepDerivatives::new(model);
+            step_derivatives(model, &mut dws, inputs[0], inputs[1], inputs[2], inputs[3][0], &[], &mut d)
+        },
+    },
 ];
 
 /// The wrenches of `f_ext`'s rows (`[fx, fy, fz, tx, ty, tz]`, row-major) on `frames`, in order.
@@ -1320,7 +1418,7 @@ const _: () = {
         assert!(ALGORITHMS[i].algorithm as usize == i);
         i += 1;
     }
-    assert!(Algorithm::RneaDerivatives as usize + 1 == ALGORITHMS.len());
+    assert!(Algorithm::Step as usize + 1 == ALGORITHMS.len());
 };
 
 impl Algorithm {
@@ -1420,6 +1518,7 @@ impl AlgorithmSpec {
     /// `aba(q: &[S; NQ], v: &[S; NV], tau: &[S; NV], qdd: &mut [S; NV])`.
     pub fn readme_line(&self, constrained: bool) -> String {
         let inputs = self.inputs.iter().map(|i| match i.columns {
+            None if i.len == Dim::Scalar => format!("{}: S", i.name),
             None => format!("{}: &[S; {}]", i.name, i.len.code()),
             Some(c) => format!("{}: &[[S; {c}]; {}]", i.name, i.len.code()),
         });
@@ -1635,7 +1734,7 @@ mod tests {
         let e = Algorithm::from_name("abba").unwrap_err().to_string();
         assert_eq!(
             e,
-            "unknown function `abba` (expected kinematics, aba, rnea, gravity, nle, crba, minv, complete, embedding, crba_independent, integrate, difference, aba_ext, rnea_ext, nle_ext, frame, com, centroidal, centroidal_bias, aba_derivatives, rnea_derivatives)"
+            "unknown function `abba` (expected kinematics, aba, rnea, gravity, nle, crba, minv, complete, embedding, crba_independent, integrate, difference, aba_ext, rnea_ext, nle_ext, frame, com, centroidal, centroidal_bias, aba_derivatives, rnea_derivatives, step)"
         );
     }
 

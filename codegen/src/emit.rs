@@ -15,11 +15,16 @@ pub struct Arg {
     pub name: &'static str,
     pub len: usize,
     pub columns: Option<usize>,
+    /// A single number passed by value (`dt: S`).
+    pub scalar: bool,
 }
 
 impl Arg {
     /// The parameter's type: `&[S; 7]` or `&[[S; 6]; 4]`.
     pub(crate) fn type_text(&self) -> String {
+        if self.scalar {
+            return "S".into();
+        }
         match self.columns {
             None => format!("&[S; {}]", self.len),
             Some(c) => format!("&[[S; {c}]; {}]", self.len),
@@ -28,6 +33,9 @@ impl Arg {
 
     /// Reading entry `index` (row-major for a matrix): `q[3]`, `f_ext[1][2]`.
     pub(crate) fn entry_text(&self, index: u32) -> String {
+        if self.scalar {
+            return self.name.to_string();
+        }
         let i = index as usize;
         match self.columns {
             None => format!("{}[{i}]", self.name),
@@ -37,6 +45,9 @@ impl Arg {
 
     fn tokens(&self) -> TokenStream {
         let id = format_ident!("{}", self.name);
+        if self.scalar {
+            return quote!(#id: S);
+        }
         let len = num(self.len);
         match self.columns {
             None => quote!(#id: &[S; #len]),
@@ -49,6 +60,9 @@ impl Arg {
 
     fn entry(&self, index: u32) -> TokenStream {
         let id = format_ident!("{}", self.name);
+        if self.scalar {
+            return quote!(#id);
+        }
         let i = index as usize;
         match self.columns {
             None => {

@@ -852,6 +852,9 @@ fn generate_algorithm(
     // coordinates), so that generated code reads `let knee_q = q[2];`.
     let named_input = |arg: u8, spec_input: &crate::algorithm::InputSpec, i: usize| -> Sym {
         let value = input(arg, i);
+        if spec_input.len == crate::algorithm::Dim::Scalar {
+            return value;
+        }
         if spec_input.len == crate::algorithm::Dim::WrenchLinks {
             return match wrench_names.get(i / 6) {
                 Some(link) => value.named(link, spec_input.name, WRENCH_COMPONENT[i % 6]),
@@ -964,6 +967,7 @@ fn generate_algorithm(
             name: i.name,
             len: i.len.len(&dims),
             columns: i.columns,
+            scalar: i.len == crate::algorithm::Dim::Scalar,
         })
         .collect();
     let doc = match instance.link {

@@ -61,9 +61,9 @@ pub use algorithms::{
     forward_kinematics_acceleration, frame_classical_acceleration, frame_jacobian, frame_placement,
     frame_velocity, gravity, kinetic_energy, kkt_forward_dynamics, link_poses, mass_matrix_inverse,
     nle, nle_ext, potential_energy, reduced_mass_matrix, reduced_mass_matrix_in, rnea,
-    rnea_derivatives, rnea_ext, rnea_with_gravity, AbaDerivatives, CenterOfMass,
-    DerivativeWorkspace, DynamicsError, Kinematics, LinkWrench, ManifoldDerivatives, Reference,
-    RneaDerivatives, Sweep, Workspace,
+    rnea_derivatives, rnea_ext, rnea_with_gravity, step, step_derivatives, AbaDerivatives,
+    CenterOfMass, DerivativeWorkspace, DynamicsError, Kinematics, LinkWrench, ManifoldDerivatives,
+    Reference, RneaDerivatives, StepDerivatives, Sweep, Workspace,
 };
 #[cfg(feature = "alloc")]
 pub use configuration::{

@@ -47,6 +47,10 @@ pub struct DerivativeWorkspace<T: Real> {
     step: Vec<D<T>>,
     wrenches: Vec<LinkWrench<D<T>>>,
     x: DMatrix<T>,
+    /// [`step`]'s configurations (the undisturbed next one as constants, the disturbed one) and output.
+    next0: Vec<D<T>>,
+    next: Vec<D<T>>,
+    out: Vec<D<T>>,
 }
 
 impl<T: Real> DerivativeWorkspace<T> {
@@ -69,6 +73,9 @@ impl<T: Real> DerivativeWorkspace<T> {
             step: vec![zero; model.nv()],
             wrenches: Vec::with_capacity(model.frames().count()),
             x: DMatrix::zeros(model.nv(), model.independent_nv()),
+            next0: vec![zero; model.nq()],
+            next: vec![zero; model.nq()],
+            out: vec![zero; 2 * model.nv()],
             model: dual,
         }
     }
@@ -174,9 +181,12 @@ enum Seed {
 
 /// Which algorithm a pass differentiates.
 #[derive(Clone, Copy, PartialEq)]
-enum Pass {
+enum Pass<T: Real> {
     ForwardDynamics,
     InverseDynamics,
+    /// [`step`] with this time step: the output is `[q' ⊖ q'₀; v']` (the configuration's change in the
+    /// tangent space at the undisturbed `q'₀`, then the velocity).
+    Step(T),
 }
 
 /// The derivatives of forward dynamics, `aba(q, v, τ)` with the wrenches `f_ext` held fixed, over the
@@ -311,6 +321,153 @@ pub fn aba_derivatives_independent<T: Real>(
     )
 }
 
+/// One step of semi-implicit (symplectic) Euler: `v' = v + dt · aba(q, v, τ)`, then `q' = q ⊕ dt · v'`
+/// ([`integrate`](crate::integrate)), the wrenches `f_ext` held over the step. Leaves `dt · v'` in
+/// `ws.qdd`. On a model with constraints it steps the spanning tree's coordinates (the next state satisfies
+/// the constraints to first order in `dt`; `complete` projects it back).
+///
+/// # Errors
+/// Those of [`crate::aba_ext`] at `(q, v, τ)`; [`DynamicsError::WrongLength`] for a `q_next` or `v_next` of
+/// the wrong length.
+#[allow(clippy::too_many_arguments)]
+pub fn step<T: Real>(
+    model: &Model<T>,
+    ws: &mut Workspace<T>,
+    q: &[T],
+    v: &[T],
+    tau: &[T],
+    dt: T,
+    f_ext: &[LinkWrench<T>],
+    q_next: &mut [T],
+    v_next: &mut [T],
+) -> Result<(), DynamicsError> {
+    check_len("q_next", q_next.len(), model.nq())?;
+    check_len("v_next", v_next.len(), model.nv())?;
+    super::aba_ext(model, ws, q, v, tau, f_ext)?;
+    for i in 0..model.nv() {
+        v_next[i] = v[i] + dt * ws.qdd[i];
+        ws.qdd[i] = dt * v_next[i];
+    }
+    crate::configuration::integrate(model, q, &ws.qdd, q_next)
+}
+
+/// [`step`]'s next state and its Jacobian with respect to `(q, v, τ)` (each block `nv × nv`; row and
+/// column perturbations of a configuration are in the tangent space: column `k` of a `∂/∂q` along
+/// `integrate(q, ε eₖ)`, row `i` of a `∂q'` the `i`-th entry of `difference(q'₀, q'(ε))`) — the block a
+/// multiple-shooting solver linearizes each knot with.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StepDerivatives<T: Real> {
+    /// `q'`.
+    pub q_next: DVector<T>,
+    /// `v'`.
+    pub v_next: DVector<T>,
+    /// `∂q'/∂q`.
+    pub dq_next_dq: DMatrix<T>,
+    /// `∂q'/∂v`.
+    pub dq_next_dv: DMatrix<T>,
+    /// `∂q'/∂τ`.
+    pub dq_next_dtau: DMatrix<T>,
+    /// `∂v'/∂q`.
+    pub dv_next_dq: DMatrix<T>,
+    /// `∂v'/∂v`.
+    pub dv_next_dv: DMatrix<T>,
+    /// `∂v'/∂τ` (`dt · M⁻¹` for a tree).
+    pub dv_next_dtau: DMatrix<T>,
+}
+
+impl<T: Real> StepDerivatives<T> {
+    /// Zeros of `model`'s sizes.
+    pub fn new(model: &Model<T>) -> Self {
+        let (nq, nv) = (model.nq(), model.nv());
+        let zero = || DMatrix::zeros(nv, nv);
+        StepDerivatives {
+            q_next: DVector::zeros(nq),
+            v_next: DVector::zeros(nv),
+            dq_next_dq: zero(),
+            dq_next_dv: zero(),
+            dq_next_dtau: zero(),
+            dv_next_dq: zero(),
+            dv_next_dv: zero(),
+            dv_next_dtau: zero(),
+        }
+    }
+}
+
+/// [`step`] and its Jacobian (see [`StepDerivatives`]), by dual numbers through the step itself: the
+/// forward dynamics, the velocity update, `integrate`, and `difference` against the undisturbed next
+/// configuration.
+///
+/// # Errors
+/// Those of [`step`].
+#[allow(clippy::too_many_arguments)]
+pub fn step_derivatives<T: Real>(
+    model: &Model<T>,
+    dws: &mut DerivativeWorkspace<T>,
+    q: &[T],
+    v: &[T],
+    tau: &[T],
+    dt: T,
+    f_ext: &[LinkWrench<T>],
+    out: &mut StepDerivatives<T>,
+) -> Result<(), DynamicsError> {
+    let nv = model.nv();
+    check_len("StepDerivatives q_next", out.q_next.len(), model.nq())?;
+    check_out(
+        model,
+        out.v_next.len(),
+        out.dq_next_dq.shape(),
+        "StepDerivatives",
+    )?;
+    step(
+        model,
+        &mut dws.plain,
+        q,
+        v,
+        tau,
+        dt,
+        f_ext,
+        out.q_next.as_mut_slice(),
+        out.v_next.as_mut_slice(),
+    )?;
+    for (d, &x) in dws.next0.iter_mut().zip(out.q_next.iter()) {
+        *d = Dual::constant(x);
+    }
+    let seed = |c: usize| match c / nv {
+        0 => Seed::Configuration(c % nv),
+        1 => Seed::Velocity(c % nv),
+        _ => Seed::Input(c % nv),
+    };
+    let StepDerivatives {
+        dq_next_dq,
+        dq_next_dv,
+        dq_next_dtau,
+        dv_next_dq,
+        dv_next_dv,
+        dv_next_dtau,
+        ..
+    } = out;
+    passes(
+        model,
+        dws,
+        Pass::Step(dt),
+        (q, v, tau),
+        f_ext,
+        3 * nv,
+        seed,
+        |c, result, lane| {
+            let (dq, dv) = match c / nv {
+                0 => (&mut *dq_next_dq, &mut *dv_next_dq),
+                1 => (&mut *dq_next_dv, &mut *dv_next_dv),
+                _ => (&mut *dq_next_dtau, &mut *dv_next_dtau),
+            };
+            for r in 0..nv {
+                dq[(r, c % nv)] = result[r].eps[lane];
+                dv[(r, c % nv)] = result[nv + r].eps[lane];
+            }
+        },
+    )
+}
+
 fn check_out<T: Real>(
     model: &Model<T>,
     len: usize,
@@ -327,7 +484,7 @@ fn check_out<T: Real>(
 fn spanning_passes<T: Real>(
     model: &Model<T>,
     dws: &mut DerivativeWorkspace<T>,
-    pass: Pass,
+    pass: Pass<T>,
     inputs: (&[T], &[T], &[T]),
     f_ext: &[LinkWrench<T>],
     outputs: [&mut DMatrix<T>; 3],
@@ -366,7 +523,7 @@ fn spanning_passes<T: Real>(
 fn passes<T: Real>(
     model: &Model<T>,
     dws: &mut DerivativeWorkspace<T>,
-    pass: Pass,
+    pass: Pass<T>,
     (q, v, u): (&[T], &[T], &[T]),
     f_ext: &[LinkWrench<T>],
     total: usize,
@@ -395,7 +552,7 @@ fn passes<T: Real>(
 fn dual_pass<'w, T: Real>(
     model: &Model<T>,
     dws: &'w mut DerivativeWorkspace<T>,
-    pass: Pass,
+    pass: Pass<T>,
     q: &[T],
     v: &[T],
     u: &[T],
@@ -459,5 +616,25 @@ fn dual_pass<'w, T: Real>(
             &dws.u,
             &dws.wrenches,
         ),
+        Pass::Step(dt) => {
+            let dt = Dual::constant(dt);
+            let qdd = super::aba_ext(
+                &dws.model,
+                &mut dws.ws,
+                &dws.q,
+                &dws.v,
+                &dws.u,
+                &dws.wrenches,
+            )?;
+            for (i, &a) in qdd.iter().enumerate() {
+                let v_next = dws.v[i] + dt * a;
+                dws.out[nv + i] = v_next;
+                dws.step[i] = dt * v_next;
+            }
+            crate::configuration::integrate(&dws.model, &dws.q, &dws.step, &mut dws.next)?;
+            let (displacement, _) = dws.out.split_at_mut(nv);
+            crate::configuration::difference(&dws.model, &dws.next0, &dws.next, displacement)?;
+            Ok(&dws.out)
+        }
     }
 }

@@ -22,8 +22,8 @@ pub use centroidal::{
 };
 pub use crba::crba;
 pub use derivatives::{
-    aba_derivatives, aba_derivatives_independent, rnea_derivatives, AbaDerivatives,
-    DerivativeWorkspace, ManifoldDerivatives, RneaDerivatives,
+    aba_derivatives, aba_derivatives_independent, rnea_derivatives, step, step_derivatives,
+    AbaDerivatives, DerivativeWorkspace, ManifoldDerivatives, RneaDerivatives, StepDerivatives,
 };
 pub(crate) use embedded::position_kinematics;
 pub use embedded::{
