@@ -232,20 +232,6 @@ pub fn eval(
     let model64 = loaded.model::<f64>(options)?;
     let frame = query.frame(&model64)?;
     let samples = read_samples(&model64, query, input)?;
-    if engine == Engine::Generated
-        && matches!(
-            query.algo,
-            EvalAlgo::AbaDerivatives | EvalAlgo::RneaDerivatives
-        )
-    {
-        return Err(CliError::BadOption {
-            option: "--engine",
-            message: format!(
-                "`--algo {}` has no generated code yet: use `--engine interpreted`",
-                query.algo.name()
-            ),
-        });
-    }
     if engine == Engine::Generated {
         // Before anything is compiled.
         samples.check_all()?;
@@ -386,13 +372,25 @@ impl Plan {
             EvalAlgo::Com => Algo::Com,
             EvalAlgo::Centroidal => Algo::Centroidal,
             EvalAlgo::AbaDerivatives | EvalAlgo::RneaDerivatives => {
-                return Err(CliError::BadOption {
+                // The generated derivatives are the spanning tree's, without wrenches: the manifold
+                // derivatives of a model with constraints and derivatives with wrenches are interpreted.
+                let refuse = |what: &str| CliError::BadOption {
                     option: "--engine",
                     message: format!(
-                        "`--algo {}` has no generated code yet: use `--engine interpreted`",
+                        "`--algo {}` {what} has no generated code yet: use `--engine interpreted`",
                         query.algo.name()
                     ),
-                })
+                };
+                if plan.constrained {
+                    return Err(refuse("on a model with loops, couplings or mimic joints"));
+                }
+                if samples.has_wrenches() {
+                    return Err(refuse("with external wrenches (`f_ext`)"));
+                }
+                match query.algo {
+                    EvalAlgo::AbaDerivatives => Algo::AbaDerivatives,
+                    _ => Algo::RneaDerivatives,
+                }
             }
         };
         plan.arm = match plan.function {
@@ -678,7 +676,28 @@ fn generated_outputs(
         };
         let x = x.as_ref();
         let has_v = samples.optional_vector(i, "v").ok().flatten().is_some();
+        let square = |m: &[f64], name| -> Result<Vec<Vec<f64>>, CliError> {
+            Ok(finite(m, i, name)?
+                .chunks(nv)
+                .map(<[f64]>::to_vec)
+                .collect())
+        };
         out.push(match (plan.algo, &parts[..]) {
+            (EvalAlgo::AbaDerivatives, [qdd, dq, dv, dtau]) => Output::AbaDerivatives {
+                qdd: finite(qdd, i, "qdd")?,
+                dqdd_dq: square(dq, "dqdd_dq")?,
+                dqdd_dv: square(dv, "dqdd_dv")?,
+                dqdd_dtau: square(dtau, "dqdd_dtau")?,
+                dqdd_independent_dq_independent: None,
+                dqdd_independent_dv_independent: None,
+                dqdd_independent_dtau: None,
+            },
+            (EvalAlgo::RneaDerivatives, [tau, dq, dv, m]) => Output::RneaDerivatives {
+                tau: finite(tau, i, "tau")?,
+                dtau_dq: square(dq, "dtau_dq")?,
+                dtau_dv: square(dv, "dtau_dv")?,
+                dtau_dqdd: square(m, "dtau_dqdd")?,
+            },
             (EvalAlgo::Dynamics(Algo::Aba), [qdd]) => {
                 let qdd = finite(qdd, i, "qdd")?;
                 Output::Aba {

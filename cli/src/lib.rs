@@ -303,9 +303,9 @@ pub enum EvalAlgo {
     Com,
     /// `centroidal`: the centroidal momentum matrix, momentum and bias.
     Centroidal,
-    /// `aba_derivatives`: forward dynamics and its derivatives (interpreted engine).
+    /// `aba_derivatives`: forward dynamics and its derivatives.
     AbaDerivatives,
-    /// `rnea_derivatives`: inverse dynamics and its derivatives (interpreted engine).
+    /// `rnea_derivatives`: inverse dynamics and its derivatives.
     RneaDerivatives,
 }
 
@@ -317,8 +317,8 @@ impl From<Algo> for EvalAlgo {
 
 impl EvalAlgo {
     /// The frame, centroidal and derivative algorithms, with their `--algo` help: the command line's names
-    /// for them (the generated engine runs the generated `frame_<link>`, `com` and `centroidal`; the
-    /// derivatives are interpreted only, for now). (Should the
+    /// for them (the generated engine runs the generated `frame_<link>`, `com`, `centroidal`,
+    /// `aba_derivatives` and `rnea_derivatives`). (Should the
     /// descriptors offer one of these names, this entry is the one `--algo` means.)
     const KINEMATIC: [(EvalAlgo, &'static str, &'static str); 5] = [
         (
@@ -339,12 +339,12 @@ impl EvalAlgo {
         (
             EvalAlgo::AbaDerivatives,
             "aba_derivatives",
-            "Forward dynamics and its derivatives dqdd/dq, dqdd/dv, dqdd/dtau (interpreted engine)",
+            "Forward dynamics and its derivatives dqdd/dq, dqdd/dv, dqdd/dtau",
         ),
         (
             EvalAlgo::RneaDerivatives,
             "rnea_derivatives",
-            "Inverse dynamics and its derivatives dtau/dq, dtau/dv, dtau/dqdd = M (interpreted engine)",
+            "Inverse dynamics and its derivatives dtau/dq, dtau/dv, dtau/dqdd = M",
         ),
     ];
 

@@ -1,9 +1,9 @@
 //! `eval --algo aba_derivatives` and `rnea_derivatives` (CONTRACT §3) through the command line: against
 //! Pinocchio 4.1's analytical derivatives (tests/data/pinocchio/derivatives.py: a fixed UR5 and a floating
 //! ANYmal B, with the contact references' external wrenches) to 1e-9 relative; the manifold fields of a
-//! loop model; the generated engine's refusal.
+//! loop model; the generated engine against the interpreted one, and its refusals.
 
-use crate::cli::{json_of, repo};
+use crate::cli::{embedyn_cached, json_of, repo};
 use crate::contact::{flat_rows, refused, relative_error, vecf, Robot};
 use serde_json::{json, Value};
 
@@ -96,16 +96,74 @@ fn loop_models_report_manifold_derivatives() {
     }
 }
 
-/// Derivatives have no generated code yet: the generated engine refuses with a usage error (exit 2)
-/// saying what to use instead, before building anything.
+/// `--engine generated` runs the generated `aba_derivatives` and `rnea_derivatives` and agrees with the
+/// interpreted engine (the same dual-number passes, traced: to rounding) on the UR5, f64 and f32 (to 1e-3
+/// relative, the f32 answer of the same states).
 #[test]
-fn the_generated_engine_refuses_derivatives() {
-    let model = repo("models/arm7.urdf");
-    let input = json!({"samples": [{"q": vec![0.1; 7], "v": vec![0.0; 7], "tau": vec![0.0; 7]}]});
+fn the_generated_engine_agrees_with_the_interpreted() {
+    let r = Robot::with_reference("ur5", "tests/data/pinocchio/ur5.urdf", false, "derivatives");
+    let model = repo("tests/data/pinocchio/ur5.urdf");
+    for (algo, key, field) in [
+        ("aba_derivatives", "tau", "tau"),
+        ("rnea_derivatives", "qdd", "qdd_for_rnea"),
+    ] {
+        let samples: Vec<Value> = r
+            .samples()
+            .iter()
+            .map(|s| json!({"q": r.q(s), "v": r.v(&s["v"]), key: r.v(&s[field])}))
+            .collect();
+        let input = json!({ "samples": samples }).to_string();
+        let interpreted = json_of(&["eval", &model, "--algo", algo], &input);
+        for (scalar, tol) in [("f64", 1e-12), ("f32", 1e-3)] {
+            let (ok, out, err) = embedyn_cached(
+                &[
+                    "eval",
+                    &model,
+                    "--algo",
+                    algo,
+                    "--engine",
+                    "generated",
+                    "--scalar",
+                    scalar,
+                ],
+                &input,
+            );
+            assert!(ok, "{algo} {scalar}: {err}");
+            let generated: Value = serde_json::from_str(&out).unwrap();
+            for (g, i) in generated["samples"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .zip(interpreted["samples"].as_array().unwrap())
+            {
+                for (field, reference) in i.as_object().unwrap() {
+                    let (a, b) = match reference {
+                        Value::Array(rows) if rows[0].is_array() => {
+                            (flat_rows(&g[field]), flat_rows(reference))
+                        }
+                        _ => (vecf(&g[field]), vecf(reference)),
+                    };
+                    let e = relative_error(&a, &b);
+                    assert!(e < tol, "{algo} {scalar} {field}: {e:e}");
+                }
+            }
+        }
+    }
+}
+
+/// The generated derivatives are the spanning tree's, without wrenches: on a model with constraints and
+/// with `f_ext` the generated engine refuses with a usage error (exit 2) saying what to use, before
+/// building anything.
+#[test]
+fn the_generated_engine_refuses_what_it_does_not_generate() {
+    let four_bar = repo("models/loops/four_bar_internal.urdf");
+    let guess = json!({"samples": [{"q": vec![0.2; 4], "v": vec![0.3; 4]}]});
+    let state = json_of(&["complete", &four_bar], &guess.to_string())["samples"][0].clone();
+    let input = json!({"samples": [{"q": state["q"], "v": state["v"], "tau": vec![0.1; 4]}]});
     let stderr = refused(
         &[
             "eval",
-            &model,
+            &four_bar,
             "--algo",
             "aba_derivatives",
             "--engine",
@@ -114,5 +172,27 @@ fn the_generated_engine_refuses_derivatives() {
         &input.to_string(),
         2,
     );
-    assert!(stderr.contains("--engine interpreted"), "{stderr}");
+    assert!(
+        stderr.contains("loops") && stderr.contains("--engine interpreted"),
+        "{stderr}"
+    );
+    let arm = repo("models/arm7.urdf");
+    let wrench = json!({"samples": [{"q": vec![0.1; 7], "v": vec![0.0; 7], "qdd": vec![0.0; 7],
+        "f_ext": {"link7": {"force": [1.0, 0.0, 0.0], "torque": [0.0, 0.0, 0.0]}}}]});
+    let stderr = refused(
+        &[
+            "eval",
+            &arm,
+            "--algo",
+            "rnea_derivatives",
+            "--engine",
+            "generated",
+        ],
+        &wrench.to_string(),
+        2,
+    );
+    assert!(
+        stderr.contains("f_ext") && stderr.contains("--engine interpreted"),
+        "{stderr}"
+    );
 }
