@@ -446,3 +446,42 @@ fn step_jacobian_matches_finite_differences_of_step() {
         );
     }
 }
+
+/// Inputs the derivatives refuse rather than answer wrongly or panic on: a workspace made for another
+/// model, a non-finite time step, and the errors of `aba` itself (a NaN velocity).
+#[test]
+fn derivatives_refuse_bad_inputs() {
+    let arm: Model<f64> = load_model("models/arm7.urdf", false);
+    let quadruped: Model<f64> = load_model("models/quadruped.urdf", false);
+    let mut other = DerivativeWorkspace::new(&quadruped);
+    let mut d = AbaDerivatives::new(&arm);
+    let (q, v, tau) = (vec![0.1; 7], vec![0.0; 7], vec![0.0; 7]);
+    let e = aba_derivatives(&arm, &mut other, &q, &v, &tau, &[], &mut d).unwrap_err();
+    assert!(
+        matches!(e, embedyn::DynamicsError::WrongLength { .. }),
+        "{e}"
+    );
+    let mut dws = DerivativeWorkspace::new(&arm);
+    let mut s = StepDerivatives::new(&arm);
+    for dt in [f64::NAN, f64::INFINITY] {
+        let e = step_derivatives(&arm, &mut dws, &q, &v, &tau, dt, &[], &mut s).unwrap_err();
+        assert!(
+            matches!(e, embedyn::DynamicsError::NonFiniteInput { name: "dt", .. }),
+            "{e}"
+        );
+    }
+    let mut bad_v = v.clone();
+    bad_v[3] = f64::NAN;
+    let e = aba_derivatives(&arm, &mut dws, &q, &bad_v, &tau, &[], &mut d).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            embedyn::DynamicsError::NonFiniteInput {
+                name: "v",
+                index: 3,
+                ..
+            }
+        ),
+        "{e}"
+    );
+}

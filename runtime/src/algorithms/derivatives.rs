@@ -19,7 +19,7 @@
 //! an inconsistent state) is that of [`crate::aba`] or [`crate::rnea`]; the dual passes then repeat the
 //! arithmetic with the tangents.
 
-use super::{check_len, DynamicsError, LinkWrench, Workspace};
+use super::{check_input, check_len, DynamicsError, LinkWrench, Workspace};
 #[allow(unused_imports)]
 use crate::alloc_prelude::*;
 use crate::dual::Dual;
@@ -54,6 +54,26 @@ pub struct DerivativeWorkspace<T: Real> {
 }
 
 impl<T: Real> DerivativeWorkspace<T> {
+    /// That this workspace was made for a model of `model`'s sizes (a workspace of another model is an
+    /// error, not an out-of-bounds index).
+    fn check_for(&self, model: &Model<T>) -> Result<(), DynamicsError> {
+        check_len(
+            "DerivativeWorkspace (made for another model) q",
+            self.q0.len(),
+            model.nq(),
+        )?;
+        check_len(
+            "DerivativeWorkspace (made for another model) v",
+            self.v.len(),
+            model.nv(),
+        )?;
+        check_len(
+            "DerivativeWorkspace (made for another model) independent v",
+            self.x.ncols(),
+            model.independent_nv(),
+        )
+    }
+
     /// A workspace for `model`'s derivatives.
     pub fn new(model: &Model<T>) -> Self {
         let dual: Model<D<T>> = model.cast();
@@ -221,6 +241,7 @@ pub fn aba_derivatives<T: Real>(
     f_ext: &[LinkWrench<T>],
     out: &mut AbaDerivatives<T>,
 ) -> Result<(), DynamicsError> {
+    dws.check_for(model)?;
     check_out(model, out.qdd.len(), out.dqdd_dq.shape(), "AbaDerivatives")?;
     let qdd = super::aba_ext(model, &mut dws.plain, q, v, tau, f_ext)?;
     out.qdd.copy_from_slice(qdd);
@@ -249,6 +270,7 @@ pub fn rnea_derivatives<T: Real>(
     f_ext: &[LinkWrench<T>],
     out: &mut RneaDerivatives<T>,
 ) -> Result<(), DynamicsError> {
+    dws.check_for(model)?;
     check_out(model, out.tau.len(), out.dtau_dq.shape(), "RneaDerivatives")?;
     let tau = super::rnea_ext(model, &mut dws.plain, q, v, qdd, f_ext)?;
     out.tau.copy_from_slice(tau);
@@ -279,6 +301,7 @@ pub fn aba_derivatives_independent<T: Real>(
     f_ext: &[LinkWrench<T>],
     out: &mut ManifoldDerivatives<T>,
 ) -> Result<(), DynamicsError> {
+    dws.check_for(model)?;
     let (nv, ni) = (model.nv(), model.independent_nv());
     check_len("ManifoldDerivatives rows", out.qdd_independent.len(), ni)?;
     check_len("ManifoldDerivatives columns", out.dqdd_dq.ncols(), ni)?;
@@ -327,8 +350,8 @@ pub fn aba_derivatives_independent<T: Real>(
 /// the constraints to first order in `dt`; `complete` projects it back).
 ///
 /// # Errors
-/// Those of [`crate::aba_ext`] at `(q, v, τ)`; [`DynamicsError::WrongLength`] for a `q_next` or `v_next` of
-/// the wrong length.
+/// Those of [`crate::aba_ext`] at `(q, v, τ)`; [`DynamicsError::NonFiniteInput`] for a `dt` that is NaN or
+/// infinite; [`DynamicsError::WrongLength`] for a `q_next` or `v_next` of the wrong length.
 #[allow(clippy::too_many_arguments)]
 pub fn step<T: Real>(
     model: &Model<T>,
@@ -341,6 +364,7 @@ pub fn step<T: Real>(
     q_next: &mut [T],
     v_next: &mut [T],
 ) -> Result<(), DynamicsError> {
+    check_input("dt", &[dt], 1)?;
     check_len("q_next", q_next.len(), model.nq())?;
     check_len("v_next", v_next.len(), model.nv())?;
     super::aba_ext(model, ws, q, v, tau, f_ext)?;
@@ -410,6 +434,7 @@ pub fn step_derivatives<T: Real>(
     f_ext: &[LinkWrench<T>],
     out: &mut StepDerivatives<T>,
 ) -> Result<(), DynamicsError> {
+    dws.check_for(model)?;
     let nv = model.nv();
     check_len("StepDerivatives q_next", out.q_next.len(), model.nq())?;
     check_out(
