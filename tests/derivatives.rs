@@ -470,6 +470,35 @@ fn derivatives_refuse_bad_inputs() {
             "{e}"
         );
     }
+    // One output of the wrong size (the struct otherwise right) is an error too, not a panic.
+    let mut wrong = AbaDerivatives::new(&arm);
+    wrong.dqdd_dv = DMatrix::zeros(2, 2);
+    let e = aba_derivatives(&arm, &mut dws, &q, &v, &tau, &[], &mut wrong).unwrap_err();
+    assert!(
+        matches!(e, embedyn::DynamicsError::WrongLength { .. }),
+        "{e}"
+    );
+    let mut wrong = StepDerivatives::new(&arm);
+    wrong.dv_next_dtau = DMatrix::zeros(1, 1);
+    let e = step_derivatives(&arm, &mut dws, &q, &v, &tau, 0.01, &[], &mut wrong).unwrap_err();
+    assert!(
+        matches!(e, embedyn::DynamicsError::WrongLength { .. }),
+        "{e}"
+    );
+    // A workspace of a model with the same sizes but other numbers (here: no gravity) is refused.
+    let loaded = embedyn::load(&crate::common::repo_path("models/arm7.urdf")).unwrap();
+    let weightless: Model<f64> = loaded
+        .model(&embedyn::ModelOptions {
+            gravity: [0.0, 0.0, 0.0],
+            ..Default::default()
+        })
+        .unwrap();
+    let mut theirs = DerivativeWorkspace::new(&weightless);
+    let e = aba_derivatives(&arm, &mut theirs, &q, &v, &tau, &[], &mut d).unwrap_err();
+    assert!(
+        matches!(e, embedyn::DynamicsError::WrongLength { .. }),
+        "{e}"
+    );
     let mut bad_v = v.clone();
     bad_v[3] = f64::NAN;
     let e = aba_derivatives(&arm, &mut dws, &q, &bad_v, &tau, &[], &mut d).unwrap_err();
@@ -484,4 +513,30 @@ fn derivatives_refuse_bad_inputs() {
         ),
         "{e}"
     );
+}
+
+/// Near a four-bar's toggle the derivatives lose digits as cond₁(Y1)² (the derivative of `Y1⁻¹`): they are
+/// refused from the square root of the values' threshold, where `aba` itself still answers, and answered
+/// (matching finite differences) away from it.
+#[test]
+fn derivatives_near_a_toggle_are_refused_not_wrong() {
+    let model: Model<f64> = load_model("models/loops/singular_four_bar.urdf", false);
+    let mut dws = DerivativeWorkspace::new(&model);
+    let mut d = ManifoldDerivatives::new(&model);
+    let mut ws = Workspace::new(&model);
+    let toggle = std::f64::consts::FRAC_PI_3;
+    for (distance, refused) in [(1e-9, true), (1e-6, true), (0.2, false)] {
+        let th = toggle + distance;
+        let q = vec![th, -th, th];
+        let v = vec![0.7, -0.7, 0.7];
+        let tau = vec![0.1, 0.0, 0.0];
+        // `aba` answers at all three (its own threshold is 1e10).
+        aba(&model, &mut ws, &q, &v, &tau).unwrap();
+        let result = aba_derivatives_independent(&model, &mut dws, &q, &v, &tau, &[], &mut d);
+        match (refused, result) {
+            (true, Err(embedyn::DynamicsError::SingularConstraint { .. })) => {}
+            (false, Ok(())) => {}
+            (_, other) => panic!("{distance}: {other:?}"),
+        }
+    }
 }

@@ -13,7 +13,7 @@ use embedyn_runtime::{
     centroidal_momentum_rate, com_jacobian, crba, difference, embedding_map_in, forward_kinematics,
     forward_kinematics_acceleration, frame_classical_acceleration, frame_jacobian, frame_placement,
     gravity, integrate, link_poses, mass_matrix_inverse, nle, nle_ext, reduced_mass_matrix_in,
-    rnea, rnea_derivatives, rnea_ext, step_derivatives, AbaDerivatives, DerivativeWorkspace,
+    rnea, rnea_derivatives, rnea_ext, step, step_derivatives, AbaDerivatives, DerivativeWorkspace,
     DynamicsError, FrameId, LinkWrench, Model, Real, Reference, RneaDerivatives, StepDerivatives,
     Workspace,
 };
@@ -63,8 +63,10 @@ pub enum Algorithm {
     AbaDerivatives,
     /// `rnea_derivatives`: inverse dynamics and its derivatives with respect to `q`, `v` and `q̈`.
     RneaDerivatives,
-    /// `step`: one semi-implicit Euler step and its Jacobian.
+    /// `step`: one semi-implicit Euler step.
     Step,
+    /// `step_derivatives`: one semi-implicit Euler step and its Jacobian.
+    StepDerivatives,
 }
 
 /// A length of an argument or an output, in the model's terms.
@@ -1285,6 +1287,51 @@ pub const ALGORITHMS: &[AlgorithmSpec] = &[
         name: "step",
         traced_name: "step",
         wrapper: None,
+        summary: "one semi-implicit Euler step `(q', v')` (only when asked for)",
+        doc: "One step of semi-implicit (symplectic) Euler: `v_next = v + dt · aba(q, v, tau)`, then `q_next = integrate(q, dt · v_next)` — a rollout's step; `step_derivatives` adds its Jacobian.",
+        doc_with_constraints: Some("One step of semi-implicit Euler over the spanning tree's coordinates (`q_next` satisfies the constraints to first order in `dt`; `complete` projects it back)."),
+        inputs: &[Q, V, TAU, DT],
+        outputs: &[
+            OutputSpec {
+                name: "q_next",
+                shape: Shape::Vector(Dim::Nq),
+                unit: "rad or m; a floating joint's [x y z qx qy qz qw]",
+            },
+            OutputSpec {
+                name: "v_next",
+                shape: Shape::Vector(Dim::Nv),
+                unit: "rad/s or m/s",
+            },
+        ],
+        returns: Returns::Nothing,
+        needs_constraints: false,
+        generated: WhenGenerated::OnRequest,
+        parameter: Parameter::None,
+        readme_note: " — one semi-implicit Euler step (a rollout's step)",
+        readme_note_with_constraints: None,
+        cli: None,
+        growth: Growth::Linear,
+        predicted_operations: |c| 500.0 * c.nv,
+        trace: |model, ws, inputs, _| {
+            let (mut q_next, mut v_next) =
+                (vec![Sym::Const(0.0); model.nq()], vec![Sym::Const(0.0); model.nv()]);
+            let dt = inputs[3][0];
+            step(model, ws, &inputs[0], &inputs[1], &inputs[2], dt, &[], &mut q_next, &mut v_next)?;
+            Ok(Traced {
+                outputs: vec![q_next, v_next],
+                returned: None,
+            })
+        },
+        interpreted: |model, ws, inputs, _| {
+            let (mut q_next, mut v_next) = (vec![0.0; model.nq()], vec![0.0; model.nv()]);
+            step(model, ws, inputs[0], inputs[1], inputs[2], inputs[3][0], &[], &mut q_next, &mut v_next)
+        },
+    },
+    AlgorithmSpec {
+        algorithm: Algorithm::StepDerivatives,
+        name: "step_derivatives",
+        traced_name: "step_derivatives",
+        wrapper: None,
         summary: "one semi-implicit Euler step `(q', v')` and its Jacobian with respect to `(q, v, τ)` (only when asked for)",
         doc: "One step of semi-implicit Euler, `v_next = v + dt · aba(q, v, tau)` and `q_next = integrate(q, dt · v_next)`, and its Jacobian in blocks (`nv × nv`, tangent space: a column of `∂/∂q` is along `integrate(q, ε e_k)`, a row of `∂q_next` is an entry of `difference(q_next, ·)`): the linearization a multiple-shooting solver takes at each knot.",
         doc_with_constraints: Some("One step of semi-implicit Euler over the spanning tree's coordinates (`q_next` satisfies the constraints to first order in `dt`), and its Jacobian in blocks (`nv × nv`, tangent space)."),
@@ -1418,7 +1465,7 @@ const _: () = {
         assert!(ALGORITHMS[i].algorithm as usize == i);
         i += 1;
     }
-    assert!(Algorithm::Step as usize + 1 == ALGORITHMS.len());
+    assert!(Algorithm::StepDerivatives as usize + 1 == ALGORITHMS.len());
 };
 
 impl Algorithm {
@@ -1734,7 +1781,7 @@ mod tests {
         let e = Algorithm::from_name("abba").unwrap_err().to_string();
         assert_eq!(
             e,
-            "unknown function `abba` (expected kinematics, aba, rnea, gravity, nle, crba, minv, complete, embedding, crba_independent, integrate, difference, aba_ext, rnea_ext, nle_ext, frame, com, centroidal, centroidal_bias, aba_derivatives, rnea_derivatives, step)"
+            "unknown function `abba` (expected kinematics, aba, rnea, gravity, nle, crba, minv, complete, embedding, crba_independent, integrate, difference, aba_ext, rnea_ext, nle_ext, frame, com, centroidal, centroidal_bias, aba_derivatives, rnea_derivatives, step, step_derivatives)"
         );
     }
 

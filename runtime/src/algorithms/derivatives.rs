@@ -57,21 +57,41 @@ impl<T: Real> DerivativeWorkspace<T> {
     /// That this workspace was made for a model of `model`'s sizes (a workspace of another model is an
     /// error, not an out-of-bounds index).
     fn check_for(&self, model: &Model<T>) -> Result<(), DynamicsError> {
-        check_len(
-            "DerivativeWorkspace (made for another model) q",
-            self.q0.len(),
-            model.nq(),
-        )?;
-        check_len(
-            "DerivativeWorkspace (made for another model) v",
-            self.v.len(),
-            model.nv(),
-        )?;
-        check_len(
-            "DerivativeWorkspace (made for another model) independent v",
-            self.x.ncols(),
-            model.independent_nv(),
-        )
+        const OTHER: &str = "DerivativeWorkspace (made for another model)";
+        check_len(OTHER, self.q0.len(), model.nq())?;
+        check_len(OTHER, self.v.len(), model.nv())?;
+        check_len(OTHER, self.x.ncols(), model.independent_nv())?;
+        check_len(OTHER, self.model.nbodies(), model.nbodies())?;
+        // Same sizes are not the same model (another gravity, a locked joint, other inertias): the
+        // numbers the dual passes run on are compared too (O(N), beside passes of O(N²)).
+        let same = |a: T, b: D<T>| a.to_f64() == b.re.to_f64();
+        let same3 = |a: &nalgebra::Vector3<T>, b: &nalgebra::Vector3<D<T>>| {
+            a.iter().zip(b.iter()).all(|(&x, &y)| same(x, y))
+        };
+        let bodies = model.bodies.iter().zip(&self.model.bodies).all(|(a, b)| {
+            same(a.inertia.mass, b.inertia.mass)
+                && same3(&a.inertia.first_moment, &b.inertia.first_moment)
+                && a.inertia
+                    .rotational
+                    .iter()
+                    .zip(b.inertia.rotational.iter())
+                    .all(|(&x, &y)| same(x, y))
+        });
+        let joints = model.joints.iter().zip(&self.model.joints).all(|(a, b)| {
+            a.joint_type == b.joint_type
+                && a.parent == b.parent
+                && same3(&a.axis, &b.axis)
+                && same3(&a.placement.translation, &b.placement.translation)
+        });
+        if bodies && joints && same3(&model.gravity, &self.model.gravity) {
+            Ok(())
+        } else {
+            Err(DynamicsError::WrongLength {
+                name: OTHER,
+                got: self.model.nbodies(),
+                expected: model.nbodies(),
+            })
+        }
     }
 
     /// A workspace for `model`'s derivatives.
@@ -242,9 +262,15 @@ pub fn aba_derivatives<T: Real>(
     out: &mut AbaDerivatives<T>,
 ) -> Result<(), DynamicsError> {
     dws.check_for(model)?;
-    check_out(model, out.qdd.len(), out.dqdd_dq.shape(), "AbaDerivatives")?;
+    check_out(
+        model,
+        out.qdd.len(),
+        &[&out.dqdd_dq, &out.dqdd_dv, &out.dqdd_dtau],
+        "AbaDerivatives",
+    )?;
     let qdd = super::aba_ext(model, &mut dws.plain, q, v, tau, f_ext)?;
     out.qdd.copy_from_slice(qdd);
+    check_derivative_condition(model, &dws.plain)?;
     let outputs = [&mut out.dqdd_dq, &mut out.dqdd_dv, &mut out.dqdd_dtau];
     spanning_passes(
         model,
@@ -271,7 +297,12 @@ pub fn rnea_derivatives<T: Real>(
     out: &mut RneaDerivatives<T>,
 ) -> Result<(), DynamicsError> {
     dws.check_for(model)?;
-    check_out(model, out.tau.len(), out.dtau_dq.shape(), "RneaDerivatives")?;
+    check_out(
+        model,
+        out.tau.len(),
+        &[&out.dtau_dq, &out.dtau_dv, &out.dtau_dqdd],
+        "RneaDerivatives",
+    )?;
     let tau = super::rnea_ext(model, &mut dws.plain, q, v, qdd, f_ext)?;
     out.tau.copy_from_slice(tau);
     let outputs = [&mut out.dtau_dq, &mut out.dtau_dv, &mut out.dtau_dqdd];
@@ -310,6 +341,7 @@ pub fn aba_derivatives_independent<T: Real>(
     for (r, i) in model.independent_coordinates().enumerate() {
         out.qdd_independent[r] = qdd[i];
     }
+    check_derivative_condition(model, &dws.plain)?;
     let x = super::embedding_map_in(model, &mut dws.plain, q)?;
     dws.x.copy_from(x);
     let seed = |c: usize| {
@@ -440,7 +472,14 @@ pub fn step_derivatives<T: Real>(
     check_out(
         model,
         out.v_next.len(),
-        out.dq_next_dq.shape(),
+        &[
+            &out.dq_next_dq,
+            &out.dq_next_dv,
+            &out.dq_next_dtau,
+            &out.dv_next_dq,
+            &out.dv_next_dv,
+            &out.dv_next_dtau,
+        ],
         "StepDerivatives",
     )?;
     step(
@@ -454,6 +493,7 @@ pub fn step_derivatives<T: Real>(
         out.q_next.as_mut_slice(),
         out.v_next.as_mut_slice(),
     )?;
+    check_derivative_condition(model, &dws.plain)?;
     for (d, &x) in dws.next0.iter_mut().zip(out.q_next.iter()) {
         *d = Dual::constant(x);
     }
@@ -496,12 +536,38 @@ pub fn step_derivatives<T: Real>(
 fn check_out<T: Real>(
     model: &Model<T>,
     len: usize,
-    shape: (usize, usize),
+    matrices: &[&DMatrix<T>],
     name: &'static str,
 ) -> Result<(), DynamicsError> {
     check_len(name, len, model.nv())?;
-    check_len(name, shape.0, model.nv())?;
-    check_len(name, shape.1, model.nv())
+    for m in matrices {
+        check_len(name, m.nrows(), model.nv())?;
+        check_len(name, m.ncols(), model.nv())?;
+    }
+    Ok(())
+}
+
+/// On a model with constraints the derivatives differentiate through `Y1⁻¹`, whose derivative
+/// `−Y1⁻¹ dY1 Y1⁻¹` amplifies rounding by cond₁(Y1)²: they are refused from the square root of the values'
+/// singularity threshold (1e5 in f64, about 92 in f32), where about three digits are left, rather than
+/// returned quietly wrong near a toggle. Reads the condition of the last value pass on `plain`.
+fn check_derivative_condition<T: Real>(
+    model: &Model<T>,
+    plain: &Workspace<T>,
+) -> Result<(), DynamicsError> {
+    let threshold = crate::constraints::singularity_threshold::<T>().sqrt();
+    for (g, gw) in model.groups.iter().zip(&plain.constraints.groups) {
+        if let Some(c) = gw.condition.value() {
+            if c.is_nan() || c >= threshold {
+                return Err(DynamicsError::SingularConstraint {
+                    group: crate::constraints::ConstraintSet::Group(g.label.clone()),
+                    condition: c,
+                    threshold,
+                });
+            }
+        }
+    }
+    Ok(())
 }
 
 /// The `3 nv` spanning directions (configuration, velocity, then τ or q̈), each output tangent written as
