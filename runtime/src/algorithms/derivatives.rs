@@ -19,7 +19,7 @@
 //! an inconsistent state) is that of [`crate::aba`] or [`crate::rnea`]; the dual passes then repeat the
 //! arithmetic with the tangents.
 
-use super::{check_input, check_len, DynamicsError, LinkWrench, Workspace};
+use super::{check_len, DynamicsError, LinkWrench, Workspace};
 #[allow(unused_imports)]
 use crate::alloc_prelude::*;
 use crate::dual::Dual;
@@ -382,7 +382,7 @@ pub fn aba_derivatives_independent<T: Real>(
 /// the constraints to first order in `dt`; `complete` projects it back).
 ///
 /// # Errors
-/// Those of [`crate::aba_ext`] at `(q, v, τ)`; [`DynamicsError::NonFiniteInput`] for a `dt` that is NaN or
+/// Those of [`crate::aba_ext`] at `(q, v, τ)`; [`DynamicsError::NonFiniteScalar`] for a `dt` that is NaN or
 /// infinite; [`DynamicsError::WrongLength`] for a `q_next` or `v_next` of the wrong length.
 #[allow(clippy::too_many_arguments)]
 pub fn step<T: Real>(
@@ -396,7 +396,9 @@ pub fn step<T: Real>(
     q_next: &mut [T],
     v_next: &mut [T],
 ) -> Result<(), DynamicsError> {
-    check_input("dt", &[dt], 1)?;
+    if let Some(value) = dt.value().filter(|x| !x.is_finite()) {
+        return Err(DynamicsError::NonFiniteScalar { name: "dt", value });
+    }
     check_len("q_next", q_next.len(), model.nq())?;
     check_len("v_next", v_next.len(), model.nv())?;
     super::aba_ext(model, ws, q, v, tau, f_ext)?;

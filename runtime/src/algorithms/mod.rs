@@ -68,6 +68,14 @@ pub enum DynamicsError {
         /// Its value.
         value: f64,
     },
+    /// A scalar input (a time step) is NaN or infinite.
+    #[error("`{name}` is not a finite number ({value})")]
+    NonFiniteScalar {
+        /// The argument.
+        name: &'static str,
+        /// Its value.
+        value: f64,
+    },
     /// A floating joint's quaternion is zero or not finite.
     #[error("joint `{joint}`: its quaternion `q`[{start}..{end}] has norm {norm:e}; it must be a non-zero, finite [qx qy qz qw] (it is normalized before use)")]
     InvalidQuaternion {
