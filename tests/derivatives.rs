@@ -477,6 +477,18 @@ fn derivatives_refuse_bad_inputs() {
             "{e}"
         );
     }
+    // A finite dt whose step overflows names the step, not the input velocity.
+    let e = step_derivatives(&arm, &mut dws, &q, &v, &tau, 1e308, &[], &mut s).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            embedyn::DynamicsError::NonFiniteInput {
+                name: "dt · v_next",
+                ..
+            }
+        ),
+        "{e}"
+    );
     // One output of the wrong size (the struct otherwise right) is an error too, not a panic.
     let mut wrong = AbaDerivatives::new(&arm);
     wrong.dqdd_dv = DMatrix::zeros(2, 2);

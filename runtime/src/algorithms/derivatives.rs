@@ -383,7 +383,8 @@ pub fn aba_derivatives_independent<T: Real>(
 ///
 /// # Errors
 /// Those of [`crate::aba_ext`] at `(q, v, τ)`; [`DynamicsError::NonFiniteScalar`] for a `dt` that is NaN or
-/// infinite; [`DynamicsError::WrongLength`] for a `q_next` or `v_next` of the wrong length.
+/// infinite, [`DynamicsError::NonFiniteInput`] naming `dt · v_next` where the step overflows (a huge `dt`);
+/// [`DynamicsError::WrongLength`] for a `q_next` or `v_next` of the wrong length.
 #[allow(clippy::too_many_arguments)]
 pub fn step<T: Real>(
     model: &Model<T>,
@@ -405,6 +406,15 @@ pub fn step<T: Real>(
     for i in 0..model.nv() {
         v_next[i] = v[i] + dt * ws.qdd[i];
         ws.qdd[i] = dt * v_next[i];
+        // A finite state can overflow in the step (a huge dt): name the step, not the input `v` that
+        // `integrate` would see.
+        if let Some(value) = ws.qdd[i].value().filter(|x| !x.is_finite()) {
+            return Err(DynamicsError::NonFiniteInput {
+                name: "dt · v_next",
+                index: i,
+                value,
+            });
+        }
     }
     crate::configuration::integrate(model, q, &ws.qdd, q_next)
 }
