@@ -504,6 +504,13 @@ fn derivatives_refuse_bad_inputs() {
         matches!(e, embedyn::DynamicsError::WrongLength { .. }),
         "{e}"
     );
+    let mut wrong = ManifoldDerivatives::new(&arm);
+    wrong.dqdd_dv = DMatrix::zeros(7, 2);
+    let e = aba_derivatives_independent(&arm, &mut dws, &q, &v, &tau, &[], &mut wrong).unwrap_err();
+    assert!(
+        matches!(e, embedyn::DynamicsError::WrongLength { .. }),
+        "{e}"
+    );
     // A workspace of a model with the same sizes but other numbers (here: no gravity) is refused.
     let loaded = embedyn::load(&crate::common::repo_path("models/arm7.urdf")).unwrap();
     let weightless: Model<f64> = loaded

@@ -334,9 +334,13 @@ pub fn aba_derivatives_independent<T: Real>(
 ) -> Result<(), DynamicsError> {
     dws.check_for(model)?;
     let (nv, ni) = (model.nv(), model.independent_nv());
-    check_len("ManifoldDerivatives rows", out.qdd_independent.len(), ni)?;
-    check_len("ManifoldDerivatives columns", out.dqdd_dq.ncols(), ni)?;
-    check_len("ManifoldDerivatives τ columns", out.dqdd_dtau.ncols(), nv)?;
+    // Every block's shape, so that one mis-sized block is an error rather than an index panic.
+    const NAME: &str = "ManifoldDerivatives";
+    check_len(NAME, out.qdd_independent.len(), ni)?;
+    for (m, cols) in [(&out.dqdd_dq, ni), (&out.dqdd_dv, ni), (&out.dqdd_dtau, nv)] {
+        check_len(NAME, m.nrows(), ni)?;
+        check_len(NAME, m.ncols(), cols)?;
+    }
     let qdd = super::aba_ext(model, &mut dws.plain, q, v, tau, f_ext)?;
     for (r, i) in model.independent_coordinates().enumerate() {
         out.qdd_independent[r] = qdd[i];
@@ -509,11 +513,6 @@ pub fn step_derivatives<T: Real>(
     for (d, &x) in dws.next0.iter_mut().zip(out.q_next.iter()) {
         *d = Dual::constant(x);
     }
-    let seed = |c: usize| match c / nv {
-        0 => Seed::Configuration(c % nv),
-        1 => Seed::Velocity(c % nv),
-        _ => Seed::Input(c % nv),
-    };
     let StepDerivatives {
         dq_next_dq,
         dq_next_dv,
@@ -530,7 +529,7 @@ pub fn step_derivatives<T: Real>(
         (q, v, tau),
         f_ext,
         3 * nv,
-        seed,
+        |c| spanning_seed(c, nv),
         |c, result, lane| {
             let (dq, dv) = match c / nv {
                 0 => (&mut *dq_next_dq, &mut *dv_next_dq),
@@ -582,6 +581,15 @@ fn check_derivative_condition<T: Real>(
     Ok(())
 }
 
+/// Spanning direction `c` of `3 nv`: the configuration's, the velocity's, then τ's (or q̈'s) coordinates.
+fn spanning_seed(c: usize, nv: usize) -> Seed {
+    match c / nv {
+        0 => Seed::Configuration(c % nv),
+        1 => Seed::Velocity(c % nv),
+        _ => Seed::Input(c % nv),
+    }
+}
+
 /// The `3 nv` spanning directions (configuration, velocity, then τ or q̈), each output tangent written as
 /// a column of `outputs[0..3]`.
 fn spanning_passes<T: Real>(
@@ -593,11 +601,6 @@ fn spanning_passes<T: Real>(
     outputs: [&mut DMatrix<T>; 3],
 ) -> Result<(), DynamicsError> {
     let nv = model.nv();
-    let seed = |c: usize| match c / nv {
-        0 => Seed::Configuration(c % nv),
-        1 => Seed::Velocity(c % nv),
-        _ => Seed::Input(c % nv),
-    };
     let [dq, dv, du] = outputs;
     passes(
         model,
@@ -606,7 +609,7 @@ fn spanning_passes<T: Real>(
         inputs,
         f_ext,
         3 * nv,
-        seed,
+        |c| spanning_seed(c, nv),
         |c, result, lane| {
             let matrix = match c / nv {
                 0 => &mut *dq,
