@@ -1,9 +1,11 @@
 #!/usr/bin/env python3
-"""Writes the section "Contacts, frames and momentum" of BENCHMARKS.md from criterion's estimates of
-benches/contact.rs and bench/results/pinocchio_contact.jsonl (both from bench/contact.sh, one session)."""
-import datetime, json, os, platform, re, statistics
+"""Writes the section "Contacts, frames and momentum" of BENCHMARKS.md from bench/results/contact_copies.json
+(benches/contact.rs through bench/placement.py) and bench/results/pinocchio_contact.jsonl (both from
+bench/contact.sh, one session)."""
+import datetime, json, os, platform, statistics
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+from benchmarks_md import ROOT, last_json, spread, write_section
+
 MODEL = "anymal_b_floating"
 
 
@@ -15,17 +17,9 @@ def load_ours():
                             if bench_id.endswith(MODEL)}
 
 
-def spread(xs):
-    return f"{min(xs):,.0f}–{max(xs):,.0f}"
-
-
 def main():
     copies, ours = load_ours()
-    pin = {}
-    with open(os.path.join(ROOT, "bench", "results", "pinocchio_contact.jsonl")) as f:
-        for line in f:
-            if line.startswith("{"):
-                pin = json.loads(line)
+    pin = last_json(os.path.join(ROOT, "bench", "results", "pinocchio_contact.jsonl"))
     rows = [
         ("aba, no wrench", "gen_aba", "aba", None),
         ("aba with 4 foot wrenches", "gen_aba_ext4", "aba_fext", None),
@@ -80,16 +74,7 @@ def main():
               "the world placements it saves. Of the 1,827 operations about 400 are the legs' world placements, 470 "
               "the twelve leg columns, 210 h_g = A_g v and the rest the composite inertias and the base; the time "
               "per operation (0.36 ns, `aba`'s 0.31) is what is left, issue 13's subject."]
-    section = "\n".join(lines) + "\n"
-    path = os.path.join(ROOT, "BENCHMARKS.md")
-    text = open(path).read()
-    pattern = re.compile(r"## Contacts, frames and momentum \(issue 11\)\n.*?(?=\n## |\Z)", re.S)
-    if pattern.search(text):
-        text = pattern.sub(section.rstrip("\n") + "\n", text)
-    else:
-        text = text.rstrip("\n") + "\n\n" + section
-    open(path, "w").write(text)
-    print(section)
+    write_section("\n".join(lines) + "\n")
 
 
 main()

@@ -4,7 +4,8 @@
 bench/derivatives.sh, one session), with each generated function's operation count (`embedyn generate`)."""
 import datetime, json, os, platform, re, statistics, subprocess, tempfile
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+from benchmarks_md import ROOT, last_json, spread, write_section
+
 ROBOTS = [("z1", "models/peers/z1.urdf", False, "pinocchio_derivatives_z1.jsonl"),
           ("anymal_b_floating", "models/peers/anymal_b.urdf", True, "pinocchio_derivatives_anymal.jsonl")]
 CALLS = [("aba", "aba", "aba", None),
@@ -23,10 +24,6 @@ def operations(urdf, floating, function):
     return len(re.findall(r" [-+*/] ", body)) + len(re.findall(r"= -[a-z(]", body))
 
 
-def spread(xs):
-    return f"{min(xs):,.0f}–{max(xs):,.0f}"
-
-
 def main():
     with open(os.path.join(ROOT, "bench", "results", "derivatives_copies.json")) as f:
         runs = json.load(f)
@@ -43,8 +40,7 @@ def main():
         "|---|---|---:|---:|---:|---:|---:|---:|---:|",
     ]
     for robot, urdf, floating, pin_file in ROBOTS:
-        with open(os.path.join(ROOT, "bench", "results", pin_file)) as f:
-            pin = json.loads([l for l in f if l.startswith("{")][-1])
+        pin = last_json(os.path.join(ROOT, "bench", "results", pin_file))
         for call, ours_name, theirs_label, target in CALLS:
             xs = runs["benches"].get(f"gen_{ours_name}/{robot}")
             theirs = pin.get(call)
@@ -70,16 +66,7 @@ def main():
               "zero folded: `aba_derivatives` took 120 µs on the Z1 and 565 µs on the floating ANYmal B (61× and 140× "
               "the interpreted `aba`; measured 2026-12-02 with a loop over one state). They are the oracle and the "
               "way to loop models' manifold derivatives; a control loop calls the generated functions."]
-    section = "\n".join(lines) + "\n"
-    path = os.path.join(ROOT, "BENCHMARKS.md")
-    text = open(path).read()
-    pattern = re.compile(r"## Derivatives \(issue 12\)\n.*?(?=\n## |\Z)", re.S)
-    if pattern.search(text):
-        text = pattern.sub(section.rstrip("\n") + "\n", text)
-    else:
-        text = text.rstrip("\n") + "\n\n" + section
-    open(path, "w").write(text)
-    print(section)
+    write_section("\n".join(lines) + "\n")
 
 
 main()
