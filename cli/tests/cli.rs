@@ -611,7 +611,8 @@ pub(crate) fn embedyn_cached(args: &[&str], stdin: &str) -> (bool, String, Strin
     embedyn_with_env(args, stdin, &[("EMBEDYN_CACHE_DIR", cache)])
 }
 
-fn flat(v: &Value) -> Vec<f64> {
+/// Every number of a JSON value (arrays and objects flattened in order).
+pub(crate) fn flat(v: &Value) -> Vec<f64> {
     match v {
         Value::Array(a) => a.iter().flat_map(flat).collect(),
         Value::Object(o) => o.values().flat_map(flat).collect(),
