@@ -1,15 +1,17 @@
 //! Generated `aba_derivatives` and `rnea_derivatives` (issue 12): against Pinocchio 4.1's analytical
-//! derivatives on the UR5 (tests/data/pinocchio/ur5_derivatives.json, the states without their wrenches:
-//! generated derivative functions take none), f64 to 1e-9 relative and f32 to 1e-3; and against the
-//! interpreted derivatives on a four-bar (the spanning tree's derivatives of the embedded dynamics); the
-//! generated `step` and its Jacobian against the interpreted ones on the UR5.
+//! derivatives on the UR5 (tests/data/pinocchio/ur5_derivatives.json: the states without their wrenches,
+//! f64 to 1e-9 relative and f32 to 1e-3; with them through `aba_derivatives_ext`, f64); against the
+//! interpreted derivatives on a four-bar (the spanning tree's derivatives of the embedded dynamics, and
+//! `aba_derivatives_independent` along the constraint manifold, each returning the singularity measure);
+//! the generated `step` and its Jacobian against the interpreted ones on the UR5.
 
 use crate::common::{load_model, repo_path, Rng};
+use embedyn::constraints::constraint_condition;
 use embedyn::constraints::{complete_configuration, complete_velocity};
 use embedyn::nalgebra::DMatrix;
 use embedyn::{
-    aba_derivatives, step_derivatives, AbaDerivatives, DerivativeWorkspace, Model, StepDerivatives,
-    Workspace,
+    aba_derivatives, aba_derivatives_independent, step_derivatives, AbaDerivatives,
+    DerivativeWorkspace, ManifoldDerivatives, Model, StepDerivatives, Workspace,
 };
 use serde_json::Value;
 
@@ -23,14 +25,15 @@ mod ur5_step {
     embedyn::robot!(
         "tests/data/pinocchio/ur5.urdf",
         f64_only,
-        only(step, step_derivatives)
+        only(step, step_derivatives, aba_derivatives_ext),
+        wrenches(tool0, wrist_2_link)
     );
 }
 mod four_bar {
     embedyn::robot!(
         "models/loops/four_bar_internal.urdf",
         f64_only,
-        only(aba_derivatives)
+        only(aba_derivatives, aba_derivatives_independent)
     );
 }
 
@@ -137,11 +140,36 @@ fn generated_derivatives_match_pinocchio_on_the_ur5() {
             errors32.iter().all(|&e| e < 1e-3),
             "sample {k}, f32: {errors32:?}"
         );
+
+        // With the sample's wrenches on the links generated for (the one on the fixed base_link moves
+        // nothing), against Pinocchio's derivatives with them.
+        let mut f_ext = [[0.0; 6]; 2];
+        for (row, link) in f_ext.iter_mut().zip(ur5_step::WRENCH_LINKS) {
+            let w = &s["f_ext"][link];
+            let wrench = [numbers(&w["force"]), numbers(&w["torque"])].concat();
+            row.copy_from_slice(&wrench);
+        }
+        ur5_step::f64::aba_derivatives_ext(
+            &q, &v, &tau, &f_ext, &mut qdd, &mut dq, &mut dv, &mut dt,
+        );
+        let errors_ext = [
+            rel_vec(&qdd, &ours(numbers(&s["qdd"]))),
+            rel(&dq, &matrix(&s["dqdd_dq"], &map)),
+            rel(&dv, &matrix(&s["dqdd_dv"], &map)),
+            rel(&dt, &matrix(&s["dqdd_dtau"], &map)),
+        ];
+        assert!(
+            errors_ext.iter().all(|&e| e < 1e-9),
+            "sample {k}, with wrenches: {errors_ext:?}"
+        );
+        // The wrenches change the answer (the test would hold without them otherwise).
+        assert!(rel(&dq, &matrix(&reference["dqdd_dq"], &map)) > 1e-6);
     }
 }
 
-/// On a four-bar the generated spanning-tree derivatives equal the interpreted ones (the same dual-number
-/// passes, traced) at consistent states.
+/// On a four-bar the generated spanning-tree derivatives and the manifold ones equal the interpreted ones
+/// (the same dual-number passes, traced) at consistent states, and both return the singularity measure
+/// of the interpreted value pass.
 #[test]
 fn generated_derivatives_match_the_interpreted_on_a_loop() {
     const NV: usize = four_bar::NV;
@@ -150,6 +178,8 @@ fn generated_derivatives_match_the_interpreted_on_a_loop() {
     let mut rng = Rng::new(5);
     let mut dws = DerivativeWorkspace::new(&model);
     let mut d = AbaDerivatives::new(&model);
+    let mut m = ManifoldDerivatives::new(&model);
+    const NI: usize = four_bar::NI;
     for _ in 0..4 {
         let mut q = model.neutral_configuration();
         q[0] = rng.uniform(-0.5, 0.5);
@@ -159,9 +189,10 @@ fn generated_derivatives_match_the_interpreted_on_a_loop() {
         let tau = rng.vec(NV, -1.0, 1.0);
         aba_derivatives(&model, &mut dws, &q, &v, &tau, &[], &mut d).unwrap();
         let arr = |x: &[f64]| -> [f64; NV] { std::array::from_fn(|i| x[i]) };
+        let condition = constraint_condition(dws.value_workspace());
         let mut qdd = [0.0; NV];
         let (mut dq, mut dv, mut dt) = ([[0.0; NV]; NV], [[0.0; NV]; NV], [[0.0; NV]; NV]);
-        four_bar::f64::aba_derivatives(
+        let generated_condition = four_bar::f64::aba_derivatives(
             &arr(&q),
             &arr(&v),
             &arr(&tau),
@@ -177,6 +208,29 @@ fn generated_derivatives_match_the_interpreted_on_a_loop() {
             rel(&dt, &d.dqdd_dtau),
         ];
         assert!(errors.iter().all(|&e| e < 1e-12), "{errors:?}");
+        assert!(condition > 1.0 && condition < four_bar::f64::DERIVATIVE_SINGULARITY_THRESHOLD);
+        assert!((generated_condition - condition).abs() <= 1e-12 * condition);
+
+        aba_derivatives_independent(&model, &mut dws, &q, &v, &tau, &[], &mut m).unwrap();
+        let mut qdd_i = [0.0; NI];
+        let (mut mq, mut mv, mut mt) = ([[0.0; NI]; NI], [[0.0; NI]; NI], [[0.0; NV]; NI]);
+        let generated_condition = four_bar::f64::aba_derivatives_independent(
+            &arr(&q),
+            &arr(&v),
+            &arr(&tau),
+            &mut qdd_i,
+            &mut mq,
+            &mut mv,
+            &mut mt,
+        );
+        let errors = [
+            rel_vec(&qdd_i, m.qdd_independent.as_slice()),
+            rel(&mq, &m.dqdd_dq),
+            rel(&mv, &m.dqdd_dv),
+            rel(&mt, &m.dqdd_dtau),
+        ];
+        assert!(errors.iter().all(|&e| e < 1e-12), "manifold: {errors:?}");
+        assert!((generated_condition - condition).abs() <= 1e-12 * condition);
     }
 }
 

@@ -336,30 +336,30 @@ impl Plan {
             wrench_rows: Vec::new(),
             constrained: model.has_constraints(),
         };
-        plan.function = match query.algo {
-            EvalAlgo::Dynamics(algo) if takes_wrenches(query.algo) && samples.has_wrenches() => {
-                let mut rows = Vec::new();
-                for i in 0..samples.len() {
-                    for w in samples.wrenches(i)? {
-                        let frame = *frames
-                            .get(w.frame)
-                            .ok_or(InternalError::SampleNotInInput { sample: i })?;
-                        if frame.body.is_some() && !rows.contains(&w.frame) {
-                            rows.push(w.frame);
-                        }
+        if takes_wrenches(query.algo) && samples.has_wrenches() {
+            let mut rows = Vec::new();
+            for i in 0..samples.len() {
+                for w in samples.wrenches(i)? {
+                    let frame = *frames
+                        .get(w.frame)
+                        .ok_or(InternalError::SampleNotInInput { sample: i })?;
+                    if frame.body.is_some() && !rows.contains(&w.frame) {
+                        rows.push(w.frame);
                     }
                 }
-                rows.sort_unstable();
-                plan.links.wrenches = rows.iter().map(|&k| name_of(frames[k])).collect();
-                plan.wrench_rows = rows;
-                match (algo, plan.wrench_rows.is_empty()) {
-                    (_, true) => algo,
-                    (Algo::Aba, false) => Algo::AbaExt,
-                    (Algo::Rnea, false) => Algo::RneaExt,
-                    (Algo::Nle, false) => Algo::NleExt,
-                    (other, false) => return Err(not_evaluated(other)),
-                }
             }
+            rows.sort_unstable();
+            plan.links.wrenches = rows.iter().map(|&k| name_of(frames[k])).collect();
+            plan.wrench_rows = rows;
+        }
+        let with_wrenches = !plan.wrench_rows.is_empty();
+        plan.function = match query.algo {
+            EvalAlgo::Dynamics(algo) if with_wrenches => match algo {
+                Algo::Aba => Algo::AbaExt,
+                Algo::Rnea => Algo::RneaExt,
+                Algo::Nle => Algo::NleExt,
+                other => return Err(not_evaluated(other)),
+            },
             EvalAlgo::Dynamics(algo) => algo,
             EvalAlgo::Jacobian => {
                 let link = query.frame.clone().ok_or(InternalError::FieldNotRead {
@@ -372,24 +372,22 @@ impl Plan {
             EvalAlgo::Com => Algo::Com,
             EvalAlgo::Centroidal => Algo::Centroidal,
             EvalAlgo::AbaDerivatives | EvalAlgo::RneaDerivatives => {
-                // The generated derivatives are the spanning tree's, without wrenches: the manifold
-                // derivatives of a model with constraints and derivatives with wrenches are interpreted.
-                let refuse = |what: &str| CliError::BadOption {
-                    option: "--engine",
-                    message: format!(
-                        "`--algo {}` {what} has no generated code yet: use `--engine interpreted`",
-                        query.algo.name()
-                    ),
-                };
+                // The command's output on a model with constraints adds the manifold derivatives, a
+                // second function; the runner runs one function per query.
                 if plan.constrained {
-                    return Err(refuse("on a model with loops, couplings or mimic joints"));
+                    return Err(CliError::BadOption {
+                        option: "--engine",
+                        message: format!(
+                            "`--algo {}` on a model with loops, couplings or mimic joints is not run through generated code: use `--engine interpreted` (the library's generated `aba_derivatives_independent` gives the manifold derivatives)",
+                            query.algo.name()
+                        ),
+                    });
                 }
-                if samples.has_wrenches() {
-                    return Err(refuse("with external wrenches (`f_ext`)"));
-                }
-                match query.algo {
-                    EvalAlgo::AbaDerivatives => Algo::AbaDerivatives,
-                    _ => Algo::RneaDerivatives,
+                match (query.algo, with_wrenches) {
+                    (EvalAlgo::AbaDerivatives, false) => Algo::AbaDerivatives,
+                    (EvalAlgo::AbaDerivatives, true) => Algo::AbaDerivativesExt,
+                    (_, false) => Algo::RneaDerivatives,
+                    (_, true) => Algo::RneaDerivativesExt,
                 }
             }
         };

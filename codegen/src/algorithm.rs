@@ -9,12 +9,13 @@ use crate::trace::Sym;
 use embedyn_runtime::constraints::{completion_step, constraint_condition};
 use embedyn_runtime::nalgebra::{Matrix3xX, Matrix6xX, Vector3};
 use embedyn_runtime::{
-    aba, aba_derivatives, aba_ext, center_of_mass, centroidal_momentum_matrix,
-    centroidal_momentum_rate, com_jacobian, crba, difference, embedding_map_in, forward_kinematics,
-    forward_kinematics_acceleration, frame_classical_acceleration, frame_jacobian, frame_placement,
-    gravity, integrate, link_poses, mass_matrix_inverse, nle, nle_ext, reduced_mass_matrix_in,
-    rnea, rnea_derivatives, rnea_ext, step, step_derivatives, AbaDerivatives, DerivativeWorkspace,
-    DynamicsError, FrameId, LinkWrench, Model, Real, Reference, RneaDerivatives, StepDerivatives,
+    aba, aba_derivatives, aba_derivatives_independent, aba_ext, center_of_mass,
+    centroidal_momentum_matrix, centroidal_momentum_rate, com_jacobian, crba, difference,
+    embedding_map_in, forward_kinematics, forward_kinematics_acceleration,
+    frame_classical_acceleration, frame_jacobian, frame_placement, gravity, integrate, link_poses,
+    mass_matrix_inverse, nle, nle_ext, reduced_mass_matrix_in, rnea, rnea_derivatives, rnea_ext,
+    step, step_derivatives, AbaDerivatives, DerivativeWorkspace, DynamicsError, FrameId,
+    LinkWrench, ManifoldDerivatives, Model, Real, Reference, RneaDerivatives, StepDerivatives,
     Workspace,
 };
 
@@ -67,6 +68,14 @@ pub enum Algorithm {
     Step,
     /// `step_derivatives`: one semi-implicit Euler step and its Jacobian.
     StepDerivatives,
+    /// `aba_derivatives_independent`: the independent accelerations' derivatives along the constraint
+    /// manifold (models with constraints).
+    AbaDerivativesIndependent,
+    /// `aba_derivatives_ext`: `aba_derivatives` with the wrenches of the links named at generation time.
+    AbaDerivativesExt,
+    /// `rnea_derivatives_ext`: `rnea_derivatives` with the wrenches of the links named at generation
+    /// time.
+    RneaDerivativesExt,
 }
 
 /// A length of an argument or an output, in the model's terms.
@@ -1169,36 +1178,15 @@ pub const ALGORITHMS: &[AlgorithmSpec] = &[
         wrapper: None,
         summary: "`q̈` and its derivatives `∂q̈/∂q`, `∂q̈/∂v`, `∂q̈/∂τ` (only when asked for)",
         doc: "Forward dynamics `qdd = aba(q, v, tau)` and its derivatives (`nv × nv`, row `i` is `qdd[i]`, column `k` a direction in `v` order): `dqdd_dq` in the tangent space (column `k` along `integrate(q, ε e_k)`, Pinocchio's convention), `dqdd_dv` and `dqdd_dtau` (`M⁻¹`). Forward-mode dual numbers through the algorithm, unrolled.",
-        doc_with_constraints: Some("Forward dynamics `qdd = aba(q, v, tau)` over the spanning tree and its derivatives as a function of every spanning coordinate (`nv × nv`, tangent space); for a `q`, `v` on the constraints."),
+        doc_with_constraints: Some("Forward dynamics `qdd = aba(q, v, tau)` over the spanning tree and its derivatives as a function of every spanning coordinate (`nv × nv`, tangent space); for a `q`, `v` on the constraints (`aba_derivatives_independent` moves along the constraint manifold instead). Returns the singularity measure cond₁(Y1): where it is not below `DERIVATIVE_SINGULARITY_THRESHOLD` (`!(cond < DERIVATIVE_SINGULARITY_THRESHOLD)`) the derivatives have lost their digits (their rounding grows as cond²) and the interpreted solver refuses."),
         inputs: &[Q, V, TAU],
-        outputs: &[
-            OutputSpec {
-                name: "qdd",
-                shape: Shape::Vector(Dim::Nv),
-                unit: "rad/s² or m/s²",
-            },
-            OutputSpec {
-                name: "dqdd_dq",
-                shape: Shape::Matrix(Dim::Nv, Dim::Nv),
-                unit: "1/s² or m/s² per rad",
-            },
-            OutputSpec {
-                name: "dqdd_dv",
-                shape: Shape::Matrix(Dim::Nv, Dim::Nv),
-                unit: "1/s",
-            },
-            OutputSpec {
-                name: "dqdd_dtau",
-                shape: Shape::Matrix(Dim::Nv, Dim::Nv),
-                unit: "1/kg, 1/(kg·m) or 1/(kg·m²)",
-            },
-        ],
-        returns: Returns::Nothing,
+        outputs: ABA_DERIVATIVE_OUTPUTS,
+        returns: Returns::SingularityMeasure,
         needs_constraints: false,
         generated: WhenGenerated::OnRequest,
         parameter: Parameter::None,
         readme_note: " — forward dynamics and its derivatives `∂q̈/∂q`, `∂q̈/∂v`, `∂q̈/∂τ` (tangent space)",
-        readme_note_with_constraints: None,
+        readme_note_with_constraints: Some(" — forward dynamics and its derivatives over every spanning coordinate (tangent space); returns the singularity measure, to compare with `DERIVATIVE_SINGULARITY_THRESHOLD`"),
         cli: None,
         growth: Growth::Quadratic,
         predicted_operations: |c| 600.0 * c.nv * c.nv,
@@ -1206,15 +1194,7 @@ pub const ALGORITHMS: &[AlgorithmSpec] = &[
             let mut dws = DerivativeWorkspace::new(model);
             let mut d = AbaDerivatives::new(model);
             aba_derivatives(model, &mut dws, &inputs[0], &inputs[1], &inputs[2], &[], &mut d)?;
-            Ok(Traced {
-                outputs: vec![
-                    d.qdd.iter().copied().collect(),
-                    row_major(&d.dqdd_dq),
-                    row_major(&d.dqdd_dv),
-                    row_major(&d.dqdd_dtau),
-                ],
-                returned: None,
-            })
+            Ok(aba_derivatives_traced(model, &dws, &d))
         },
         interpreted: |model, _, inputs, _| {
             let mut dws = DerivativeWorkspace::new(model);
@@ -1231,28 +1211,7 @@ pub const ALGORITHMS: &[AlgorithmSpec] = &[
         doc: "Inverse dynamics `tau = rnea(q, v, qdd)` and its derivatives (`nv × nv`, row `i` is `tau[i]`, column `k` a direction in `v` order): `dtau_dq` in the tangent space (column `k` along `integrate(q, ε e_k)`), `dtau_dv` and `dtau_dqdd` (the mass matrix). Forward-mode dual numbers through the algorithm, unrolled.",
         doc_with_constraints: None,
         inputs: &[Q, V, QDD],
-        outputs: &[
-            OutputSpec {
-                name: "tau",
-                shape: Shape::Vector(Dim::Nv),
-                unit: "N·m or N",
-            },
-            OutputSpec {
-                name: "dtau_dq",
-                shape: Shape::Matrix(Dim::Nv, Dim::Nv),
-                unit: "N·m/rad, N/rad, N·m/m or N/m",
-            },
-            OutputSpec {
-                name: "dtau_dv",
-                shape: Shape::Matrix(Dim::Nv, Dim::Nv),
-                unit: "N·m·s/rad or N·s/m",
-            },
-            OutputSpec {
-                name: "dtau_dqdd",
-                shape: Shape::Matrix(Dim::Nv, Dim::Nv),
-                unit: MASS_UNIT,
-            },
-        ],
+        outputs: RNEA_DERIVATIVE_OUTPUTS,
         returns: Returns::Nothing,
         needs_constraints: false,
         generated: WhenGenerated::OnRequest,
@@ -1266,15 +1225,7 @@ pub const ALGORITHMS: &[AlgorithmSpec] = &[
             let mut dws = DerivativeWorkspace::new(model);
             let mut d = RneaDerivatives::new(model);
             rnea_derivatives(model, &mut dws, &inputs[0], &inputs[1], &inputs[2], &[], &mut d)?;
-            Ok(Traced {
-                outputs: vec![
-                    d.tau.iter().copied().collect(),
-                    row_major(&d.dtau_dq),
-                    row_major(&d.dtau_dv),
-                    row_major(&d.dtau_dqdd),
-                ],
-                returned: None,
-            })
+            Ok(rnea_derivatives_traced(&d))
         },
         interpreted: |model, _, inputs, _| {
             let mut dws = DerivativeWorkspace::new(model);
@@ -1289,7 +1240,7 @@ pub const ALGORITHMS: &[AlgorithmSpec] = &[
         wrapper: None,
         summary: "one semi-implicit Euler step `(q', v')` (only when asked for)",
         doc: "One step of semi-implicit (symplectic) Euler: `v_next = v + dt · aba(q, v, tau)`, then `q_next = integrate(q, dt · v_next)` — a rollout's step; `step_derivatives` adds its Jacobian.",
-        doc_with_constraints: Some("One step of semi-implicit Euler over the spanning tree's coordinates (`q_next` satisfies the constraints to first order in `dt`; `complete` projects it back)."),
+        doc_with_constraints: Some("One step of semi-implicit Euler over the spanning tree's coordinates (`q_next` satisfies the constraints to first order in `dt`; `complete` projects it back). Returns the singularity measure cond₁(Y1) of the step's `aba`, to compare with `SINGULARITY_THRESHOLD` as `aba`'s."),
         inputs: &[Q, V, TAU, DT],
         outputs: &[
             OutputSpec {
@@ -1303,12 +1254,12 @@ pub const ALGORITHMS: &[AlgorithmSpec] = &[
                 unit: "rad/s or m/s",
             },
         ],
-        returns: Returns::Nothing,
+        returns: Returns::SingularityMeasure,
         needs_constraints: false,
         generated: WhenGenerated::OnRequest,
         parameter: Parameter::None,
         readme_note: " — one semi-implicit Euler step (a rollout's step)",
-        readme_note_with_constraints: None,
+        readme_note_with_constraints: Some(" — one semi-implicit Euler step over the spanning coordinates; returns the singularity measure, as `aba` does"),
         cli: None,
         growth: Growth::Linear,
         predicted_operations: |c| 500.0 * c.nv,
@@ -1319,7 +1270,7 @@ pub const ALGORITHMS: &[AlgorithmSpec] = &[
             step(model, ws, &inputs[0], &inputs[1], &inputs[2], dt, &[], &mut q_next, &mut v_next)?;
             Ok(Traced {
                 outputs: vec![q_next, v_next],
-                returned: None,
+                returned: model.has_constraints().then(|| constraint_condition(ws)),
             })
         },
         interpreted: |model, ws, inputs, _| {
@@ -1334,7 +1285,7 @@ pub const ALGORITHMS: &[AlgorithmSpec] = &[
         wrapper: None,
         summary: "one semi-implicit Euler step `(q', v')` and its Jacobian with respect to `(q, v, τ)` (only when asked for)",
         doc: "One step of semi-implicit Euler, `v_next = v + dt · aba(q, v, tau)` and `q_next = integrate(q, dt · v_next)`, and its Jacobian in blocks (`nv × nv`, tangent space: a column of `∂/∂q` is along `integrate(q, ε e_k)`, a row of `∂q_next` is an entry of `difference(q_next, ·)`): the linearization a multiple-shooting solver takes at each knot.",
-        doc_with_constraints: Some("One step of semi-implicit Euler over the spanning tree's coordinates (`q_next` satisfies the constraints to first order in `dt`), and its Jacobian in blocks (`nv × nv`, tangent space)."),
+        doc_with_constraints: Some("One step of semi-implicit Euler over the spanning tree's coordinates (`q_next` satisfies the constraints to first order in `dt`), and its Jacobian in blocks (`nv × nv`, tangent space). Returns the singularity measure cond₁(Y1), to compare with `DERIVATIVE_SINGULARITY_THRESHOLD` as `aba_derivatives`'."),
         inputs: &[Q, V, TAU, DT],
         outputs: &[
             OutputSpec {
@@ -1378,12 +1329,12 @@ pub const ALGORITHMS: &[AlgorithmSpec] = &[
                 unit: "per unit of the input",
             },
         ],
-        returns: Returns::Nothing,
+        returns: Returns::SingularityMeasure,
         needs_constraints: false,
         generated: WhenGenerated::OnRequest,
         parameter: Parameter::None,
         readme_note: " — one semi-implicit Euler step and its Jacobian with respect to `(q, v, tau)` (tangent space)",
-        readme_note_with_constraints: None,
+        readme_note_with_constraints: Some(" — one semi-implicit Euler step and its Jacobian over the spanning coordinates; returns the singularity measure, to compare with `DERIVATIVE_SINGULARITY_THRESHOLD`"),
         cli: None,
         growth: Growth::Quadratic,
         predicted_operations: |c| 700.0 * c.nv * c.nv,
@@ -1403,7 +1354,9 @@ pub const ALGORITHMS: &[AlgorithmSpec] = &[
                     row_major(&d.dv_next_dv),
                     row_major(&d.dv_next_dtau),
                 ],
-                returned: None,
+                returned: model
+                    .has_constraints()
+                    .then(|| constraint_condition(dws.value_workspace())),
             })
         },
         interpreted: |model, _, inputs, _| {
@@ -1412,7 +1365,214 @@ pub const ALGORITHMS: &[AlgorithmSpec] = &[
             step_derivatives(model, &mut dws, inputs[0], inputs[1], inputs[2], inputs[3][0], &[], &mut d)
         },
     },
+    AlgorithmSpec {
+        algorithm: Algorithm::AbaDerivativesIndependent,
+        name: "aba_derivatives_independent",
+        traced_name: "aba_derivatives_independent",
+        wrapper: None,
+        summary: "`q̈_I` and its derivatives along the constraint manifold (models with constraints, only when asked for)",
+        doc: "The independent accelerations `qdd_i` (of `aba`) and their derivatives along the constraint manifold: `dqdd_dq` (`ni × ni`) with the configuration moving along column `k` of the embedding map `X` (the dependent coordinates follow the independent ones), `dqdd_dv` (`ni × ni`) with the dependent velocities following the independent ones through the velocity constraints, and `dqdd_dtau` (`ni × nv`, over the spanning tree's `tau`). `q` and `v` must satisfy the constraints (`complete`). Returns the singularity measure cond₁(Y1): where it is not below `DERIVATIVE_SINGULARITY_THRESHOLD` (`!(cond < DERIVATIVE_SINGULARITY_THRESHOLD)`) the derivatives have lost their digits and the interpreted solver refuses.",
+        doc_with_constraints: None,
+        inputs: &[Q, V, TAU],
+        outputs: &[
+            OutputSpec {
+                name: "qdd_i",
+                shape: Shape::Vector(Dim::Ni),
+                unit: "rad/s² or m/s²",
+            },
+            OutputSpec {
+                name: "dqdd_dq",
+                shape: Shape::Matrix(Dim::Ni, Dim::Ni),
+                unit: "1/s² or m/s² per rad",
+            },
+            OutputSpec {
+                name: "dqdd_dv",
+                shape: Shape::Matrix(Dim::Ni, Dim::Ni),
+                unit: "1/s",
+            },
+            OutputSpec {
+                name: "dqdd_dtau",
+                shape: Shape::Matrix(Dim::Ni, Dim::Nv),
+                unit: "1/kg, 1/(kg·m) or 1/(kg·m²)",
+            },
+        ],
+        returns: Returns::SingularityMeasure,
+        needs_constraints: true,
+        generated: WhenGenerated::OnRequest,
+        parameter: Parameter::None,
+        readme_note: " — the independent accelerations' derivatives along the constraint manifold; returns the singularity measure, to compare with `DERIVATIVE_SINGULARITY_THRESHOLD`",
+        readme_note_with_constraints: None,
+        cli: None,
+        growth: Growth::Quadratic,
+        predicted_operations: |c| 600.0 * c.nv * c.nv,
+        trace: |model, _, inputs, _| {
+            let mut dws = DerivativeWorkspace::new(model);
+            let mut d = ManifoldDerivatives::new(model);
+            aba_derivatives_independent(model, &mut dws, &inputs[0], &inputs[1], &inputs[2], &[], &mut d)?;
+            Ok(Traced {
+                outputs: vec![
+                    d.qdd_independent.iter().copied().collect(),
+                    row_major(&d.dqdd_dq),
+                    row_major(&d.dqdd_dv),
+                    row_major(&d.dqdd_dtau),
+                ],
+                returned: Some(constraint_condition(dws.value_workspace())),
+            })
+        },
+        interpreted: |model, _, inputs, _| {
+            let mut dws = DerivativeWorkspace::new(model);
+            let mut d = ManifoldDerivatives::new(model);
+            aba_derivatives_independent(model, &mut dws, inputs[0], inputs[1], inputs[2], &[], &mut d)
+        },
+    },
+    AlgorithmSpec {
+        algorithm: Algorithm::AbaDerivativesExt,
+        name: "aba_derivatives_ext",
+        traced_name: "aba_derivatives_ext",
+        wrapper: None,
+        summary: "`aba_derivatives` with the wrenches `f_ext` of the links named at generation time, held fixed (only when asked for)",
+        doc: "Forward dynamics with external wrenches, `qdd = aba_ext(q, v, tau, f_ext)`, and its derivatives with the wrenches held fixed (`nv × nv`, as `aba_derivatives`: `dqdd_dq` in the tangent space, `dqdd_dv`, `dqdd_dtau = M⁻¹`). Row `k` of `f_ext` is the wrench `[fx, fy, fz, tx, ty, tz]` (N, N·m) on link `WRENCH_LINKS[k]`, in that link's own frame, about its origin: a wrench fixed in the link's frame turns with the link, which `dqdd_dq` includes.",
+        doc_with_constraints: Some("Forward dynamics with external wrenches over the spanning tree and its derivatives with the wrenches held fixed in their links' frames, as a function of every spanning coordinate (`nv × nv`, tangent space); rows of `f_ext` as in `aba_ext`. Returns the singularity measure cond₁(Y1), to compare with `DERIVATIVE_SINGULARITY_THRESHOLD` as `aba_derivatives`'."),
+        inputs: &[Q, V, TAU, F_EXT],
+        outputs: ABA_DERIVATIVE_OUTPUTS,
+        returns: Returns::SingularityMeasure,
+        needs_constraints: false,
+        generated: WhenGenerated::OnRequest,
+        parameter: Parameter::WrenchLinks,
+        readme_note: " — `aba_derivatives` with the wrenches `f_ext` (rows as in `aba_ext`) held fixed in their links' frames",
+        readme_note_with_constraints: Some(" — `aba_derivatives` with the wrenches `f_ext` (rows as in `aba_ext`) held fixed in their links' frames; returns the singularity measure, to compare with `DERIVATIVE_SINGULARITY_THRESHOLD`"),
+        cli: None,
+        growth: Growth::Quadratic,
+        predicted_operations: |c| 650.0 * c.nv * c.nv,
+        trace: |model, _, inputs, links| {
+            let f_ext = link_wrenches(links.wrenches, &inputs[3]);
+            let mut dws = DerivativeWorkspace::new(model);
+            let mut d = AbaDerivatives::new(model);
+            aba_derivatives(model, &mut dws, &inputs[0], &inputs[1], &inputs[2], &f_ext, &mut d)?;
+            Ok(aba_derivatives_traced(model, &dws, &d))
+        },
+        interpreted: |model, _, inputs, links| {
+            let f_ext = link_wrenches(links.wrenches, inputs[3]);
+            let mut dws = DerivativeWorkspace::new(model);
+            let mut d = AbaDerivatives::new(model);
+            aba_derivatives(model, &mut dws, inputs[0], inputs[1], inputs[2], &f_ext, &mut d)
+        },
+    },
+    AlgorithmSpec {
+        algorithm: Algorithm::RneaDerivativesExt,
+        name: "rnea_derivatives_ext",
+        traced_name: "rnea_derivatives_ext",
+        wrapper: None,
+        summary: "`rnea_derivatives` with the wrenches `f_ext` of the links named at generation time, held fixed (only when asked for)",
+        doc: "Inverse dynamics with external wrenches, `tau = rnea_ext(q, v, qdd, f_ext)`, and its derivatives with the wrenches held fixed (`nv × nv`, as `rnea_derivatives`: `dtau_dq` in the tangent space, `dtau_dv`, `dtau_dqdd = M`). Row `k` of `f_ext` is the wrench `[fx, fy, fz, tx, ty, tz]` (N, N·m) on link `WRENCH_LINKS[k]`, in that link's own frame, about its origin: a wrench fixed in the link's frame turns with the link, which `dtau_dq` includes.",
+        doc_with_constraints: None,
+        inputs: &[Q, V, QDD, F_EXT],
+        outputs: RNEA_DERIVATIVE_OUTPUTS,
+        returns: Returns::Nothing,
+        needs_constraints: false,
+        generated: WhenGenerated::OnRequest,
+        parameter: Parameter::WrenchLinks,
+        readme_note: " — `rnea_derivatives` with the wrenches `f_ext` (rows as in `aba_ext`) held fixed in their links' frames",
+        readme_note_with_constraints: None,
+        cli: None,
+        growth: Growth::Quadratic,
+        predicted_operations: |c| 320.0 * c.nv * c.nv,
+        trace: |model, _, inputs, links| {
+            let f_ext = link_wrenches(links.wrenches, &inputs[3]);
+            let mut dws = DerivativeWorkspace::new(model);
+            let mut d = RneaDerivatives::new(model);
+            rnea_derivatives(model, &mut dws, &inputs[0], &inputs[1], &inputs[2], &f_ext, &mut d)?;
+            Ok(rnea_derivatives_traced(&d))
+        },
+        interpreted: |model, _, inputs, links| {
+            let f_ext = link_wrenches(links.wrenches, inputs[3]);
+            let mut dws = DerivativeWorkspace::new(model);
+            let mut d = RneaDerivatives::new(model);
+            rnea_derivatives(model, &mut dws, inputs[0], inputs[1], inputs[2], &f_ext, &mut d)
+        },
+    },
 ];
+
+/// `aba_derivatives`' outputs (also those of `aba_derivatives_ext`).
+const ABA_DERIVATIVE_OUTPUTS: &[OutputSpec] = &[
+    OutputSpec {
+        name: "qdd",
+        shape: Shape::Vector(Dim::Nv),
+        unit: "rad/s² or m/s²",
+    },
+    OutputSpec {
+        name: "dqdd_dq",
+        shape: Shape::Matrix(Dim::Nv, Dim::Nv),
+        unit: "1/s² or m/s² per rad",
+    },
+    OutputSpec {
+        name: "dqdd_dv",
+        shape: Shape::Matrix(Dim::Nv, Dim::Nv),
+        unit: "1/s",
+    },
+    OutputSpec {
+        name: "dqdd_dtau",
+        shape: Shape::Matrix(Dim::Nv, Dim::Nv),
+        unit: "1/kg, 1/(kg·m) or 1/(kg·m²)",
+    },
+];
+
+/// `rnea_derivatives`' outputs (also those of `rnea_derivatives_ext`).
+const RNEA_DERIVATIVE_OUTPUTS: &[OutputSpec] = &[
+    OutputSpec {
+        name: "tau",
+        shape: Shape::Vector(Dim::Nv),
+        unit: "N·m or N",
+    },
+    OutputSpec {
+        name: "dtau_dq",
+        shape: Shape::Matrix(Dim::Nv, Dim::Nv),
+        unit: "N·m/rad, N/rad, N·m/m or N/m",
+    },
+    OutputSpec {
+        name: "dtau_dv",
+        shape: Shape::Matrix(Dim::Nv, Dim::Nv),
+        unit: "N·m·s/rad or N·s/m",
+    },
+    OutputSpec {
+        name: "dtau_dqdd",
+        shape: Shape::Matrix(Dim::Nv, Dim::Nv),
+        unit: MASS_UNIT,
+    },
+];
+
+/// The traced outputs of `aba_derivatives` (and `_ext`), with the singularity measure of its value pass
+/// on a model with constraints.
+fn aba_derivatives_traced(
+    model: &Model<Sym>,
+    dws: &DerivativeWorkspace<Sym>,
+    d: &AbaDerivatives<Sym>,
+) -> Traced {
+    Traced {
+        outputs: vec![
+            d.qdd.iter().copied().collect(),
+            row_major(&d.dqdd_dq),
+            row_major(&d.dqdd_dv),
+            row_major(&d.dqdd_dtau),
+        ],
+        returned: model
+            .has_constraints()
+            .then(|| constraint_condition(dws.value_workspace())),
+    }
+}
+
+/// The traced outputs of `rnea_derivatives` (and `_ext`).
+fn rnea_derivatives_traced(d: &RneaDerivatives<Sym>) -> Traced {
+    Traced {
+        outputs: vec![
+            d.tau.iter().copied().collect(),
+            row_major(&d.dtau_dq),
+            row_major(&d.dtau_dv),
+            row_major(&d.dtau_dqdd),
+        ],
+        returned: None,
+    }
+}
 
 /// The wrenches of `f_ext`'s rows (`[fx, fy, fz, tx, ty, tz]`, row-major) on `frames`, in order.
 fn link_wrenches<T: Real>(frames: &[FrameId], f_ext: &[T]) -> Vec<LinkWrench<T>> {
@@ -1465,7 +1625,7 @@ const _: () = {
         assert!(ALGORITHMS[i].algorithm as usize == i);
         i += 1;
     }
-    assert!(Algorithm::StepDerivatives as usize + 1 == ALGORITHMS.len());
+    assert!(Algorithm::RneaDerivativesExt as usize + 1 == ALGORITHMS.len());
 };
 
 impl Algorithm {
@@ -1781,7 +1941,7 @@ mod tests {
         let e = Algorithm::from_name("abba").unwrap_err().to_string();
         assert_eq!(
             e,
-            "unknown function `abba` (expected kinematics, aba, rnea, gravity, nle, crba, minv, complete, embedding, crba_independent, integrate, difference, aba_ext, rnea_ext, nle_ext, frame, com, centroidal, centroidal_bias, aba_derivatives, rnea_derivatives, step, step_derivatives)"
+            "unknown function `abba` (expected kinematics, aba, rnea, gravity, nle, crba, minv, complete, embedding, crba_independent, integrate, difference, aba_ext, rnea_ext, nle_ext, frame, com, centroidal, centroidal_bias, aba_derivatives, rnea_derivatives, step, step_derivatives, aba_derivatives_independent, aba_derivatives_ext, rnea_derivatives_ext)"
         );
     }
 

@@ -14,6 +14,7 @@ use crate::trace::{input, record, snap, Sym};
 use crate::value_names::Owners;
 use crate::{build_model, LoadError, LoadErrorKind, Loaded, Location, ModelOptions};
 use embedyn_runtime::constraints::{singularity_threshold, COMPLETION_MAX_STEPS};
+use embedyn_runtime::derivative_singularity_threshold;
 use embedyn_runtime::{FrameId, Model, Real, Reference, Workspace};
 
 use proc_macro2::TokenStream;
@@ -439,7 +440,7 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
             !wrench_links.is_empty(),
             Parameter::WrenchLinks,
             "--wrenches / wrenches(…)",
-            "`aba_ext`, `rnea_ext` or `nle_ext`",
+            "`aba_ext`, `rnea_ext`, `nle_ext`, `aba_derivatives_ext` or `rnea_derivatives_ext`",
         ),
         (
             !frame_links.is_empty(),
@@ -699,12 +700,21 @@ fn scalar_module(
             "f32" => singularity_threshold::<f32>(),
             _ => singularity_threshold::<f64>(),
         });
+        let derivative_value = proc_macro2::Literal::f64_unsuffixed(match scalar {
+            "f32" => derivative_singularity_threshold::<f32>(),
+            _ => derivative_singularity_threshold::<f64>(),
+        });
         quote! {
             /// cond₁(Y1) at or above which a configuration counts as singular in this scalar type,
             /// `min(1e10, 10⁻³ / ε)`: where the condition number returned by `aba`, `embedding` or
             /// `crba_independent` is not below it (`cond.is_nan() || cond >= SINGULARITY_THRESHOLD`), the
             /// results are meaningless and the interpreted solver refuses.
             pub const SINGULARITY_THRESHOLD: S = #value;
+            /// cond₁(Y1) at or above which the derivatives (`aba_derivatives`, `step_derivatives`,
+            /// `aba_derivatives_independent`, …) have lost their digits in this scalar type: the square
+            /// root of `SINGULARITY_THRESHOLD`, because their rounding grows as cond₁(Y1)² where the
+            /// values' grows as cond₁(Y1). The interpreted solver refuses derivatives from it.
+            pub const DERIVATIVE_SINGULARITY_THRESHOLD: S = #derivative_value;
         }
     } else {
         quote!()
@@ -1232,7 +1242,7 @@ mod tests {
             (
                 &["FL_foot"][..],
                 &[][..],
-                "`aba_ext`, `rnea_ext` or `nle_ext`",
+                "`aba_ext`, `rnea_ext`, `nle_ext`, `aba_derivatives_ext` or `rnea_derivatives_ext`",
             ),
             (&[][..], &["trunk"][..], "`frame`"),
         ] {

@@ -94,6 +94,13 @@ impl<T: Real> DerivativeWorkspace<T> {
         }
     }
 
+    /// The workspace of the last call's value pass (the plain algorithm at the inputs): on a model with
+    /// constraints, [`crate::constraints::constraint_condition`] of it is the singularity measure the
+    /// derivatives were checked against (generated code returns it instead of refusing).
+    pub fn value_workspace(&self) -> &Workspace<T> {
+        &self.plain
+    }
+
     /// A workspace for `model`'s derivatives.
     pub fn new(model: &Model<T>) -> Self {
         let dual: Model<D<T>> = model.cast();
@@ -566,7 +573,7 @@ fn check_derivative_condition<T: Real>(
     model: &Model<T>,
     plain: &Workspace<T>,
 ) -> Result<(), DynamicsError> {
-    let threshold = crate::constraints::singularity_threshold::<T>().sqrt();
+    let threshold = derivative_singularity_threshold::<T>();
     for (g, gw) in model.groups.iter().zip(&plain.constraints.groups) {
         if let Some(c) = gw.condition.value() {
             if c.is_nan() || c >= threshold {
@@ -579,6 +586,13 @@ fn check_derivative_condition<T: Real>(
         }
     }
     Ok(())
+}
+
+/// cond₁(Y1) at or above which the derivatives on a model with constraints are refused in the scalar
+/// type `T`: the square root of [`crate::constraints::singularity_threshold`] (1e5 in f64, about 92 in
+/// f32), because the derivatives' rounding grows as cond₁(Y1)² where the values' grows as cond₁(Y1).
+pub fn derivative_singularity_threshold<T: Real>() -> f64 {
+    crate::constraints::singularity_threshold::<T>().sqrt()
 }
 
 /// Spanning direction `c` of `3 nv`: the configuration's, the velocity's, then τ's (or q̈'s) coordinates.

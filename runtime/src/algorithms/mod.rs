@@ -22,8 +22,9 @@ pub use centroidal::{
 };
 pub use crba::crba;
 pub use derivatives::{
-    aba_derivatives, aba_derivatives_independent, rnea_derivatives, step, step_derivatives,
-    AbaDerivatives, DerivativeWorkspace, ManifoldDerivatives, RneaDerivatives, StepDerivatives,
+    aba_derivatives, aba_derivatives_independent, derivative_singularity_threshold,
+    rnea_derivatives, step, step_derivatives, AbaDerivatives, DerivativeWorkspace,
+    ManifoldDerivatives, RneaDerivatives, StepDerivatives,
 };
 pub(crate) use embedded::position_kinematics;
 pub use embedded::{
