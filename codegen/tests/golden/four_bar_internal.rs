@@ -79,6 +79,11 @@ pub mod f64 {
     /// `crba_independent` is not below it (`cond.is_nan() || cond >= SINGULARITY_THRESHOLD`), the
     /// results are meaningless and the interpreted solver refuses.
     pub const SINGULARITY_THRESHOLD: S = 10000000000.0;
+    /// cond₁(Y1) at or above which the derivatives (`aba_derivatives`, `step_derivatives`,
+    /// `aba_derivatives_independent`, …) have lost their digits in this scalar type: the square
+    /// root of `SINGULARITY_THRESHOLD`, because their rounding grows as cond₁(Y1)² where the
+    /// values' grows as cond₁(Y1). The interpreted solver refuses derivatives from it.
+    pub const DERIVATIVE_SINGULARITY_THRESHOLD: S = 100000.0;
     /// Lower position limit of each coordinate of `q` (rad or m; `<limit lower>`): `-INFINITY`
     /// where the model gives none (continuous and floating joints, a missing attribute).
     pub const LOWER: [S; super::NQ] = [-6.3, -6.3, -6.3, -6.3];
