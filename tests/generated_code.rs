@@ -8,4 +8,5 @@ mod common;
 mod generated;
 mod generated_chain;
 mod generated_derivatives;
+mod generated_lanes;
 mod limits;

@@ -217,6 +217,10 @@ pub enum Command {
         /// Where the frame functions express their Jacobian and bias (Pinocchio's references).
         #[arg(long, value_parser = ["local", "local_world_aligned", "world"], default_value = "local_world_aligned")]
         reference: String,
+        /// Also write lane modules of this many states per call (`f64x4`, `f32x4` for 4; 2 or 4 for
+        /// f64, 4 or 8 for f32): every function evaluating that many states at once, one per SIMD lane.
+        #[arg(long, value_name = "N")]
+        lanes: Option<usize>,
     },
     /// Time every algorithm for each engine and scalar (median ns per call, in-process, pre-generated
     /// random states).
@@ -849,9 +853,11 @@ pub fn run(cli: Cli) -> Result<Printed, CliError> {
             wrenches,
             frames,
             reference,
+            lanes,
         } => {
             let loaded = load_reporting(&model)?;
             let options = embedyn_codegen::GenerateOptions {
+                lanes: lanes.unwrap_or(0),
                 model: scene.options_for(&loaded),
                 f64: scalar != Some(Scalar::F32),
                 f32: scalar != Some(Scalar::F64),

@@ -113,6 +113,37 @@ fn standalone_crate_builds_as_no_std() {
     assert_eq!(deps, ["libm = \"0.2\""], "dependencies: {deps:?}");
 }
 
+/// With `--lanes 4` the crate has the lane module `f64x4`, carries the lane types in its helpers and
+/// depends on `wide` without its `std` feature; it still builds (type-checks) as `no_std`.
+#[test]
+fn standalone_crate_with_lanes_checks_as_no_std() {
+    let dir = tmp("lanes_crate");
+    generate(
+        "models/arm7.urdf",
+        &dir,
+        &["--lanes", "4", "--scalar", "f64", "--only", "aba"],
+    );
+    let src = std::fs::read_to_string(dir.join("src/lib.rs")).unwrap();
+    assert!(src.contains("pub mod f64x4") && src.contains("pub type S = crate::helpers::F64x4;"));
+    let cargo = std::fs::read_to_string(dir.join("Cargo.toml")).unwrap();
+    assert!(
+        cargo.contains("[dependencies.wide]") && cargo.contains("default-features = false"),
+        "{cargo}"
+    );
+    let target = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("generated-target");
+    let out = Command::new(env!("CARGO"))
+        .args(["check", "--offline", "--quiet"])
+        .current_dir(&dir)
+        .env("CARGO_TARGET_DIR", &target)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "the generated crate does not check:\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
 /// `--only` writes exactly the functions named (and lists exactly those in the README); unknown names and
 /// loop-only functions on a tree are refused with a message naming them.
 #[test]

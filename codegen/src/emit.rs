@@ -233,6 +233,8 @@ pub struct ModuleContext<'a> {
     /// The names at the module's level so far (public functions, parts of long functions), which a
     /// function's parts must not take and join.
     pub taken: &'a mut HashSet<String>,
+    /// A lane module (`f64x4`, …): constants as `S::splat(…)`, comparisons through `select_gt`.
+    pub lanes: bool,
 }
 
 /// Emits `pub fn name(args…, outputs…)` for one scalar module.
@@ -335,6 +337,7 @@ pub fn function(
             &helpers,
             &names,
             module.taken,
+            module.lanes,
         );
         return Ok(Emitted {
             operations,
@@ -386,8 +389,13 @@ pub fn function(
     let arg_names: Vec<Ident> = args.iter().map(|a| format_ident!("{}", a.name)).collect();
     let nslots = num(slot.len().max(1));
 
+    let lanes = module.lanes;
     let operand = |s: &Sym| -> TokenStream {
         match s {
+            Sym::Const(c) if lanes => {
+                let c = lit(*c);
+                quote!(S::splat(#c))
+            }
             Sym::Const(c) => lit(*c),
             Sym::Node(n) => {
                 let id = node_ident(&names, *n);
@@ -476,7 +484,11 @@ pub fn function(
                         operand(then),
                         operand(otherwise),
                     );
-                    quote!(if #l > #r { #t } else { #o })
+                    if lanes {
+                        quote!(#helpers::select_gt(#l, #r, #t, #o))
+                    } else {
+                        quote!(if #l > #r { #t } else { #o })
+                    }
                 }
                 Op::Sin(_) | Op::Cos(_) if batch.contains(&n) => {
                     // All angles that depend on the inputs alone, in one helper call.
@@ -591,6 +603,7 @@ pub fn function(
         }
     }
     let fname = format_ident!("{}", name);
+    let zero = operand(&Sym::Const(0.0));
     let body = if split {
         let calls: Vec<TokenStream> = chunk_names
             .iter()
@@ -600,7 +613,7 @@ pub fn function(
             })
             .collect();
         quote! {
-            let mut s: [S; #nslots] = [0.0; #nslots];
+            let mut s: [S; #nslots] = [#zero; #nslots];
             #(#calls)*
             #(#out_stmts)*
             #ret_value

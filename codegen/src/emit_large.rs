@@ -112,6 +112,15 @@ fn scratch_type(name: &str) -> String {
 
 /// A float literal as `Literal::f64_unsuffixed` writes it (so both forms of emission print the same
 /// constants): the shortest decimal that reads back exactly, with a `.0` when it has no point.
+/// A constant as the function's scalar takes it: the literal, or `S::splat(literal)` in a lane function.
+pub(crate) fn constant_text(x: f64, lanes: bool) -> String {
+    if lanes {
+        format!("S::splat({})", float_text(x))
+    } else {
+        float_text(x)
+    }
+}
+
 pub(crate) fn float_text(x: f64) -> String {
     let mut s = x.abs().to_string();
     if !s.contains('.') {
@@ -166,6 +175,7 @@ pub(crate) fn function_text(
     helpers: &str,
     names: &ValueNames,
     taken: &mut std::collections::HashSet<String>,
+    lanes: bool,
 ) -> String {
     let order = pair_sines_with_cosines(nodes, order, sin_of, cos_of, batch);
     let position: HashMap<u32, usize> = order.iter().enumerate().map(|(i, &n)| (n, i)).collect();
@@ -308,6 +318,7 @@ pub(crate) fn function_text(
             cos_of,
             helpers,
             names,
+            lanes,
         };
         write_doc(&mut text, &part_doc(name, c, parts.len(), &part_bodies[c]));
         writeln!(text, "    #[inline(never)]").unwrap();
@@ -333,7 +344,9 @@ pub(crate) fn function_text(
             text,
             "        let mut s: {} = ({});",
             scratch_type(name),
-            "0.0, ".repeat(nslots).trim_end()
+            format!("{}, ", constant_text(0.0, lanes))
+                .repeat(nslots)
+                .trim_end()
         )
         .unwrap();
     }
@@ -342,7 +355,7 @@ pub(crate) fn function_text(
     }
     let outside = |v: &Sym| -> Option<String> {
         match v {
-            Sym::Const(x) => Some(float_text(*x)),
+            Sym::Const(x) => Some(constant_text(*x, lanes)),
             Sym::Node(n) => match nodes[*n as usize] {
                 Op::Input { arg, index } => Some(args[arg as usize].entry_text(index)),
                 _ => None,
@@ -492,6 +505,8 @@ struct Part<'a> {
     sin_of: &'a HashMap<Sym, u32>,
     cos_of: &'a HashMap<Sym, u32>,
     helpers: &'a str,
+    /// A lane function: constants as `S::splat(…)`, comparisons through `select_gt`.
+    lanes: bool,
     names: &'a ValueNames,
 }
 
@@ -620,7 +635,7 @@ impl Part<'_> {
             .iter()
             .map(|a| match a {
                 Sym::Node(m) => self.expr(*m, reference).0,
-                Sym::Const(x) => float_text(*x),
+                Sym::Const(x) => constant_text(*x, self.lanes),
             })
             .collect();
         writeln!(
@@ -709,7 +724,7 @@ impl Part<'_> {
     fn operand(&self, s: &Sym, reference: &HashMap<u32, Reference>) -> (String, u8) {
         match s {
             Sym::Const(x) => {
-                let t = float_text(*x);
+                let t = constant_text(*x, self.lanes);
                 let strength = if t.starts_with('-') { UNARY } else { ATOM };
                 (t, strength)
             }
@@ -748,6 +763,22 @@ impl Part<'_> {
             ),
             Op::Abs(a) => (
                 format!("{}::abs({})", self.helpers, self.operand(a, reference).0),
+                ATOM,
+            ),
+            Op::Select {
+                lhs,
+                rhs,
+                then,
+                otherwise,
+            } if self.lanes => (
+                format!(
+                    "{}::select_gt({}, {}, {}, {})",
+                    self.helpers,
+                    self.operand(lhs, reference).0,
+                    self.operand(rhs, reference).0,
+                    self.operand(then, reference).0,
+                    self.operand(otherwise, reference).0
+                ),
                 ATOM,
             ),
             Op::Select {

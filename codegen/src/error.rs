@@ -626,6 +626,14 @@ pub enum LoadErrorKind {
         /// The function.
         function: Algorithm,
     },
+    /// A lane count the scalar has no lane type of.
+    #[error("`lanes = {lanes}` has no lane type for {scalar} (lanes: 2 or 4 for f64, 4 or 8 for f32; `f64_only` or `f32_only` picks one scalar)")]
+    NoLaneType {
+        /// The scalar.
+        scalar: &'static str,
+        /// The lanes asked for.
+        lanes: usize,
+    },
     /// A function generated for links named at generation time, asked for without any.
     #[error("`{}` is generated for links named at generation time, and none is named: {}", .function.name(), links_option(*.function))]
     NeedsLinks {

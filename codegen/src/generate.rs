@@ -45,6 +45,9 @@ pub struct GenerateOptions {
     /// Links named at generation time: those whose wrenches `aba_ext`, `rnea_ext` and `nle_ext` take,
     /// and those that get a frame function each.
     pub links: LinkOptions,
+    /// Lanes of the lane modules (`f64x4`, `f32x4` for 4: every function evaluating that many states
+    /// at once, one per lane); 0 for none (the default). Macro `lanes = 4`, `embedyn generate --lanes 4`.
+    pub lanes: usize,
 }
 
 /// Links named at generation time, by name (macro `wrenches(…)`, `frames(…)`, `reference = …`;
@@ -83,6 +86,7 @@ impl Default for GenerateOptions {
             exact: false,
             max_compile_memory_mb: Some(crate::size::DEFAULT_COMPILE_MEMORY_MB),
             links: LinkOptions::default(),
+            lanes: 0,
         }
     }
 }
@@ -253,6 +257,12 @@ struct Generated {
     header: TokenStream,
     scalars: Vec<&'static str>,
     functions: Vec<Emitted>,
+    /// The same functions for the lane modules (those without a hand-written wrapper), when asked for.
+    lane_functions: Vec<Emitted>,
+    /// Lanes per lane module (0: none).
+    lanes: usize,
+    /// The helper module's path (for the lane modules' scalar type).
+    helpers: TokenStream,
     /// Whether the model has loops, couplings or mimic joints (then each scalar module has its
     /// `SINGULARITY_THRESHOLD`).
     constrained: bool,
@@ -456,13 +466,23 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
             ));
         }
     }
+    if options.lanes > 0 {
+        for scalar in &scalars_of(options) {
+            if lane_type(scalar, options.lanes).is_none() {
+                return Err(located_at_robot(
+                    loaded,
+                    LoadErrorKind::NoLaneType {
+                        scalar,
+                        lanes: options.lanes,
+                    },
+                ));
+            }
+        }
+    }
     let model: Model<Sym> = snapped(&model64).cast();
     let (nq, nv) = (model.nq(), model.nv());
     let names: Vec<&str> = model.joints.iter().map(|j| j.name.as_str()).collect();
-    let scalars: Vec<&'static str> = [(options.f64, "f64"), (options.f32, "f32")]
-        .into_iter()
-        .filter_map(|(enabled, scalar)| enabled.then_some(scalar))
-        .collect();
+    let scalars = scalars_of(options);
     // One function per algorithm, and per link named for a frame function.
     let frame_names: Vec<&str> = frame_links.iter().map(|(name, _)| name.as_str()).collect();
     let frame_functions = frame_function_names(&model64, &frame_names);
@@ -502,6 +522,7 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
     let wrench_frames: Vec<FrameId> = wrench_links.iter().map(|(_, f)| *f).collect();
     let wrench_names: Vec<&str> = wrench_links.iter().map(|(n, _)| n.as_str()).collect();
     let mut functions = Vec::new();
+    let mut lane_functions = Vec::new();
     if !scalars.is_empty() {
         let instance_algorithms: Vec<Algorithm> = instances.iter().map(|i| i.algorithm).collect();
         let mut sizes =
@@ -513,7 +534,7 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
                 frame: instance.frame,
                 reference: options.links.reference,
             };
-            let function = generate_algorithm(
+            let (function, lane_function) = generate_algorithm(
                 loaded,
                 &model,
                 instance,
@@ -521,6 +542,7 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
                 &wrench_names,
                 &options.helpers,
                 &mut taken,
+                options.lanes,
             )?;
             // Constants are folded in f64; the f32 module writes them as f32 literals.
             if options.f32 && function.largest_constant > f64::from(f32::MAX) {
@@ -535,13 +557,16 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
             sizes[k] = size::FunctionSize {
                 algorithm: algo,
                 operations: function.operations,
-                compile_bytes: function.compile_bytes,
+                // The lane module's copy is compiled beside each scalar's.
+                compile_bytes: function.compile_bytes
+                    + lane_function.as_ref().map_or(0.0, |f| f.compile_bytes),
                 traced: true,
             };
             // Exact for what is traced: refused as soon as that alone is too large.
             let limit = options.max_compile_memory_mb;
             size::check(loaded, &sizes[..=k], &sizes, &scalars, limit, 1.0)?;
             functions.push(function);
+            lane_functions.extend(lane_function);
         }
     }
     let independent: Vec<bool> = (0..model64.joints.len())
@@ -662,6 +687,9 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
         header,
         scalars,
         functions,
+        lane_functions,
+        lanes: options.lanes,
+        helpers: options.helpers.clone(),
         constrained: model64.has_constraints(),
         limits: LimitTables::of(&model64),
     })
@@ -733,6 +761,45 @@ fn scalar_module(
     }
 }
 
+/// The scalar modules `options` asks for, in order.
+fn scalars_of(options: &GenerateOptions) -> Vec<&'static str> {
+    [(options.f64, "f64"), (options.f32, "f32")]
+        .into_iter()
+        .filter_map(|(enabled, scalar)| enabled.then_some(scalar))
+        .collect()
+}
+
+/// The helper module's lane type of `lanes` lanes of `scalar` (`F64x4`), if it has one.
+fn lane_type(scalar: &str, lanes: usize) -> Option<&'static str> {
+    embedyn_runtime::codegen_support::LANE_TYPES
+        .iter()
+        .find(|(s, n, _)| *s == scalar && *n == lanes)
+        .map(|(_, _, name)| *name)
+}
+
+/// The lane module `pub mod f64x4 { type S = F64x4; … }` of `scalar` around `functions`.
+fn lane_module(
+    scalar: &str,
+    lanes: usize,
+    helpers: &TokenStream,
+    functions: &[TokenStream],
+) -> TokenStream {
+    let module = format_ident!("{}x{}", scalar, lanes);
+    let lane_type = format_ident!("{}", lane_type(scalar, lanes).unwrap_or("F64x4"));
+    let doc = format!(
+        " The generated dynamics in `{scalar}`, {lanes} states per call: the scalar `S` is `{lane_type}` (one SIMD value, one state per lane), the functions are the `{scalar}` module's (less `complete`), lane by lane bit-identical to them. Pack states with `S::new([…])` per entry, read lane `k` with `to_array()[k]`; build with the target's SIMD (`-C target-cpu=native`, or `-C target-feature=+avx` for 256-bit values) to compute a lane value in one instruction."
+    );
+    quote! {
+        #[doc = #doc]
+        #[allow(clippy::all, clippy::pedantic, unused_parens, non_snake_case, dead_code)]
+        pub mod #module {
+            /// One number per state.
+            pub type S = #helpers::#lane_type;
+            #(#functions)*
+        }
+    }
+}
+
 /// Generates the items for a model: `NQ`, `NV`, `JOINTS`, and modules `f64`/`f32` with one function per
 /// algorithm.
 pub fn generate_tokens(
@@ -754,10 +821,28 @@ pub fn generate_tokens(
         .scalars
         .iter()
         .map(|scalar| scalar_module(scalar, generated.constrained, &generated.limits, &functions));
+    let lane_functions = generated
+        .lane_functions
+        .into_iter()
+        .map(|f| match f.code {
+            Code::Tokens(t) => Ok(t),
+            Code::Text(text) => syn::parse_str::<TokenStream>(&text)
+                .map_err(|e| located_at_robot(loaded, LoadErrorKind::Tokenize { error: e.into() })),
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    let lane_modules: Vec<TokenStream> = match generated.lanes {
+        0 => Vec::new(),
+        n => generated
+            .scalars
+            .iter()
+            .map(|scalar| lane_module(scalar, n, &generated.helpers, &lane_functions))
+            .collect(),
+    };
     let header = generated.header;
     Ok(quote! {
         #header
         #(#modules)*
+        #(#lane_modules)*
     })
 }
 
@@ -770,27 +855,35 @@ pub fn generate_source(loaded: &Loaded, options: &GenerateOptions) -> Result<Str
     let mut text = format_tokens(&generated.header).map_err(fail)?;
     // Each function formatted on its own inside a module, so that it is indented (and its lines
     // broken) exactly as inside the scalar module.
-    let functions = generated
-        .functions
-        .iter()
-        .map(|f| match &f.code {
-            Code::Tokens(t) => {
-                let wrapped = format_tokens(&quote!(mod m { #t })).map_err(fail)?;
-                Ok(module_body(&wrapped).to_string())
-            }
-            Code::Text(body) => Ok(body.clone()),
-        })
-        .collect::<Result<Vec<String>, LoadError>>()?;
+    let texts = |emitted: &[Emitted]| {
+        emitted
+            .iter()
+            .map(|f| match &f.code {
+                Code::Tokens(t) => {
+                    let wrapped = format_tokens(&quote!(mod m { #t })).map_err(fail)?;
+                    Ok(module_body(&wrapped).to_string())
+                }
+                Code::Text(body) => Ok(body.clone()),
+            })
+            .collect::<Result<Vec<String>, LoadError>>()
+    };
+    let functions = texts(&generated.functions)?;
+    let lane_functions = texts(&generated.lane_functions)?;
+    let mut modules = Vec::new();
     for scalar in &generated.scalars {
-        let empty = format_tokens(&scalar_module(
-            scalar,
-            generated.constrained,
-            &generated.limits,
-            &[],
-        ))
-        .map_err(fail)?;
+        let empty = scalar_module(scalar, generated.constrained, &generated.limits, &[]);
+        modules.push((empty, &functions));
+    }
+    if generated.lanes > 0 {
+        for scalar in &generated.scalars {
+            let empty = lane_module(scalar, generated.lanes, &generated.helpers, &[]);
+            modules.push((empty, &lane_functions));
+        }
+    }
+    for (empty, functions) in modules {
+        let empty = format_tokens(&empty).map_err(fail)?;
         text.push_str(empty.strip_suffix("}\n").unwrap_or(&empty));
-        for f in &functions {
+        for f in functions {
             text.push_str(f);
         }
         text.push_str("}\n");
@@ -842,6 +935,7 @@ const COORDINATE: [&str; 7] = ["0", "1", "2", "3", "4", "5", "6"];
 /// Names of the entries of a wrench row, for the names of `f_ext`'s values (`lf_foot_f_ext_fx`).
 const WRENCH_COMPONENT: [&str; 6] = ["fx", "fy", "fz", "tx", "ty", "tz"];
 
+#[allow(clippy::too_many_arguments)]
 fn generate_algorithm(
     loaded: &Loaded,
     model: &Model<Sym>,
@@ -850,7 +944,8 @@ fn generate_algorithm(
     wrench_names: &[&str],
     helpers: &TokenStream,
     taken: &mut std::collections::HashSet<String>,
-) -> Result<Emitted, LoadError> {
+    lanes: usize,
+) -> Result<(Emitted, Option<Emitted>), LoadError> {
     let algo = instance.algorithm;
     let spec = algo.spec();
     let dims = Dims {
@@ -999,9 +1094,37 @@ fn generate_algorithm(
             helpers,
             owners: &owners,
             taken,
+            lanes: false,
         },
     )
     .map_err(|e| located_at_robot(loaded, e.into()))?;
+    // The lane module's copy: the same tape, emitted with lane constants and selects. Functions with a
+    // hand-written wrapper (`complete`'s Newton loop branches on the residual) have none.
+    let lane_function = match lanes {
+        0 => None,
+        _ if spec.wrapper.is_some() => None,
+        n => {
+            let lane_doc = format!(
+                "{doc}\n\n{n} states at once, one per lane: every argument's entry holds that entry of each state (`q[i].0[k]` is `q[i]` of state `k`), and lane `k` of every result is bit-identical to the scalar function's result for state `k`."
+            );
+            Some(
+                function(
+                    &instance.name,
+                    &lane_doc,
+                    &args,
+                    &outputs,
+                    &tape,
+                    &mut crate::emit::ModuleContext {
+                        helpers,
+                        owners: &owners,
+                        taken,
+                        lanes: true,
+                    },
+                )
+                .map_err(|e| located_at_robot(loaded, e.into()))?,
+            )
+        }
+    };
     if let Some(wrapper) = spec.wrapper {
         let wrapper = wrapper();
         emitted.code = match emitted.code {
@@ -1013,7 +1136,7 @@ fn generate_algorithm(
             }
         };
     }
-    Ok(emitted)
+    Ok((emitted, lane_function))
 }
 
 /// Generated items that are not a Rust file (a bug of the generator): `syn`'s error.

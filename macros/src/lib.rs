@@ -26,6 +26,8 @@ struct Args {
     only: Option<Vec<embedyn_codegen::Algorithm>>,
     /// `max_compile_memory = MB`.
     max_compile_memory: u64,
+    /// `lanes = N`: lane modules (`f64xN`, …) of `N` states per call; 0 for none.
+    lanes: usize,
     /// `gravity = [x, y, z]` (m/s², world frame).
     gravity: Option<[f64; 3]>,
     /// `lock(joint = value, …)`.
@@ -138,6 +140,7 @@ impl Parse for Args {
             krate: None,
             only: None,
             max_compile_memory: embedyn_codegen::DEFAULT_COMPILE_MEMORY_MB,
+            lanes: 0,
             gravity: None,
             locks: Vec::new(),
             rotors: embedyn_codegen::Rotors::Exact,
@@ -195,6 +198,17 @@ impl Parse for Args {
                     input.parse::<Token![=]>()?;
                     args.max_compile_memory = input.parse::<syn::LitInt>()?.base10_parse()?;
                 }
+                "lanes" => {
+                    input.parse::<Token![=]>()?;
+                    let n: syn::LitInt = input.parse()?;
+                    args.lanes = n.base10_parse()?;
+                    if args.lanes == 0 {
+                        return Err(syn::Error::new(
+                            n.span(),
+                            "lanes = N: 2 or 4 for f64, 4 or 8 for f32",
+                        ));
+                    }
+                }
                 "only" => {
                     let content;
                     syn::parenthesized!(content in input);
@@ -213,7 +227,7 @@ impl Parse for Args {
                     return Err(syn::Error::new(
                         key.span(),
                         format!(
-                            "unknown option `{other}` (expected floating, {}, f64_only, f32_only, only(…), gravity = [x, y, z], lock(joint = value, …), rotors = exact|reflected, wrenches(link, …), frames(link, …), reference = local|local_world_aligned|world, max_compile_memory = MB or crate = path)",
+                            "unknown option `{other}` (expected floating, {}, f64_only, f32_only, only(…), gravity = [x, y, z], lock(joint = value, …), rotors = exact|reflected, wrenches(link, …), frames(link, …), reference = local|local_world_aligned|world, max_compile_memory = MB, lanes = N or crate = path)",
                             requested.join(", ")
                         ),
                     ));
@@ -336,6 +350,7 @@ fn expand(args: &Args) -> Result<proc_macro2::TokenStream, ExpandError> {
         helpers: quote!(#krate::codegen_support),
         max_compile_memory_mb: Some(args.max_compile_memory),
         links: args.links.clone(),
+        lanes: args.lanes,
         ..Default::default()
     }
     .with_requested(args.only.clone(), &args.requested);

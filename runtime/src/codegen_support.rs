@@ -3,13 +3,22 @@
 // `no_std`, no allocation, no panics. The same text is compiled into embedyn-runtime and copied into every
 // standalone crate `embedyn generate` writes, so both paths compute bit-identical results.
 
-/// The scalar operations generated code needs, for `f64` and `f32`.
+/// The scalar operations generated code needs, for `f64`, `f32` and [`Lanes`] of them.
 pub trait Float: Copy {
     fn sincos(self) -> (Self, Self);
     /// Sines and cosines of `N` angles at once (see [`sincos_batch_f64`]).
     fn sincos_batch<const N: usize>(x: [Self; N]) -> ([Self; N], [Self; N]);
     fn sqrt(self) -> Self;
     fn abs(self) -> Self;
+    /// `if lhs > rhs { then } else { otherwise }` (lane by lane for [`Lanes`]).
+    fn select_gt(lhs: Self, rhs: Self, then: Self, otherwise: Self) -> Self;
+}
+
+/// `if lhs > rhs { then } else { otherwise }`, lane by lane for [`Lanes`]: generated lane functions
+/// write their run-time pivoting with it.
+#[inline(always)]
+pub fn select_gt<S: Float>(lhs: S, rhs: S, then: S, otherwise: S) -> S {
+    S::select_gt(lhs, rhs, then, otherwise)
 }
 
 /// Sine and cosine of `x` together.
@@ -51,6 +60,14 @@ impl Float for f64 {
     fn abs(self) -> f64 {
         libm::fabs(self)
     }
+    #[inline(always)]
+    fn select_gt(lhs: f64, rhs: f64, then: f64, otherwise: f64) -> f64 {
+        if lhs > rhs {
+            then
+        } else {
+            otherwise
+        }
+    }
 }
 
 impl Float for f32 {
@@ -72,6 +89,14 @@ impl Float for f32 {
     #[inline(always)]
     fn abs(self) -> f32 {
         libm::fabsf(self)
+    }
+    #[inline(always)]
+    fn select_gt(lhs: f32, rhs: f32, then: f32, otherwise: f32) -> f32 {
+        if lhs > rhs {
+            then
+        } else {
+            otherwise
+        }
     }
 }
 

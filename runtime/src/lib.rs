@@ -102,9 +102,21 @@ pub fn relative_error<T: Real>(a: &[T], b: &[T]) -> f64 {
 #[doc(hidden)]
 pub mod codegen_support {
     include!("codegen_support.rs");
+    include!("codegen_lanes.rs");
+}
+
+/// The lane types of generated lane modules (`robot!(…, lanes = 4)`: module `f64x4`, …): `N` numbers in
+/// one SIMD value, one per state. Pack states with `F64x4::new([…])`, read them with `to_array()`.
+pub mod lanes {
+    pub use crate::codegen_support::{F32x4, F32x8, F64x2, F64x4};
 }
 
 /// The source text of [`codegen_support`], which `embedyn generate` copies into every standalone crate so
 /// that it depends on nothing (and computes bit-identically to the macro and build.rs routes).
 #[doc(hidden)]
 pub const CODEGEN_SUPPORT_SOURCE: &str = include_str!("codegen_support.rs");
+
+/// The source text of the lane types, which `embedyn generate` copies beside [`CODEGEN_SUPPORT_SOURCE`]
+/// into a standalone crate generated with lanes (which then depends on `wide`).
+#[doc(hidden)]
+pub const CODEGEN_LANES_SOURCE: &str = include_str!("codegen_lanes.rs");

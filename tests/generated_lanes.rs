@@ -1,0 +1,157 @@
+//! Lane modules (issue 13, `lanes = N`): each lane function evaluates N states at once, and lane `k` of
+//! its result must be bit-identical to the scalar generated function's result for state `k` (the lanes
+//! change the layout, never the arithmetic). Checked on the floating ANYmal B (`aba`, `rnea`, `crba`: the
+//! free flyer's quaternion, sines and cosines through the batch), on a four-bar (run-time pivoting by
+//! `select_gt`, the returned singularity measure) and on the Z1 in f32 with 8 lanes.
+
+use crate::common::{load_model, Rng};
+use embedyn::codegen_support::{F32x8, F64x4};
+use embedyn::random::SplitMix64;
+use embedyn::{random_configuration_within_limits, Model};
+
+mod anymal {
+    embedyn::robot!(
+        "tests/data/pinocchio/anymal_b.urdf",
+        floating,
+        f64_only,
+        only(aba, rnea, crba),
+        lanes = 4
+    );
+}
+mod four_bar {
+    embedyn::robot!(
+        "models/loops/four_bar_internal.urdf",
+        f64_only,
+        only(aba),
+        lanes = 4
+    );
+}
+mod z1 {
+    embedyn::robot!("models/peers/z1.urdf", f32_only, only(aba), lanes = 8);
+}
+
+/// Lane `k` of `x` for each entry.
+fn lane<const N: usize>(x: &[F64x4; N], k: usize) -> [f64; N] {
+    std::array::from_fn(|i| x[i].to_array()[k])
+}
+
+/// `states[k][i]` packed as entry `i`, lane `k`.
+fn pack<const N: usize>(states: &[[f64; N]; 4]) -> [F64x4; N] {
+    std::array::from_fn(|i| F64x4::new(std::array::from_fn(|k| states[k][i])))
+}
+
+fn bits(x: &[f64]) -> Vec<u64> {
+    x.iter().map(|v| v.to_bits()).collect()
+}
+
+#[test]
+fn lane_functions_equal_the_scalar_ones_bit_for_bit_on_a_floating_quadruped() {
+    const NQ: usize = anymal::NQ;
+    const NV: usize = anymal::NV;
+    let model: Model<f64> = load_model("tests/data/pinocchio/anymal_b.urdf", true);
+    let mut rng = SplitMix64::new(7);
+    let mut noise = Rng::new(8);
+    for _ in 0..3 {
+        let mut q = [[0.0; NQ]; 4];
+        let mut v = [[0.0; NV]; 4];
+        let mut u = [[0.0; NV]; 4];
+        for k in 0..4 {
+            random_configuration_within_limits(&model, &mut rng, &mut q[k]).unwrap();
+            v[k].copy_from_slice(&noise.vec(NV, -2.0, 2.0));
+            u[k].copy_from_slice(&noise.vec(NV, -20.0, 20.0));
+        }
+        let (ql, vl, ul) = (pack(&q), pack(&v), pack(&u));
+        let mut qdd = [F64x4::splat(0.0); NV];
+        anymal::f64x4::aba(&ql, &vl, &ul, &mut qdd);
+        let mut tau = [F64x4::splat(0.0); NV];
+        anymal::f64x4::rnea(&ql, &vl, &ul, &mut tau);
+        let mut m = [[F64x4::splat(0.0); NV]; NV];
+        anymal::f64x4::crba(&ql, &mut m);
+        for k in 0..4 {
+            let mut expected = [0.0; NV];
+            anymal::f64::aba(&q[k], &v[k], &u[k], &mut expected);
+            assert_eq!(bits(&lane(&qdd, k)), bits(&expected), "aba, lane {k}");
+            anymal::f64::rnea(&q[k], &v[k], &u[k], &mut expected);
+            assert_eq!(bits(&lane(&tau, k)), bits(&expected), "rnea, lane {k}");
+            let mut mass = [[0.0; NV]; NV];
+            anymal::f64::crba(&q[k], &mut mass);
+            for r in 0..NV {
+                assert_eq!(
+                    bits(&lane(&m[r], k)),
+                    bits(&mass[r]),
+                    "crba row {r}, lane {k}"
+                );
+            }
+        }
+        // The lanes are different states (a test of one state copied four times could not fail).
+        assert_ne!(
+            qdd[0].to_array()[0].to_bits(),
+            qdd[0].to_array()[1].to_bits()
+        );
+    }
+}
+
+#[test]
+fn lane_functions_pivot_lane_by_lane_on_a_loop() {
+    const NQ: usize = four_bar::NQ;
+    const NV: usize = four_bar::NV;
+    let model: Model<f64> = load_model("models/loops/four_bar_internal.urdf", false);
+    let mut ws = embedyn::Workspace::new(&model);
+    let mut noise = Rng::new(3);
+    let mut q = [[0.0; NQ]; 4];
+    let mut v = [[0.0; NV]; 4];
+    let mut u = [[0.0; NV]; 4];
+    for k in 0..4 {
+        // Crank angles far apart, so that the lanes pivot differently.
+        let mut state = model.neutral_configuration();
+        state[0] = -1.2 + 0.8 * k as f64;
+        embedyn::constraints::complete_configuration(&model, &mut ws, &mut state).unwrap();
+        q[k].copy_from_slice(&state);
+        let mut vel = noise.vec(NV, -1.0, 1.0);
+        embedyn::constraints::complete_velocity(&model, &mut ws, &state, &mut vel).unwrap();
+        v[k].copy_from_slice(&vel);
+        u[k].copy_from_slice(&noise.vec(NV, -1.0, 1.0));
+    }
+    let mut qdd = [F64x4::splat(0.0); NV];
+    let condition = four_bar::f64x4::aba(&pack(&q), &pack(&v), &pack(&u), &mut qdd);
+    for k in 0..4 {
+        let mut expected = [0.0; NV];
+        let c = four_bar::f64::aba(&q[k], &v[k], &u[k], &mut expected);
+        assert_eq!(bits(&lane(&qdd, k)), bits(&expected), "lane {k}");
+        assert_eq!(
+            condition.to_array()[k].to_bits(),
+            c.to_bits(),
+            "measure, lane {k}"
+        );
+    }
+}
+
+#[test]
+fn f32_lane_functions_equal_the_scalar_ones() {
+    const N: usize = z1::NV;
+    let mut noise = Rng::new(11);
+    let draw = |noise: &mut Rng, scale: f64| -> [[f32; N]; 8] {
+        std::array::from_fn(|_| std::array::from_fn(|_| noise.uniform(-scale, scale) as f32))
+    };
+    let (q, v, u) = (
+        draw(&mut noise, 2.5),
+        draw(&mut noise, 2.0),
+        draw(&mut noise, 5.0),
+    );
+    let pack8 = |states: &[[f32; N]; 8]| -> [F32x8; N] {
+        std::array::from_fn(|i| F32x8::new(std::array::from_fn(|k| states[k][i])))
+    };
+    let mut qdd = [F32x8::splat(0.0); N];
+    z1::f32x8::aba(&pack8(&q), &pack8(&v), &pack8(&u), &mut qdd);
+    for k in 0..8 {
+        let mut expected = [0.0f32; N];
+        z1::f32::aba(&q[k], &v[k], &u[k], &mut expected);
+        let got: [f32; N] = std::array::from_fn(|i| qdd[i].to_array()[k]);
+        assert!(
+            got.iter()
+                .zip(&expected)
+                .all(|(a, b)| a.to_bits() == b.to_bits()),
+            "lane {k}: {got:?} vs {expected:?}"
+        );
+    }
+}
