@@ -100,10 +100,14 @@ macro_rules! lanes_type {
                 }
                 ($name::new(s), $name::new(c))
             }
-            /// Lane by lane: lane `k`'s angles through the scalar batch, as the scalar function computes
-            /// them.
+            /// Lane by lane as the scalar batch computes them: for `f64` lanes the scalar kernel's
+            /// operations on whole SIMD values ([`sincos_batch_simd`]), else each lane's angles through the
+            /// scalar batch.
             #[inline(always)]
             fn sincos_batch<const M: usize>(x: [Self; M]) -> ([Self; M], [Self; M]) {
+                if let Some(result) = $name::sincos_batch_simd(&x) {
+                    return result;
+                }
                 let lanes = x.map($name::to_array);
                 let (mut s, mut c) = (lanes, lanes);
                 for k in 0..$n {
@@ -136,6 +140,91 @@ lanes_type!(F64x2, f64x2, f64, 2);
 lanes_type!(F64x4, f64x4, f64, 4);
 lanes_type!(F32x4, f32x4, f32, 4);
 lanes_type!(F32x8, f32x8, f32, 8);
+
+/// The scalar kernel of `sincos_kernel` (codegen_support.rs) on whole SIMD values: the same operations in
+/// the same order, lane by lane, so every lane equals the scalar result bit for bit (tests/generated_lanes.rs
+/// holds the two to that). `None` where an angle of a lane is NaN or beyond the reduction's range (the
+/// scalar batch then takes its libm path for that lane).
+macro_rules! sincos_simd {
+    ($name:ident, $float:ident, $bits:ident, $n:literal) => {
+        impl $name {
+            #[inline(always)]
+            #[allow(clippy::excessive_precision)]
+            fn sincos_batch_simd<const M: usize>(x: &[Self; M]) -> Option<([Self; M], [Self; M])> {
+                use wide::{$bits, $float};
+                let limit = $float::splat(REDUCTION_LIMIT);
+                for v in x {
+                    // NaN compares false and leaves the fast path, as in the scalar batch.
+                    if !wide::CmpLt::cmp_lt(v.0.abs(), limit).all() {
+                        return None;
+                    }
+                }
+                const TWO_OVER_PI: f64 = core::f64::consts::FRAC_2_PI;
+                const PIO2_1: f64 = 1.570_796_326_734_125_6e0;
+                const PIO2_2: f64 = 6.077_100_506_303_966e-11;
+                const PIO2_3: f64 = 2.022_266_248_711_166_5e-21;
+                const SHIFTER: f64 = 6_755_399_441_055_744.0;
+                const S1: f64 = -1.666_666_666_666_663_2e-1;
+                const S2: f64 = 8.333_333_333_322_49e-3;
+                const S3: f64 = -1.984_126_982_985_795e-4;
+                const S4: f64 = 2.755_731_370_707_006_8e-6;
+                const S5: f64 = -2.505_076_025_340_686_3e-8;
+                const S6: f64 = 1.589_690_995_211_55e-10;
+                const C1: f64 = 4.166_666_666_666_660_2e-2;
+                const C2: f64 = -1.388_888_888_887_411e-3;
+                const C3: f64 = 2.480_158_728_947_673e-5;
+                const C4: f64 = -2.755_731_435_139_066_3e-7;
+                const C5: f64 = 2.087_572_321_298_175e-9;
+                const C6: f64 = -1.135_964_755_778_819_5e-11;
+                let c = |v: f64| $float::splat(v);
+                let bits = |v: $float| $bits::from(v.to_array().map(f64::to_bits));
+                let float = |v: $bits| $float::from(v.to_array().map(f64::from_bits));
+                let (mut sines, mut cosines) = (*x, *x);
+                for m in 0..M {
+                    let x = x[m].0;
+                    let shifted = x * c(TWO_OVER_PI) + c(SHIFTER);
+                    let n = bits(shifted);
+                    let k = shifted - c(SHIFTER);
+                    let r = ((x - k * c(PIO2_1)) - k * c(PIO2_2)) - k * c(PIO2_3);
+                    let z = r * r;
+                    let sr = c(S2) + z * (c(S3) + z * (c(S4) + z * (c(S5) + z * c(S6))));
+                    let s = r + z * r * (c(S1) + z * sr);
+                    let cr = z * (c(C1) + z * (c(C2) + z * (c(C3) + z * (c(C4) + z * (c(C5) + z * c(C6))))));
+                    let hz = c(0.5) * z;
+                    let w = c(1.0) - hz;
+                    let co = w + (((c(1.0) - w) - hz) + z * cr);
+                    let one = $bits::splat(1);
+                    let two = $bits::splat(2);
+                    let swap = $bits::splat(0) - (n & one);
+                    let (sb, cb) = (bits(s), bits(co));
+                    let a = (sb & !swap) | (cb & swap);
+                    let b = (cb & !swap) | (sb & swap);
+                    let sin_sign = (n & two) << 62;
+                    let cos_sign = ((n + one) & two) << 62;
+                    sines[m] = $name(float(a ^ sin_sign));
+                    cosines[m] = $name(float(b ^ cos_sign));
+                }
+                Some((sines, cosines))
+            }
+        }
+    };
+}
+sincos_simd!(F64x2, f64x2, u64x2, 2);
+sincos_simd!(F64x4, f64x4, u64x4, 4);
+
+/// `f32` lanes take the scalar batch lane by lane (it evaluates in f64 and rounds once).
+macro_rules! sincos_per_lane {
+    ($name:ident) => {
+        impl $name {
+            #[inline(always)]
+            fn sincos_batch_simd<const M: usize>(_: &[Self; M]) -> Option<([Self; M], [Self; M])> {
+                None
+            }
+        }
+    };
+}
+sincos_per_lane!(F32x4);
+sincos_per_lane!(F32x8);
 
 /// The lane type of `N` lanes of a scalar, for the lane modules' `type S`.
 pub const LANE_TYPES: [(&str, usize, &str); 4] = [

@@ -87,3 +87,60 @@ fn batch_is_the_single_call_bit_for_bit() {
     let (s32, c32) = sincos_batch([0.5f32, -7.0]);
     assert_eq!((s32[1], c32[1]), (-7.0f32).sincos());
 }
+
+/// The lane types' batch (the scalar kernel on whole SIMD values for f64 lanes, per lane for f32) equals
+/// the scalar batch bit for bit, lane by lane: every quadrant and both signs, ±0, the boundaries of the
+/// quadrants, and batches with an angle beyond the reduction's range or NaN in one lane (the libm path).
+#[test]
+fn lane_batches_equal_the_scalar_batch_bit_for_bit() {
+    use embedyn_runtime::lanes::{F32x8, F64x2, F64x4};
+    let mut angles: Vec<f64> = (-4000..=4000).map(|i| i as f64 * 0.0125).collect();
+    for k in -8..=8 {
+        let q = k as f64 * core::f64::consts::FRAC_PI_4;
+        angles.extend([q, q.next_up(), q.next_down()]);
+    }
+    angles.extend([0.0, -0.0, 1e-300, -1e-300, 8.2e5, -8.2e5]);
+    let same = |a: f64, b: f64| a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan());
+    for special in [None, Some(1e6), Some(f64::NAN)] {
+        for chunk in angles.chunks_exact(12) {
+            // Three angles per lane, lanes of four.
+            let mut lanes: [[f64; 3]; 4] =
+                std::array::from_fn(|k| std::array::from_fn(|m| chunk[3 * k + m]));
+            if let Some(x) = special {
+                lanes[2][1] = x;
+            }
+            let packed: [F64x4; 3] =
+                std::array::from_fn(|m| F64x4::new(std::array::from_fn(|k| lanes[k][m])));
+            let (s, c) = F64x4::sincos_batch(packed);
+            let pair: [F64x2; 3] = std::array::from_fn(|m| F64x2::new([lanes[0][m], lanes[1][m]]));
+            let (s2, c2) = F64x2::sincos_batch(pair);
+            for (k, angles) in lanes.iter().enumerate() {
+                let (rs, rc) = f64::sincos_batch(*angles);
+                for m in 0..3 {
+                    assert!(
+                        same(s[m].to_array()[k], rs[m]) && same(c[m].to_array()[k], rc[m]),
+                        "{angles:?}"
+                    );
+                    if k < 2 {
+                        assert!(
+                            same(s2[m].to_array()[k], rs[m]) && same(c2[m].to_array()[k], rc[m])
+                        );
+                    }
+                }
+            }
+        }
+    }
+    // f32 lanes: lane by lane through the scalar f32 batch.
+    let x: [F32x8; 2] = [
+        F32x8::new([0.1, -2.0, 3.5, 0.0, -0.0, 7.0, -1.5, 100.0]),
+        F32x8::splat(0.7),
+    ];
+    let (s, c) = F32x8::sincos_batch(x);
+    for k in 0..8 {
+        let (rs, rc) = f32::sincos_batch([x[0].to_array()[k], x[1].to_array()[k]]);
+        for m in 0..2 {
+            assert_eq!(s[m].to_array()[k].to_bits(), rs[m].to_bits());
+            assert_eq!(c[m].to_array()[k].to_bits(), rc[m].to_bits());
+        }
+    }
+}

@@ -1,0 +1,36 @@
+#!/usr/bin/env bash
+# Issue 13's many-states-per-call targets in one session: Pinocchio 4.1's single-state aba, rnea and crba
+# (bench/peers/pinocchio_bench.cpp) and embedyn's generated scalar and lane functions (benches/lanes.rs),
+# built twice: for the baseline x86-64 target (SSE2) and with -C target-cpu=native (the host's widest
+# SIMD). Each binary runs from COPIES fresh copies (bench/placement.py); then the table "Many states per
+# call" in BENCHMARKS.md (bench/lanes_table.py).
+# Usage: bench/lanes.sh [COPIES]
+set -euo pipefail
+cd "$(dirname "$0")/.."
+copies="${1:-3}"
+mkdir -p bench/results target
+eval "$(bench/peers/build_pinocchio.sh)"
+python3 bench/placement.py command "$copies" bench/results/pinocchio_lanes_z1.jsonl "$PINOCCHIO_BENCH" \
+  models/peers/z1.urdf
+python3 bench/placement.py command "$copies" bench/results/pinocchio_lanes_anymal.jsonl "$PINOCCHIO_BENCH" \
+  --floating models/peers/anymal_b.urdf
+# The bench binary of one build: `lanes_binary TARGET_DIR RUSTFLAGS`.
+lanes_binary() {
+  local log="target/cargo_bench_lanes.log"
+  if ! CARGO_TARGET_DIR="$1" RUSTFLAGS="$2" cargo bench --bench lanes --no-run --message-format=json \
+      > target/cargo_bench_lanes.json 2> "$log"; then
+    tail -20 "$log" >&2
+    echo "cargo bench failed (log: $log); BENCHMARKS.md not updated" >&2
+    exit 1
+  fi
+  python3 -c 'import json,sys
+for line in open(sys.argv[1]):
+    m = json.loads(line)
+    if m.get("reason") == "compiler-artifact" and m.get("target", {}).get("name") == "lanes" and m.get("executable"):
+        print(m["executable"])' target/cargo_bench_lanes.json
+}
+baseline=$(lanes_binary target "")
+python3 bench/placement.py criterion "$baseline" "$copies" bench/results/lanes_baseline.json
+native=$(lanes_binary target/native "-C target-cpu=native")
+python3 bench/placement.py criterion "$native" "$copies" bench/results/lanes_native.json
+python3 bench/lanes_table.py
