@@ -31,8 +31,8 @@ def main():
         "of the same code: the baseline x86-64 target (an `F64x4` is two 128-bit registers) and "
         "`-C target-cpu=native` (one 256-bit register; Pinocchio's wheel is built for the baseline).",
         "",
-        "| robot | call | build | Pinocchio (ns) | generated (ns) | ratio | lanes (ns per state) | ratio | vs generated | target |",
-        "|---|---|---|---:|---:|---:|---:|---:|---:|---:|",
+        "| robot | call | build | Pinocchio (ns) | generated (ns) | ratio | lanes (ns per state) | ratio | vs generated | `_batch` of 64 (ns per state) | target |",
+        "|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|",
     ]
     for robot, pin_file, targets in ROBOTS:
         pin = last_json(os.path.join(ROOT, "bench", "results", pin_file))
@@ -46,16 +46,19 @@ def main():
                 scalar = statistics.median(one)
                 per_state = statistics.median(four) / LANES
                 target = targets.get(call)
+                batch = runs["benches"].get(f"gen_{call}_batch64/{robot}")
+                batch_text = f"{statistics.median(batch) / 64:,.0f}" if batch else ""
                 lines.append(
                     f"| {robot} | `{call}` | {build} | {theirs:,.0f} | {scalar:,.0f} | {scalar / theirs:.2f} | "
-                    f"{per_state:,.0f} | {per_state / theirs:.3f} | {per_state / scalar:.2f} | "
+                    f"{per_state:,.0f} | {per_state / theirs:.3f} | {per_state / scalar:.2f} | {batch_text} | "
                     f"{f'≤ {target}' if target else ''} |")
     lines += ["", "The lanes pay where the scalar code leaves the vector units idle: each operation of the scalar "
               "function becomes one operation on four states. What they do not remove is the scalar code's own cost "
               "per operation (spills of long functions, issue 13's first item), which the lane values, four times "
               "wider, pay four times over in memory traffic. Sines and cosines of f64 lanes run the scalar kernel "
-              "on whole SIMD values; f32 lanes take them lane by lane. Not yet here: a batch API over any number "
-              "of states with threads, and Pinocchio's OpenMP `abaInParallel` beside it."]
+              "on whole SIMD values; f32 lanes take them lane by lane. The `_batch` forms add the transposition of "
+              "states into lanes and back. Not yet here: threads over a batch (the caller's `rayon`), `embedyn eval` "
+              "and `bench` through the lanes, and Pinocchio's OpenMP `abaInParallel` beside them."]
     write_section("\n".join(lines) + "\n")
 
 

@@ -76,6 +76,14 @@ macro_rules! bench_robot {
                 black_box(out4[0])
             })
         });
+        // The batch form over all 64 states (transposition included), per call of 64.
+        let mut out64 = vec![[0.0; NV]; 64];
+        $c.bench_function(concat!("gen_aba_batch64/", $name), |b| {
+            b.iter(|| {
+                assert!($m::f64x4::aba_batch(black_box(&q), &v, &u, &mut out64));
+                black_box(out64[0][0])
+            })
+        });
         $c.bench_function(concat!("gen_rnea/", $name), |b| {
             b.iter(|| {
                 k = (k + 1) & 63;

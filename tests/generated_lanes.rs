@@ -155,3 +155,74 @@ fn f32_lane_functions_equal_the_scalar_ones() {
         );
     }
 }
+
+/// The `_batch` form: any number of states (here 7: a full chunk of four and a padded one of three), each
+/// state's result bit-identical to the scalar function's, the measure per state on a loop model, and
+/// slices of different lengths refused (false, nothing written).
+#[test]
+fn batch_functions_equal_the_scalar_ones_for_any_number_of_states() {
+    const NQ: usize = anymal::NQ;
+    const NV: usize = anymal::NV;
+    let model: Model<f64> = load_model("tests/data/pinocchio/anymal_b.urdf", true);
+    let mut rng = SplitMix64::new(21);
+    let mut noise = Rng::new(22);
+    let n = 7;
+    let mut q = vec![[0.0; NQ]; n];
+    let mut v = vec![[0.0; NV]; n];
+    let mut u = vec![[0.0; NV]; n];
+    for k in 0..n {
+        random_configuration_within_limits(&model, &mut rng, &mut q[k]).unwrap();
+        v[k].copy_from_slice(&noise.vec(NV, -2.0, 2.0));
+        u[k].copy_from_slice(&noise.vec(NV, -20.0, 20.0));
+    }
+    let mut qdd = vec![[f64::NAN; NV]; n];
+    assert!(anymal::f64x4::aba_batch(&q, &v, &u, &mut qdd));
+    let mut m = vec![[[f64::NAN; NV]; NV]; n];
+    assert!(anymal::f64x4::crba_batch(&q, &mut m));
+    for k in 0..n {
+        let mut expected = [0.0; NV];
+        anymal::f64::aba(&q[k], &v[k], &u[k], &mut expected);
+        assert_eq!(bits(&qdd[k]), bits(&expected), "aba, state {k}");
+        let mut mass = [[0.0; NV]; NV];
+        anymal::f64::crba(&q[k], &mut mass);
+        for r in 0..NV {
+            assert_eq!(bits(&m[k][r]), bits(&mass[r]), "crba row {r}, state {k}");
+        }
+    }
+    // Different lengths: refused, nothing written.
+    let mut short = vec![[f64::NAN; NV]; n - 1];
+    assert!(!anymal::f64x4::aba_batch(&q, &v, &u, &mut short));
+    assert!(short.iter().flatten().all(|x| x.is_nan()));
+    // No states: nothing to do.
+    assert!(anymal::f64x4::aba_batch(&[], &[], &[], &mut []));
+
+    // A loop model: the measure per state.
+    let model: Model<f64> = load_model("models/loops/four_bar_internal.urdf", false);
+    let mut ws = embedyn::Workspace::new(&model);
+    let (mut q, mut v, mut u) = (Vec::new(), Vec::new(), Vec::new());
+    for k in 0..5 {
+        let mut state = model.neutral_configuration();
+        state[0] = -1.0 + 0.5 * k as f64;
+        embedyn::constraints::complete_configuration(&model, &mut ws, &mut state).unwrap();
+        let mut vel = noise.vec(four_bar::NV, -1.0, 1.0);
+        embedyn::constraints::complete_velocity(&model, &mut ws, &state, &mut vel).unwrap();
+        q.push(<[f64; four_bar::NQ]>::try_from(state).unwrap());
+        v.push(<[f64; four_bar::NV]>::try_from(vel).unwrap());
+        u.push(<[f64; four_bar::NV]>::try_from(noise.vec(four_bar::NV, -1.0, 1.0)).unwrap());
+    }
+    let mut qdd = vec![[0.0; four_bar::NV]; 5];
+    let mut measure = vec![0.0; 5];
+    assert!(four_bar::f64x4::aba_batch(
+        &q,
+        &v,
+        &u,
+        &mut qdd,
+        &mut measure
+    ));
+    for k in 0..5 {
+        let mut expected = [0.0; four_bar::NV];
+        let c = four_bar::f64::aba(&q[k], &v[k], &u[k], &mut expected);
+        assert_eq!(bits(&qdd[k]), bits(&expected), "four-bar, state {k}");
+        assert_eq!(measure[k].to_bits(), c.to_bits());
+    }
+}

@@ -826,3 +826,136 @@ fn batch_angles(
     first.extend(rest);
     (first, batch)
 }
+
+/// The batch form of a lane function `name` (in a lane module, beside it): `{name}_batch` over any number
+/// of states, given as slices of per-state arrays of the lane's scalar `E`, in chunks of `LANES` through
+/// the lane function; a last partial chunk is padded with its first state (a valid state: no NaN from
+/// padding) and only the real states are written. A returned measure is written per state into `measure`.
+/// Returns `false`, computing nothing, where the slices' lengths differ. (A loop over states, not over
+/// bodies: the lane function it calls is straight-line.)
+pub(crate) fn batch_wrapper(name: &str, args: &[Arg], outputs: &[Output]) -> TokenStream {
+    let fname = format_ident!("{}", name);
+    let batch = format_ident!("{}_batch", name);
+    let doc = format!(
+        " `{name}` over any number of states: entry `s` of every slice is state `s` (`q[s]` its `q`). Runs \
+         chunks of `LANES` states through the lane function `{name}` (a last partial chunk padded with its first \
+         state, whose results are dropped); every state's results are bit-identical to the scalar function's. \
+         Returns `false`, computing nothing, when the slices' lengths differ. Split a large batch across threads \
+         with `rayon`'s `par_chunks` (each thread calling this on its chunk)."
+    );
+    let mut params = Vec::new();
+    let mut lane_args = Vec::new();
+    let mut call_args = Vec::new();
+    let mut lengths = Vec::new();
+    for a in args {
+        let id = format_ident!("{}", a.name);
+        let lane_id = format_ident!("{}_lanes", a.name);
+        let len = num(a.len);
+        if a.scalar {
+            params.push(quote!(#id: E));
+            lane_args.push(quote!(let #lane_id = S::splat(#id);));
+            call_args.push(quote!(#lane_id));
+            continue;
+        }
+        lengths.push(quote!(#id.len()));
+        match a.columns {
+            None => {
+                params.push(quote!(#id: &[[E; #len]]));
+                lane_args.push(quote!(
+                    let #lane_id: [S; #len] = core::array::from_fn(|i| {
+                        S::new(core::array::from_fn(|k| #id[at(k)][i]))
+                    });
+                ));
+            }
+            Some(c) => {
+                let c = num(c);
+                params.push(quote!(#id: &[[[E; #c]; #len]]));
+                lane_args.push(quote!(
+                    let #lane_id: [[S; #c]; #len] = core::array::from_fn(|r| {
+                        core::array::from_fn(|c| S::new(core::array::from_fn(|k| #id[at(k)][r][c])))
+                    });
+                ));
+            }
+        }
+        call_args.push(quote!(&#lane_id));
+    }
+    let mut out_lanes = Vec::new();
+    let mut stores = Vec::new();
+    let mut returns = false;
+    for o in outputs {
+        match o {
+            Output::Vector { name, values } => {
+                let id = format_ident!("{}", name);
+                let lane_id = format_ident!("{}_lanes", name);
+                let n = num(values.len());
+                params.push(quote!(#id: &mut [[E; #n]]));
+                lengths.push(quote!(#id.len()));
+                out_lanes.push(quote!(let mut #lane_id = [S::splat(0.0); #n];));
+                call_args.push(quote!(&mut #lane_id));
+                stores.push(quote!(
+                    for i in 0..#n {
+                        #id[s][i] = #lane_id[i].to_array()[k];
+                    }
+                ));
+            }
+            Output::Matrix {
+                name, rows, cols, ..
+            } => {
+                let id = format_ident!("{}", name);
+                let lane_id = format_ident!("{}_lanes", name);
+                let (r, c) = (num(*rows), num(*cols));
+                params.push(quote!(#id: &mut [[[E; #c]; #r]]));
+                lengths.push(quote!(#id.len()));
+                out_lanes.push(quote!(let mut #lane_id = [[S::splat(0.0); #c]; #r];));
+                call_args.push(quote!(&mut #lane_id));
+                stores.push(quote!(
+                    for r in 0..#r {
+                        for c in 0..#c {
+                            #id[s][r][c] = #lane_id[r][c].to_array()[k];
+                        }
+                    }
+                ));
+            }
+            Output::Return(_) => returns = true,
+        }
+    }
+    let (call, store_measure) = if returns {
+        params.push(quote!(measure: &mut [E]));
+        lengths.push(quote!(measure.len()));
+        (
+            quote!(let returned = #fname(#(#call_args),*);),
+            quote!(measure[s] = returned.to_array()[k];),
+        )
+    } else {
+        (quote!(#fname(#(#call_args),*);), quote!())
+    };
+    let first = lengths.first().cloned().unwrap_or_else(|| quote!(0));
+    let must_use = "false where the slices' lengths differ (nothing is computed then)";
+    quote! {
+        #[doc = #doc]
+        #[must_use = #must_use]
+        #[allow(unused_variables, clippy::all)]
+        pub fn #batch(#(#params),*) -> bool {
+            let n = #first;
+            if #(#lengths != n)||* {
+                return false;
+            }
+            let mut start = 0;
+            while start < n {
+                let at = |k: usize| if start + k < n { start + k } else { start };
+                #(#lane_args)*
+                #(#out_lanes)*
+                #call
+                for k in 0..LANES {
+                    let s = start + k;
+                    if s < n {
+                        #(#stores)*
+                        #store_measure
+                    }
+                }
+                start += LANES;
+            }
+            true
+        }
+    }
+}

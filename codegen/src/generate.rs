@@ -786,8 +786,10 @@ fn lane_module(
 ) -> TokenStream {
     let module = format_ident!("{}x{}", scalar, lanes);
     let lane_type = format_ident!("{}", lane_type(scalar, lanes).unwrap_or("F64x4"));
+    let scalar_ident = format_ident!("{}", scalar);
+    let n = proc_macro2::Literal::usize_unsuffixed(lanes);
     let doc = format!(
-        " The generated dynamics in `{scalar}`, {lanes} states per call: the scalar `S` is `{lane_type}` (one SIMD value, one state per lane), the functions are the `{scalar}` module's (less `complete`), lane by lane bit-identical to them. Pack states with `S::new([…])` per entry, read lane `k` with `to_array()[k]`; build with the target's SIMD (`-C target-cpu=native`, or `-C target-feature=+avx` for 256-bit values) to compute a lane value in one instruction."
+        " The generated dynamics in `{scalar}`, {lanes} states per call: the scalar `S` is `{lane_type}` (one SIMD value, one state per lane), the functions are the `{scalar}` module's (less `complete`), lane by lane bit-identical to them. Pack states with `S::new([…])` per entry, read lane `k` with `to_array()[k]`, or pass slices of states to the `_batch` forms; build with the target's SIMD (`-C target-cpu=native`, or `-C target-feature=+avx` for 256-bit values) to compute a lane value in one instruction."
     );
     quote! {
         #[doc = #doc]
@@ -795,6 +797,10 @@ fn lane_module(
         pub mod #module {
             /// One number per state.
             pub type S = #helpers::#lane_type;
+            /// The number of one state (the scalar of the `_batch` functions' slices).
+            pub type E = #scalar_ident;
+            /// States per lane call.
+            pub const LANES: usize = #n;
             #(#functions)*
         }
     }
@@ -1107,22 +1113,30 @@ fn generate_algorithm(
             let lane_doc = format!(
                 "{doc}\n\n{n} states at once, one per lane: every argument's entry holds that entry of each state (`q[i].0[k]` is `q[i]` of state `k`), and lane `k` of every result is bit-identical to the scalar function's result for state `k`."
             );
-            Some(
-                function(
-                    &instance.name,
-                    &lane_doc,
-                    &args,
-                    &outputs,
-                    &tape,
-                    &mut crate::emit::ModuleContext {
-                        helpers,
-                        owners: &owners,
-                        taken,
-                        lanes: true,
-                    },
-                )
-                .map_err(|e| located_at_robot(loaded, e.into()))?,
+            let mut lane = function(
+                &instance.name,
+                &lane_doc,
+                &args,
+                &outputs,
+                &tape,
+                &mut crate::emit::ModuleContext {
+                    helpers,
+                    owners: &owners,
+                    taken,
+                    lanes: true,
+                },
             )
+            .map_err(|e| located_at_robot(loaded, e.into()))?;
+            let batch = crate::emit::batch_wrapper(&instance.name, &args, &outputs);
+            lane.code = match lane.code {
+                Code::Tokens(t) => Code::Tokens(quote! { #t #batch }),
+                Code::Text(text) => {
+                    let formatted = format_tokens(&quote!(mod m { #batch }))
+                        .map_err(|e| located_at_robot(loaded, e.into()))?;
+                    Code::Text(text + module_body(&formatted))
+                }
+            };
+            Some(lane)
         }
     };
     if let Some(wrapper) = spec.wrapper {
