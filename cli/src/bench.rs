@@ -70,6 +70,10 @@ pub enum BenchError {
 /// States timed per algorithm.
 const STATES: usize = 64;
 
+/// States per call of the lane module whose `_batch` forms are timed (`generated_f64_batch`, ns per
+/// state over all [`STATES`] in one call).
+const LANES: usize = 4;
+
 /// `q`, `v` and the third argument (`tau` or `qdd`) of one timed call.
 type TimedState = (Vec<f64>, Vec<f64>, Vec<f64>);
 
@@ -133,6 +137,8 @@ pub fn bench(
             algorithms: super::runner::runner_algorithms(&timed, constrained),
             exact: true,
             max_compile_memory_mb: Some(max_compile_memory_mb),
+            // The f64 lane module's `_batch` forms are timed too (ns per state).
+            lanes: LANES,
             ..Default::default()
         },
     )?;
@@ -146,9 +152,25 @@ pub fn bench(
         let algo = algo.name();
         let g64 = time_generated(&binary, algo, "f64", &rows)?;
         let g32 = time_generated(&binary, algo, "f32", &rows)?;
+        // The lane module's `_batch` forms of the three dynamics algorithms.
+        let batch = match algo {
+            "aba" | "rnea" | "crba" => json!(time_generated(
+                &binary,
+                algo,
+                &format!("f64x{LANES}"),
+                &rows
+            )?),
+            _ => Value::Null,
+        };
         result.insert(
             algo.into(),
-            json!({ "interpreted_f64": i, "generated_f64": g64, "generated_f32": g32 }),
+            json!({
+                "interpreted_f64": i,
+                "generated_f64": g64,
+                "generated_f32": g32,
+                "generated_f64_batch": batch,
+                "lanes": LANES,
+            }),
         );
     }
     Ok(Value::Object(result))
@@ -176,16 +198,18 @@ fn time_generated(
 
 /// A human-readable table of [`bench`]'s result.
 pub fn table(v: &Value) -> String {
-    let mut s =
-        String::from("median ns per call   interpreted_f64  generated_f64  generated_f32\n");
+    let mut s = String::from(
+        "median ns per call   interpreted_f64  generated_f64  generated_f32  generated_f64_batch (per state)\n",
+    );
     for algo in Algorithm::timed_by_bench().map(Algorithm::name) {
         let r = &v[algo];
         let f = |k: &str| r[k].as_f64().map_or("—".to_string(), |x| format!("{x:.0}"));
         s.push_str(&format!(
-            "{algo:<20} {:>16} {:>14} {:>14}\n",
+            "{algo:<20} {:>16} {:>14} {:>14} {:>20}\n",
             f("interpreted_f64"),
             f("generated_f64"),
-            f("generated_f32")
+            f("generated_f32"),
+            f("generated_f64_batch")
         ));
     }
     s

@@ -441,8 +441,15 @@ fn runner_source(loaded: &Loaded, options: &GenerateOptions) -> Result<RunnerSou
         .filter_map(|(on, name)| on.then_some(name))
         .collect();
     let links = RunnerLinks::of(options, &model);
-    let main = runner_main(&krate, &options.algorithms, constrained, &scalars, &links)
-        .map_err(RunnerError::from)?;
+    let main = runner_main(
+        &krate,
+        &options.algorithms,
+        constrained,
+        &scalars,
+        &links,
+        options.lanes,
+    )
+    .map_err(RunnerError::from)?;
     files.push((PathBuf::from("src/main.rs"), main));
     let key_parts: Vec<&[u8]> = std::iter::once(GENERATOR_VERSION.as_bytes())
         .chain(
@@ -456,6 +463,9 @@ fn runner_source(loaded: &Loaded, options: &GenerateOptions) -> Result<RunnerSou
     // so the shared target folder never hands one model's runner to another.
     let bin_name = format!("run_{key}");
     let mut manifest = Manifest::standalone(&krate, &loaded.robot.name);
+    if options.lanes > 0 {
+        manifest = manifest.with_lanes();
+    }
     manifest.bins.push(Binary {
         name: bin_name.clone(),
         path: "src/main.rs".into(),
@@ -909,6 +919,7 @@ fn runner_main(
     constrained: bool,
     scalars: &[&str],
     links: &RunnerLinks,
+    lanes: usize,
 ) -> Result<String, RunnerSourceError> {
     let krate: syn::Ident =
         syn::parse_str(krate).map_err(|error| RunnerSourceError::NotAnIdentifier {
@@ -958,13 +969,63 @@ fn runner_main(
         .into_iter()
         .filter(|(name, _)| scalars.contains(name))
         .collect();
-    let dispatch: Vec<TokenStream> = present
+    let mut dispatch: Vec<TokenStream> = present
         .iter()
         .map(|(name, _)| {
             let function = format_ident!("run_{}", name);
             quote!(#name => #function(algo, bench, &rows, &mut text)?,)
         })
         .collect();
+    // With lanes, `bench` also times the f64 lane module's `_batch` forms over all the states at once
+    // (scalar `f64xN` in the header), for `aba`, `rnea` and `crba` (`crba_independent` with constraints).
+    let batch = (lanes > 0 && scalars.contains(&"f64")).then(|| {
+        let scalar_name = format!("f64x{lanes}");
+        let module = format_ident!("f64x{}", lanes);
+        let mut arms = Vec::new();
+        for &a in algorithms {
+            let call = match (a.name(), constrained) {
+                ("aba", false) => quote!(m::aba_batch(&qs, &vs, &xs, &mut outs)),
+                ("aba", true) => quote!(m::aba_batch(&qs, &vs, &xs, &mut outs, &mut measures)),
+                ("rnea", _) => quote!(m::rnea_batch(&qs, &vs, &xs, &mut outs)),
+                ("crba", false) => quote!(m::crba_batch(&qs, &mut mats)),
+                ("crba_independent", true) => {
+                    quote!(m::crba_independent_batch(&qs, &mut mats_i, &mut measures))
+                }
+                _ => continue,
+            };
+            // `crba` is what the command line names the reduced mass matrix too.
+            let name = if a.name() == "crba_independent" { "crba" } else { a.name() };
+            arms.push(quote!(#name => time(&mut || { black_box(#call); }),));
+        }
+        dispatch.push(quote!(#scalar_name => run_batch(algo, bench, &rows, &mut text)?,));
+        quote! {
+            /// Times the lane module's `_batch` forms over all the states in one call: ns per state.
+            fn run_batch(algo: &str, bench: bool, rows: &[Vec<f64>], text: &mut String) -> Result<(), Refusal> {
+                use #krate::#module as m;
+                if !bench {
+                    return Err(Refusal::UnknownMode("eval through the lanes".to_string()));
+                }
+                let n = rows.len();
+                if n == 0 {
+                    return Err(Refusal::NoStates);
+                }
+                let qs: Vec<[f64; NQ]> = rows.iter().map(|r| core::array::from_fn(|i| r[i])).collect();
+                let vs: Vec<[f64; NV]> = rows.iter().map(|r| core::array::from_fn(|i| r[NQ + i])).collect();
+                let xs: Vec<[f64; NV]> = rows.iter().map(|r| core::array::from_fn(|i| r[NQ + NV + i])).collect();
+                let mut outs = vec![[0.0; NV]; n];
+                let mut mats = vec![[[0.0; NV]; NV]; n];
+                let mut mats_i = vec![[[0.0; NI]; NI]; n];
+                let mut measures = vec![0.0; n];
+                let _ = (&mut outs, &mut mats, &mut mats_i, &mut measures);
+                let ns = match algo {
+                    #(#arms)*
+                    other => return Err(Refusal::UnknownAlgorithm(other.to_string())),
+                };
+                text.push_str(&format!("{:?}\n", ns / n as f64));
+                Ok(())
+            }
+        }
+    });
     let per_scalar = present.into_iter().map(|(name, scalar)| {
         let function = format_ident!("run_{}", name);
         let module = format_ident!("{}", name);
@@ -1073,6 +1134,8 @@ fn runner_main(
         }
 
         #(#per_scalar)*
+
+        #batch
 
         fn run() -> Result<(), Refusal> {
             let mut input = String::new();
@@ -1236,6 +1299,7 @@ mod tests {
             true,
             &["f64"],
             &RunnerLinks::default(),
+            0,
         )
         .unwrap();
         assert!(
@@ -1249,6 +1313,7 @@ mod tests {
             false,
             &["f64"],
             &RunnerLinks::default(),
+            0,
         )
         .unwrap();
         for absent in ["kinematics", "complete", "embedding"] {
@@ -1324,6 +1389,7 @@ mod tests {
                 constrained,
                 &["f64", "f32"],
                 &RunnerLinks::default(),
+                0,
             )
             .unwrap();
             assert!(src.contains("use arm_dynamics::{NI, NQ, NV};"), "{src}");
@@ -1337,7 +1403,8 @@ mod tests {
             &Algorithm::ALL,
             false,
             &["f64"],
-            &RunnerLinks::default()
+            &RunnerLinks::default(),
+            0
         )
         .is_err());
     }

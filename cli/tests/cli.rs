@@ -857,6 +857,12 @@ fn bench_reports_every_engine_and_scalar() {
             assert!(ns.is_finite() && ns > 0.0, "{algo} {engine}: {ns}");
         }
     }
+    // The lane module's batch forms of the three dynamics algorithms: ns per state, four lanes.
+    for algo in ["aba", "rnea", "crba"] {
+        let ns = v[algo]["generated_f64_batch"].as_f64().unwrap_or(f64::NAN);
+        assert!(ns.is_finite() && ns > 0.0, "{algo} batch: {ns}");
+        assert_eq!(v[algo]["lanes"], 4);
+    }
 }
 
 /// A model valid in f64 whose constants do not fit f32 (a gear ratio of 1e300): the f64 engines answer
