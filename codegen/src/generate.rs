@@ -1090,6 +1090,9 @@ fn generate_algorithm(
         ),
         None => spec.doc(constrained).to_string(),
     };
+    // The lane module's copy takes the same part names: its module-level names are the scalar module's
+    // (the same functions, emitted alike), so the names free there before this function are free here.
+    let mut lane_taken = taken.clone();
     let mut emitted = function(
         &instance.name,
         &doc,
@@ -1122,7 +1125,7 @@ fn generate_algorithm(
                 &mut crate::emit::ModuleContext {
                     helpers,
                     owners: &owners,
-                    taken,
+                    taken: &mut lane_taken,
                     lanes: true,
                 },
             )

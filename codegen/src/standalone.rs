@@ -190,6 +190,22 @@ pub fn crate_files(
             _ => "Module `f32` holds the functions",
         }
     );
+    if options.lanes > 0 {
+        let n = options.lanes;
+        let modules: Vec<String> = [(options.f64, "f64"), (options.f32, "f32")]
+            .into_iter()
+            .filter(|(on, _)| *on)
+            .map(|(_, s)| format!("`{s}x{n}`"))
+            .collect();
+        readme.push_str(&format!(
+            "Lane modules ({modules}) hold the same functions (less `complete`) over {n} states per call: their \
+             scalar `S` is a SIMD value of {n} numbers, one state per lane (`helpers::F64x{n}` and so on; pack \
+             with `S::new([…])`, read with `to_array()`), lane by lane bit-identical to the scalar functions; \
+             each function `f` also has `f_batch` over slices of states (embedyn's docs/generated-code.md, \
+             \"Many states per call\"). They depend on `wide` (without `std`).\n\n",
+            modules = modules.join(" and ")
+        ));
+    }
     let constrained = model.has_constraints();
     for a in options.generated_algorithms(constrained) {
         readme.push_str(&a.spec().readme_line(constrained));
