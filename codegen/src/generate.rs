@@ -518,6 +518,9 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
                 .iter()
                 .map(|a| a.spec().traced_name.to_string()),
         )
+        // The lane modules' batch forms (`aba_batch`, `frame_foot_batch`) and their items.
+        .chain(instances.iter().map(|i| format!("{}_batch", i.name)))
+        .chain(["S", "E", "LANES"].map(String::from))
         .collect();
     let wrench_frames: Vec<FrameId> = wrench_links.iter().map(|(_, f)| *f).collect();
     let wrench_names: Vec<&str> = wrench_links.iter().map(|(n, _)| n.as_str()).collect();
@@ -1269,9 +1272,16 @@ mod tests {
     /// Long functions are split into parts named after their bodies; a body named `ext` (or
     /// `independent`, `bias`, `step`) must not give a part the name of a public function (`aba` + `ext` =
     /// `aba_ext`), on a chain long enough to be split (attacker trial, issue 11: rustc's E0428 on this
-    /// very chain).
+    /// very chain). With lanes, a body named `batch` must not give a lane module's part the name of a batch
+    /// form (`aba` + `batch`).
     #[test]
     fn parts_of_long_functions_never_take_a_public_function_name() {
+        for (last, lanes) in [("ext", 0), ("batch", 4)] {
+            parts_never_take_a_public_name(last, lanes);
+        }
+    }
+
+    fn parts_never_take_a_public_name(last: &str, lanes: usize) {
         let dir = std::env::temp_dir().join(format!("embedyn-parts-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let inertial = r#"<inertial><origin xyz="0.05 0.01 0.02"/><mass value="0.5"/><inertia ixx="0.001" ixy="1e-05" ixz="0" iyy="0.0015" iyz="0" izz="0.00125"/></inertial>"#;
@@ -1280,7 +1290,7 @@ mod tests {
         // The attacker's chain: 24 links, the last named `ext` (its own part of `aba`).
         for i in 0..24 {
             let link = match i {
-                23 => "ext".to_string(),
+                23 => last.to_string(),
                 _ => format!("b{i}"),
             };
             let axis = ["1 0 0", "0 1 0", "0 0 1"][i % 3];
@@ -1296,18 +1306,26 @@ mod tests {
         let options = GenerateOptions {
             f32: false,
             links: LinkOptions {
-                wrenches: vec!["ext".into(), "b4".into()],
-                frames: vec!["ext".into()],
+                wrenches: vec![last.into(), "b4".into()],
+                frames: vec![last.into()],
                 ..Default::default()
             },
+            lanes,
             ..GenerateOptions::default()
         }
         .with_requested(None, &[Algorithm::CentroidalBias, Algorithm::Centroidal]);
         let text = generate_source(&loaded, &options).unwrap();
         std::fs::remove_dir_all(&dir).ok();
+        // Names are unique per module (the lane module repeats the scalar module's functions).
         let mut seen = std::collections::HashSet::new();
+        let mut modules = 0;
         for line in text.lines() {
             let line = line.trim_start();
+            if line.starts_with("pub mod f64") || line.starts_with("pub mod f32") {
+                modules += 1;
+                seen.clear();
+                continue;
+            }
             let Some(rest) = line
                 .strip_prefix("pub fn ")
                 .or_else(|| line.strip_prefix("fn "))
@@ -1322,6 +1340,10 @@ mod tests {
             "aba was not split: {seen:?}"
         );
         assert!(seen.contains("aba_ext") && seen.contains("centroidal_bias"));
+        assert_eq!(modules, if lanes > 0 { 2 } else { 1 });
+        if lanes > 0 {
+            assert!(seen.contains("aba_batch"), "{seen:?}");
+        }
     }
 
     #[test]
