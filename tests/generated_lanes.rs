@@ -123,6 +123,7 @@ fn lane_functions_pivot_lane_by_lane_on_a_loop() {
             c.to_bits(),
             "measure, lane {k}"
         );
+        assert!(condition.to_array()[k] < four_bar::f64x4::SINGULARITY_THRESHOLD);
     }
 }
 

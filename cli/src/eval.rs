@@ -675,8 +675,9 @@ fn generated_outputs(
         let x = x.as_ref();
         let has_v = samples.optional_vector(i, "v").ok().flatten().is_some();
         let square = |m: &[f64], name| -> Result<Vec<Vec<f64>>, CliError> {
+            // `max(1)`: a model without coordinates has 0 × 0 matrices (no rows), not a panic.
             Ok(finite(m, i, name)?
-                .chunks(nv)
+                .chunks(nv.max(1))
                 .map(<[f64]>::to_vec)
                 .collect())
         };

@@ -855,6 +855,13 @@ pub fn run(cli: Cli) -> Result<Printed, CliError> {
             reference,
             lanes,
         } => {
+            if lanes == Some(0) {
+                return Err(CliError::BadOption {
+                    option: "--lanes",
+                    message: "--lanes N: 2 or 4 for f64, 4 or 8 for f32 (leave it out for no lane modules)"
+                        .into(),
+                });
+            }
             let loaded = load_reporting(&model)?;
             let options = embedyn_codegen::GenerateOptions {
                 lanes: lanes.unwrap_or(0),

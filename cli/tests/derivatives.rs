@@ -179,3 +179,35 @@ fn the_generated_engine_refuses_loop_models() {
         "{stderr}"
     );
 }
+
+/// A model without coordinates (one link, no joint): the generated engine's derivatives are 0 × 0, as the
+/// interpreted engine's, instead of a panic on rows of length 0 (attacker trial, issue 12).
+#[test]
+fn derivatives_of_a_model_without_coordinates_are_empty_in_both_engines() {
+    let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("lone-link");
+    std::fs::create_dir_all(&dir).unwrap();
+    let model = dir.join("lone.urdf");
+    std::fs::write(
+        &model,
+        r#"<robot name="lone"><link name="base"><inertial><mass value="1"/><inertia ixx="1" ixy="0" ixz="0" iyy="1" iyz="0" izz="1"/></inertial></link></robot>"#,
+    )
+    .unwrap();
+    let model = model.to_string_lossy().to_string();
+    let input = json!({"samples": [{"q": [], "v": [], "tau": []}]}).to_string();
+    let interpreted = json_of(&["eval", &model, "--algo", "aba_derivatives"], &input);
+    let (ok, out, err) = embedyn_cached(
+        &[
+            "eval",
+            &model,
+            "--algo",
+            "aba_derivatives",
+            "--engine",
+            "generated",
+        ],
+        &input,
+    );
+    assert!(ok, "{err}");
+    let generated: Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(generated, interpreted);
+    assert_eq!(generated["samples"][0]["dqdd_dq"], json!([]));
+}

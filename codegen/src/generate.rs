@@ -560,9 +560,11 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
             sizes[k] = size::FunctionSize {
                 algorithm: algo,
                 operations: function.operations,
-                // The lane module's copy is compiled beside each scalar's.
+                // The lane module's copy is compiled beside each scalar's, at several times the cost.
                 compile_bytes: function.compile_bytes
-                    + lane_function.as_ref().map_or(0.0, |f| f.compile_bytes),
+                    + lane_function
+                        .as_ref()
+                        .map_or(0.0, |f| size::LANE_MEMORY_FACTOR * f.compile_bytes),
                 traced: true,
             };
             // Exact for what is traced: refused as soon as that alone is too large.
@@ -707,9 +709,19 @@ fn check_size_before_tracing(
     scalars: &[&'static str],
     options: &GenerateOptions,
 ) -> Result<Vec<size::FunctionSize>, LoadError> {
+    // With lanes, each function also has a lane module's copy (not `complete`'s wrapper alone, a detail).
+    let lane_weight = if options.lanes > 0 {
+        1.0 + size::LANE_MEMORY_FACTOR
+    } else {
+        1.0
+    };
     let predicted: Vec<size::FunctionSize> = algorithms
         .iter()
-        .map(|&a| size::predicted(model, a))
+        .map(|&a| {
+            let mut f = size::predicted(model, a);
+            f.compile_bytes *= lane_weight;
+            f
+        })
         .collect();
     let limit = options.max_compile_memory_mb;
     size::check(loaded, &predicted, &predicted, scalars, limit, 2.0)?;
@@ -784,6 +796,7 @@ fn lane_type(scalar: &str, lanes: usize) -> Option<&'static str> {
 fn lane_module(
     scalar: &str,
     lanes: usize,
+    constrained: bool,
     helpers: &TokenStream,
     functions: &[TokenStream],
 ) -> TokenStream {
@@ -791,8 +804,20 @@ fn lane_module(
     let lane_type = format_ident!("{}", lane_type(scalar, lanes).unwrap_or("F64x4"));
     let scalar_ident = format_ident!("{}", scalar);
     let n = proc_macro2::Literal::usize_unsuffixed(lanes);
+    // The thresholds the returned measures (one per lane) are compared with, lane by lane.
+    let thresholds = if constrained {
+        quote! {
+            /// The scalar module's `SINGULARITY_THRESHOLD`: compare each lane of a returned measure with it.
+            pub const SINGULARITY_THRESHOLD: E = super::#scalar_ident::SINGULARITY_THRESHOLD;
+            /// The scalar module's `DERIVATIVE_SINGULARITY_THRESHOLD`, for the derivatives' measures.
+            pub const DERIVATIVE_SINGULARITY_THRESHOLD: E =
+                super::#scalar_ident::DERIVATIVE_SINGULARITY_THRESHOLD;
+        }
+    } else {
+        quote!()
+    };
     let doc = format!(
-        " The generated dynamics in `{scalar}`, {lanes} states per call: the scalar `S` is `{lane_type}` (one SIMD value, one state per lane), the functions are the `{scalar}` module's (less `complete`), lane by lane bit-identical to them. Pack states with `S::new([…])` per entry, read lane `k` with `to_array()[k]`, or pass slices of states to the `_batch` forms; build with the target's SIMD (`-C target-cpu=native`, or `-C target-feature=+avx` for 256-bit values) to compute a lane value in one instruction."
+        " The generated dynamics in `{scalar}`, {lanes} states per call: the scalar `S` is `{lane_type}` (one SIMD value, one state per lane), the functions are the `{scalar}` module's (less `complete` and `complete_step`), lane by lane bit-identical to them. Pack states with `S::new([…])` per entry, read lane `k` with `to_array()[k]`, or pass slices of states to the `_batch` forms; build with the target's SIMD (`-C target-cpu=native`, or `-C target-feature=+avx` for 256-bit values) to compute a lane value in one instruction."
     );
     quote! {
         #[doc = #doc]
@@ -804,6 +829,7 @@ fn lane_module(
             pub type E = #scalar_ident;
             /// States per lane call.
             pub const LANES: usize = #n;
+            #thresholds
             #(#functions)*
         }
     }
@@ -844,7 +870,15 @@ pub fn generate_tokens(
         n => generated
             .scalars
             .iter()
-            .map(|scalar| lane_module(scalar, n, &generated.helpers, &lane_functions))
+            .map(|scalar| {
+                lane_module(
+                    scalar,
+                    n,
+                    generated.constrained,
+                    &generated.helpers,
+                    &lane_functions,
+                )
+            })
             .collect(),
     };
     let header = generated.header;
@@ -885,7 +919,13 @@ pub fn generate_source(loaded: &Loaded, options: &GenerateOptions) -> Result<Str
     }
     if generated.lanes > 0 {
         for scalar in &generated.scalars {
-            let empty = lane_module(scalar, generated.lanes, &generated.helpers, &[]);
+            let empty = lane_module(
+                scalar,
+                generated.lanes,
+                generated.constrained,
+                &generated.helpers,
+                &[],
+            );
             modules.push((empty, &lane_functions));
         }
     }
@@ -1267,6 +1307,30 @@ mod tests {
                 assert!(text.contains(&format!("pub fn frame_{}(", c.to_ascii_lowercase())));
             }
         }
+    }
+
+    /// The size guard weighs a lane module's copies (attacker trial, issue 13: `--lanes 4` on the
+    /// quadruped's `aba_derivatives` passed a 340 MB limit and took 1.31 GB to compile): a limit the
+    /// scalar module alone fits is refused with lanes, before and after tracing.
+    #[test]
+    fn the_size_guard_counts_lane_modules() {
+        let loaded =
+            crate::load(concat!(env!("CARGO_MANIFEST_DIR"), "/../models/quadruped.urdf").as_ref())
+                .unwrap();
+        let options = |lanes: usize| {
+            GenerateOptions {
+                f32: false,
+                max_compile_memory_mb: Some(340),
+                lanes,
+                ..GenerateOptions::default()
+            }
+            .with_requested(Some(vec![Algorithm::AbaDerivatives]), &[])
+        };
+        assert!(generate_source(&loaded, &options(0)).is_ok());
+        let e = generate_source(&loaded, &options(4))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("340"), "{e}");
     }
 
     /// Long functions are split into parts named after their bodies; a body named `ext` (or

@@ -54,6 +54,12 @@ pub struct FunctionSize {
     pub traced: bool,
 }
 
+/// A lane module's copy of a function takes about this many times the scalar copy's compile memory
+/// (measured 2026-12-02, release, rustc peak: arm7's `aba_derivatives` + `rnea_derivatives` 196 MB without
+/// lanes, 956 MB with `lanes = 4`; the quadruped's `aba_derivatives` 1.31 GB with lanes): SIMD values and
+/// the inlined lane operations. The size guard counts each lane module's copy at this weight.
+pub const LANE_MEMORY_FACTOR: f64 = 4.0;
+
 /// The predicted size of `algorithm` on `model` (an upper bound for the joints embedyn supports).
 pub fn predicted(model: &Model<f64>, algorithm: Algorithm) -> FunctionSize {
     let nv = model.nv() as f64;

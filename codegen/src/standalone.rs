@@ -198,7 +198,7 @@ pub fn crate_files(
             .map(|(_, s)| format!("`{s}x{n}`"))
             .collect();
         readme.push_str(&format!(
-            "Lane modules ({modules}) hold the same functions (less `complete`) over {n} states per call: their \
+            "Lane modules ({modules}) hold the same functions (less `complete` and `complete_step`) over {n} states per call: their \
              scalar `S` is a SIMD value of {n} numbers, one state per lane (`helpers::F64x{n}` and so on; pack \
              with `S::new([…])`, read with `to_array()`), lane by lane bit-identical to the scalar functions; \
              each function `f` also has `f_batch` over slices of states (embedyn's docs/generated-code.md, \

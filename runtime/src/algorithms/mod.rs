@@ -98,7 +98,7 @@ pub enum DynamicsError {
         d: f64,
     },
     /// A loop is at or too near a singular configuration.
-    #[error("{group}: the loop is at or too near a singular configuration: cond(Y1) = {condition:.3e} ≥ {threshold:.1e}, the limit in this scalar type (the dependent joints are not determined by the independent ones here)")]
+    #[error("{group}: the loop is at or too near a singular configuration: cond(Y1) = {condition:.3e} ≥ {threshold:.1e}, the limit in this scalar type (at a singular configuration the dependent joints are not determined by the independent ones; derivatives, whose rounding grows as cond², are refused from the square root of the values' limit)")]
     SingularConstraint {
         /// The group, by the names of its constraints (or the whole KKT system).
         group: ConstraintSet,
