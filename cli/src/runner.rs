@@ -8,7 +8,9 @@
 //! place, so concurrent runs never see half a file.
 
 use super::CliError;
-use embedyn_codegen::standalone::{crate_files, crate_name, Binary, Manifest, ManifestError};
+use embedyn_codegen::standalone::{
+    crate_files, crate_name, Binary, Library, Manifest, ManifestError,
+};
 use embedyn_codegen::{format_tokens, GenerateOptions, UnparsableCode, GENERATOR_VERSION};
 use embedyn_codegen::{Algorithm, Loaded};
 use proc_macro2::TokenStream;
@@ -462,7 +464,15 @@ fn runner_source(loaded: &Loaded, options: &GenerateOptions) -> Result<RunnerSou
     // The crate builds the runner as a `[[bin]]` beside its library; the binary's name carries the key,
     // so the shared target folder never hands one model's runner to another.
     let bin_name = format!("run_{key}");
-    let mut manifest = Manifest::standalone(&krate, &loaded.robot.name);
+    // The package's name carries the key too: runners of two models of one name (a scene's variants)
+    // share the target folder, and cargo keys a path package's build by its name and version, not its
+    // folder, so one runner could link the other's library (a stale build of another model). The
+    // library keeps the crate's name, which main.rs uses.
+    let mut manifest = Manifest::standalone(&format!("{krate}_{key}"), &loaded.robot.name);
+    manifest.lib = Some(Library {
+        name: krate.clone(),
+        path: "src/lib.rs".into(),
+    });
     if options.lanes > 0 {
         manifest = manifest.with_lanes();
     }

@@ -275,14 +275,22 @@ fn the_runner_cache_is_private_checked_and_rebuilt() {
             assert_eq!(mode, 0o700, "{}", d.display());
         }
     }
-    // The runner's manifest: the package, one [[bin]], libm, an empty workspace; nothing else.
+    // The runner's manifest: the package, its [lib] (the crate's name under a package named with the
+    // entry's key), one [[bin]], libm, an empty workspace; nothing else.
     let manifest: toml::Table = std::fs::read_to_string(entry.join("Cargo.toml"))
         .unwrap()
         .parse()
         .unwrap();
     assert_eq!(
         keys(&manifest),
-        ["bin", "dependencies", "package", "workspace"]
+        ["bin", "dependencies", "lib", "package", "workspace"]
+    );
+    assert_eq!(keys(manifest["lib"].as_table().unwrap()), ["name", "path"]);
+    let package = manifest["package"]["name"].as_str().unwrap();
+    let lib = manifest["lib"]["name"].as_str().unwrap();
+    assert!(
+        package.starts_with(&format!("{lib}_")) && package.len() == lib.len() + 17,
+        "{package}"
     );
     let bins = manifest["bin"].as_array().unwrap();
     assert_eq!(bins.len(), 1);

@@ -23,6 +23,9 @@ pub use crate::names::crate_name;
 pub struct Manifest {
     /// `[package]`.
     pub package: Package,
+    /// `[lib]`, when the library's name is not the package's (the runner's).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub lib: Option<Library>,
     /// `[[bin]]` targets (only the runner has them).
     #[serde(rename = "bin", skip_serializing_if = "Vec::is_empty")]
     pub bins: Vec<Binary>,
@@ -66,6 +69,15 @@ pub struct Package {
     pub publish: bool,
 }
 
+/// The `[lib]` table.
+#[derive(Serialize)]
+pub struct Library {
+    /// The library's crate name.
+    pub name: String,
+    /// Its root source file, relative to the manifest.
+    pub path: String,
+}
+
 /// A `[[bin]]` target.
 #[derive(Serialize)]
 pub struct Binary {
@@ -91,6 +103,7 @@ impl Manifest {
                 license: "MIT OR Apache-2.0".into(),
                 publish: false,
             },
+            lib: None,
             bins: Vec::new(),
             dependencies: BTreeMap::from([("libm".to_string(), Dependency::Version("0.2".into()))]),
             workspace: BTreeMap::new(),
