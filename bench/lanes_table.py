@@ -57,8 +57,9 @@ def main():
               "per operation (spills of long functions, issue 13's first item), which the lane values, four times "
               "wider, pay four times over in memory traffic. Sines and cosines of f64 lanes run the scalar kernel "
               "on whole SIMD values; f32 lanes take them lane by lane. The `_batch` forms add the transposition of "
-              "states into lanes and back. Not yet here: threads over a batch (the caller's `rayon`), `embedyn eval` "
-              "and `bench` through the lanes, and Pinocchio's OpenMP `abaInParallel` beside them."]
+              "states into lanes and back. `embedyn bench` reports the `_batch` forms of its "
+              "baseline build as `generated_f64_batch`. Not yet here: threads over a batch (the caller's `rayon`), "
+              "`embedyn eval` through the lanes, and Pinocchio's OpenMP `abaInParallel` beside them."]
     write_section("\n".join(lines) + "\n")
 
 
