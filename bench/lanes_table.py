@@ -57,7 +57,9 @@ def main():
               "per operation (spills of long functions, issue 13's first item), which the lane values, four times "
               "wider, pay four times over in memory traffic. Sines and cosines of f64 lanes run the scalar kernel "
               "on whole SIMD values; f32 lanes take them lane by lane. The `_batch` forms add the transposition of "
-              "states into lanes and back. `embedyn bench` reports the `_batch` forms of its "
+              "states into lanes and back. Eight f64 lanes (two 256-bit values per number) measured 7–9 % slower per "
+              "state than four (`_batch` of 64 with AVX2, 2026-12-02: z1 140 against 128 ns, ANYmal B 441 against "
+              "412 ns): twice the live values, more spills; they are not offered. `embedyn bench` reports the `_batch` forms of its "
               "baseline build as `generated_f64_batch`. Not yet here: threads over a batch (the caller's `rayon`), "
               "`embedyn eval` through the lanes, and Pinocchio's OpenMP `abaInParallel` beside them."]
     write_section("\n".join(lines) + "\n")

@@ -217,8 +217,8 @@ pub enum Command {
         /// Where the frame functions express their Jacobian and bias (Pinocchio's references).
         #[arg(long, value_parser = ["local", "local_world_aligned", "world"], default_value = "local_world_aligned")]
         reference: String,
-        /// Also write lane modules of this many states per call (`f64x4`, `f32x4` for 4; 2, 4 or 8
-        /// for f64, 4 or 8 for f32): every function evaluating that many states at once, one per SIMD lane.
+        /// Also write lane modules of this many states per call (`f64x4`, `f32x4` for 4; 2 or 4 for
+        /// f64, 4 or 8 for f32): every function evaluating that many states at once, one per SIMD lane.
         #[arg(long, value_name = "N")]
         lanes: Option<usize>,
     },
@@ -858,7 +858,7 @@ pub fn run(cli: Cli) -> Result<Printed, CliError> {
             if lanes == Some(0) {
                 return Err(CliError::BadOption {
                     option: "--lanes",
-                    message: "--lanes N: 2, 4 or 8 for f64, 4 or 8 for f32 (leave it out for no lane modules)"
+                    message: "--lanes N: 2 or 4 for f64, 4 or 8 for f32 (leave it out for no lane modules)"
                         .into(),
                 });
             }

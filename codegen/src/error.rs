@@ -627,7 +627,7 @@ pub enum LoadErrorKind {
         function: Algorithm,
     },
     /// A lane count the scalar has no lane type of.
-    #[error("`lanes = {lanes}` / `--lanes {lanes}` has no lane type for {scalar} (lanes: 2, 4 or 8 for f64, 4 or 8 for f32; `f64_only` or `f32_only` in robot!, `--scalar f64|f32` for embedyn generate, picks one scalar)")]
+    #[error("`lanes = {lanes}` / `--lanes {lanes}` has no lane type for {scalar} (lanes: 2 or 4 for f64, 4 or 8 for f32; `f64_only` or `f32_only` in robot!, `--scalar f64|f32` for embedyn generate, picks one scalar)")]
     NoLaneType {
         /// The scalar.
         scalar: &'static str,

@@ -205,7 +205,7 @@ impl Parse for Args {
                     if args.lanes == 0 {
                         return Err(syn::Error::new(
                             n.span(),
-                            "lanes = N: 2, 4 or 8 for f64, 4 or 8 for f32",
+                            "lanes = N: 2 or 4 for f64, 4 or 8 for f32",
                         ));
                     }
                 }

@@ -108,7 +108,7 @@ pub mod codegen_support {
 /// The lane types of generated lane modules (`robot!(…, lanes = 4)`: module `f64x4`, …): `N` numbers in
 /// one SIMD value, one per state. Pack states with `F64x4::new([…])`, read them with `to_array()`.
 pub mod lanes {
-    pub use crate::codegen_support::{F32x4, F32x8, F64x2, F64x4, F64x8};
+    pub use crate::codegen_support::{F32x4, F32x8, F64x2, F64x4};
 }
 
 /// The source text of [`codegen_support`], which `embedyn generate` copies into every standalone crate so
