@@ -74,8 +74,8 @@ impl Query {
                 Err(CliError::BadOption {
                     option: "--frame",
                     message: format!(
-                        "the model has no link `{}`{}",
-                        embedyn_codegen::shortened(name),
+                        "the model has no link {}{}",
+                        embedyn_codegen::names::fenced(&embedyn_codegen::shortened(name)),
                         match suggestions.is_empty() {
                             true => " (`embedyn info` lists the links under `frames`)".to_string(),
                             false => super::suggest::did_you_mean(&suggestions),

@@ -740,8 +740,8 @@ fn field_problem(field: &str, problem: &SampleProblem) -> String {
             format!("field `{field}` must be an object {WRENCHES_SHAPE}")
         }
         SampleProblem::UnknownLink { link, suggestions } => format!(
-            "field `{field}`: the model has no link `{}`{}",
-            embedyn_codegen::shortened(link),
+            "field `{field}`: the model has no link {}{}",
+            embedyn_codegen::names::fenced(&embedyn_codegen::shortened(link)),
             match suggestions.is_empty() {
                 true => " (`embedyn info` lists the links under `frames`)".to_string(),
                 false => suggest::did_you_mean(suggestions),

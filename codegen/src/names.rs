@@ -189,7 +189,12 @@ pub fn shown(name: &str) -> String {
 
 /// A Markdown code span of a name ([`shown`]); safe in doc comments and README text.
 pub fn code_span(name: &str) -> String {
-    let text = shown(name);
+    fenced(&shown(name))
+}
+
+/// `text` as a Markdown code span as it is (escape it first where it may hold control characters): a
+/// backtick inside cannot end the span early.
+pub fn fenced(text: &str) -> String {
     // The fence is one backtick longer than the longest run of backticks inside.
     let mut longest = 0;
     let mut run = 0;
@@ -216,6 +221,16 @@ pub fn table_cell(name: &str) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A backtick inside a name cannot end its code span early (attacker trial, issue 12: an unknown
+    /// `f_ext` link named with a backtick broke the error's span).
+    #[test]
+    fn fenced_spans_hold_backticks() {
+        assert_eq!(fenced("foot"), "`foot`");
+        assert_eq!(fenced("a`b"), "``a`b``");
+        assert_eq!(fenced("`x"), "`` `x ``");
+        assert_eq!(code_span("a`b"), fenced("a`b"));
+    }
 
     /// What rustc accepts as a crate name without a warning: ASCII, snake_case, not a keyword.
     fn is_clean_identifier(s: &str) -> bool {
