@@ -153,14 +153,15 @@ pub fn bench(
         let g64 = time_generated(&binary, algo, "f64", &rows)?;
         let g32 = time_generated(&binary, algo, "f32", &rows)?;
         // The lane module's `_batch` forms of the three dynamics algorithms.
-        let batch = match algo {
-            "aba" | "rnea" | "crba" => json!(time_generated(
+        let batch = if super::runner::BATCH_TIMED.contains(&algo) {
+            json!(time_generated(
                 &binary,
                 algo,
                 &format!("f64x{LANES}"),
                 &rows
-            )?),
-            _ => Value::Null,
+            )?)
+        } else {
+            Value::Null
         };
         result.insert(
             algo.into(),

@@ -438,10 +438,7 @@ fn runner_source(loaded: &Loaded, options: &GenerateOptions) -> Result<RunnerSou
     let krate = crate_name(&loaded.robot.name);
     let model = loaded.model::<f64>(&options.model)?;
     let constrained = model.has_constraints();
-    let scalars: Vec<&str> = [(options.f64, "f64"), (options.f32, "f32")]
-        .into_iter()
-        .filter_map(|(on, name)| on.then_some(name))
-        .collect();
+    let scalars = options.scalars();
     let links = RunnerLinks::of(options, &model);
     let main = runner_main(
         &krate,
@@ -917,6 +914,9 @@ fn runner_calls(
 
 /// The runner's `main.rs`, generated through `quote` and formatted like all generated code.
 ///
+/// The algorithms whose lane module's `_batch` forms the runner times (scalar `f64xN`, mode `bench`).
+pub(crate) const BATCH_TIMED: [&str; 3] = ["aba", "rnea", "crba"];
+
 /// Protocol on stdin: a line `ALGO SCALAR eval|bench`, then one sample per line (q, then two vectors of
 /// length NV, then a second configuration of length NQ, numbers separated by spaces; an empty line for a model without coordinates). Output: one
 /// line per sample (eval), or one line with the median ns per call (bench); every number printed as an
@@ -987,7 +987,7 @@ fn runner_main(
         })
         .collect();
     // With lanes, `bench` also times the f64 lane module's `_batch` forms over all the states at once
-    // (scalar `f64xN` in the header), for `aba`, `rnea` and `crba` (`crba_independent` with constraints).
+    // (scalar `f64xN` in the header), for BATCH_TIMED (`crba` is `crba_independent` with constraints).
     let batch = (lanes > 0 && scalars.contains(&"f64")).then(|| {
         let scalar_name = format!("f64x{lanes}");
         let module = format_ident!("f64x{}", lanes);

@@ -92,6 +92,14 @@ impl Default for GenerateOptions {
 }
 
 impl GenerateOptions {
+    /// The scalar modules asked for, in order (`f64`, `f32`).
+    pub fn scalars(&self) -> Vec<&'static str> {
+        [(self.f64, "f64"), (self.f32, "f32")]
+            .into_iter()
+            .filter_map(|(enabled, scalar)| enabled.then_some(scalar))
+            .collect()
+    }
+
     /// The functions a user asked for, read the same way by the `robot!` macro and `embedyn generate`:
     /// exactly `only` (each once, in the order given) when given, else the default ones; and `also`
     /// (the functions generated on request, `minv`) added when missing.
@@ -467,7 +475,7 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
         }
     }
     if options.lanes > 0 {
-        for scalar in &scalars_of(options) {
+        for scalar in &options.scalars() {
             if lane_type(scalar, options.lanes).is_none() {
                 return Err(located_at_robot(
                     loaded,
@@ -482,7 +490,7 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
     let model: Model<Sym> = snapped(&model64).cast();
     let (nq, nv) = (model.nq(), model.nv());
     let names: Vec<&str> = model.joints.iter().map(|j| j.name.as_str()).collect();
-    let scalars = scalars_of(options);
+    let scalars = options.scalars();
     // One function per algorithm, and per link named for a frame function.
     let frame_names: Vec<&str> = frame_links.iter().map(|(name, _)| name.as_str()).collect();
     let frame_functions = frame_function_names(&model64, &frame_names);
@@ -776,14 +784,6 @@ fn scalar_module(
     }
 }
 
-/// The scalar modules `options` asks for, in order.
-fn scalars_of(options: &GenerateOptions) -> Vec<&'static str> {
-    [(options.f64, "f64"), (options.f32, "f32")]
-        .into_iter()
-        .filter_map(|(enabled, scalar)| enabled.then_some(scalar))
-        .collect()
-}
-
 /// The helper module's lane type of `lanes` lanes of `scalar` (`F64x4`), if it has one.
 fn lane_type(scalar: &str, lanes: usize) -> Option<&'static str> {
     embedyn_runtime::codegen_support::LANE_TYPES
@@ -842,29 +842,24 @@ pub fn generate_tokens(
     options: &GenerateOptions,
 ) -> Result<TokenStream, LoadError> {
     let generated = generate_items(loaded, options)?;
-    let functions = generated
-        .functions
-        .into_iter()
-        .map(|f| match f.code {
-            Code::Tokens(t) => Ok(t),
-            // Lexed by syn, whose error (unlike proc_macro2's) may cross threads with the LoadError.
-            Code::Text(text) => syn::parse_str::<TokenStream>(&text)
-                .map_err(|e| located_at_robot(loaded, LoadErrorKind::Tokenize { error: e.into() })),
-        })
-        .collect::<Result<Vec<_>, _>>()?;
+    let tokens = |emitted: Vec<Emitted>| {
+        emitted
+            .into_iter()
+            .map(|f| match f.code {
+                Code::Tokens(t) => Ok(t),
+                // Lexed by syn, whose error (unlike proc_macro2's) may cross threads with the LoadError.
+                Code::Text(text) => syn::parse_str::<TokenStream>(&text).map_err(|e| {
+                    located_at_robot(loaded, LoadErrorKind::Tokenize { error: e.into() })
+                }),
+            })
+            .collect::<Result<Vec<_>, _>>()
+    };
+    let functions = tokens(generated.functions)?;
     let modules = generated
         .scalars
         .iter()
         .map(|scalar| scalar_module(scalar, generated.constrained, &generated.limits, &functions));
-    let lane_functions = generated
-        .lane_functions
-        .into_iter()
-        .map(|f| match f.code {
-            Code::Tokens(t) => Ok(t),
-            Code::Text(text) => syn::parse_str::<TokenStream>(&text)
-                .map_err(|e| located_at_robot(loaded, LoadErrorKind::Tokenize { error: e.into() })),
-        })
-        .collect::<Result<Vec<_>, _>>()?;
+    let lane_functions = tokens(generated.lane_functions)?;
     let lane_modules: Vec<TokenStream> = match generated.lanes {
         0 => Vec::new(),
         n => generated
@@ -1174,29 +1169,28 @@ fn generate_algorithm(
             )
             .map_err(|e| located_at_robot(loaded, e.into()))?;
             let batch = crate::emit::batch_wrapper(&instance.name, &args, &outputs);
-            lane.code = match lane.code {
-                Code::Tokens(t) => Code::Tokens(quote! { #t #batch }),
-                Code::Text(text) => {
-                    let formatted = format_tokens(&quote!(mod m { #batch }))
-                        .map_err(|e| located_at_robot(loaded, e.into()))?;
-                    Code::Text(text + module_body(&formatted))
-                }
-            };
+            lane.code =
+                followed_by(lane.code, &batch).map_err(|e| located_at_robot(loaded, e.into()))?;
             Some(lane)
         }
     };
     if let Some(wrapper) = spec.wrapper {
-        let wrapper = wrapper();
-        emitted.code = match emitted.code {
-            Code::Tokens(t) => Code::Tokens(quote! { #t #wrapper }),
-            Code::Text(text) => {
-                let formatted = format_tokens(&quote!(mod m { #wrapper }))
-                    .map_err(|e| located_at_robot(loaded, e.into()))?;
-                Code::Text(text + module_body(&formatted))
-            }
-        };
+        emitted.code = followed_by(emitted.code, &wrapper())
+            .map_err(|e| located_at_robot(loaded, e.into()))?;
     }
     Ok((emitted, lane_function))
+}
+
+/// `code` with `items` after it (a wrapper, a batch form), in `code`'s form: tokens appended, or the
+/// items formatted as inside a module and appended to the text.
+fn followed_by(code: Code, items: &TokenStream) -> Result<Code, UnparsableCode> {
+    Ok(match code {
+        Code::Tokens(t) => Code::Tokens(quote! { #t #items }),
+        Code::Text(text) => {
+            let formatted = format_tokens(&quote!(mod m { #items }))?;
+            Code::Text(text + module_body(&formatted))
+        }
+    })
 }
 
 /// Generated items that are not a Rust file (a bug of the generator): `syn`'s error.

@@ -205,10 +205,10 @@ pub fn crate_files(
     );
     if options.lanes > 0 {
         let n = options.lanes;
-        let modules: Vec<String> = [(options.f64, "f64"), (options.f32, "f32")]
-            .into_iter()
-            .filter(|(on, _)| *on)
-            .map(|(_, s)| format!("`{s}x{n}`"))
+        let modules: Vec<String> = options
+            .scalars()
+            .iter()
+            .map(|s| format!("`{s}x{n}`"))
             .collect();
         readme.push_str(&format!(
             "Lane modules ({modules}) hold the same functions (less `complete` and `complete_step`) over {n} states per call: their \
