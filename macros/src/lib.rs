@@ -146,24 +146,58 @@ impl Parse for Args {
             rotors: embedyn_codegen::Rotors::Exact,
             links: embedyn_codegen::LinkOptions::default(),
         };
+        // Options that set one value may appear once: a second `lanes = 8` would silently win over the
+        // first (lists such as `lock(…)`, `wrenches(…)` and function names accumulate instead).
+        let mut seen: Vec<String> = Vec::new();
+        let mut once = |key: &str, span: proc_macro2::Span| -> syn::Result<()> {
+            if seen.iter().any(|k| k == key) {
+                return Err(syn::Error::new(
+                    span,
+                    format!("option `{key}` given twice (give it once)"),
+                ));
+            }
+            seen.push(key.to_string());
+            Ok(())
+        };
         while !input.is_empty() {
             input.parse::<Token![,]>()?;
             if input.is_empty() {
                 break;
             }
             if input.peek(Token![crate]) {
+                once("crate", input.span())?;
                 input.parse::<Token![crate]>()?;
                 input.parse::<Token![=]>()?;
                 args.krate = Some(input.parse()?);
                 continue;
             }
             let key: Ident = input.parse()?;
-            match key.to_string().as_str() {
+            let single = [
+                "floating",
+                "f64_only",
+                "f32_only",
+                "reference",
+                "rotors",
+                "max_compile_memory",
+                "lanes",
+                "only",
+            ];
+            let name = key.to_string();
+            if single.contains(&name.as_str()) || (name == "gravity" && input.peek(Token![=])) {
+                once(&name, key.span())?;
+            }
+            match name.as_str() {
                 "floating" => args.floating = true,
                 // (`gravity` alone asks for the function, `gravity = [x, y, z]` sets the vector.)
                 name if on_request().any(|a| a.name() == name) && !input.peek(Token![=]) => args
                     .requested
                     .extend(on_request().filter(|a| a.name() == name)),
+                "f64_only" | "f32_only" if !(args.f64 && args.f32) => {
+                    return Err(syn::Error::new(
+                        key.span(),
+                        "`f64_only` and `f32_only` together leave no scalar module: give one of them (or neither, for both)",
+                    ));
+                }
                 "f64_only" => args.f32 = false,
                 "f32_only" => args.f64 = false,
                 "gravity" => {
