@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Issue 13's many-states-per-call targets in one session: Pinocchio 4.1's single-state aba, rnea and crba
-# (bench/peers/pinocchio_bench.cpp) and embedyn's generated scalar and lane functions (benches/lanes.rs),
+# (bench/peers/pinocchio_bench.cpp), its OpenMP abaInParallel over a batch (bench/peers/pinocchio_parallel.cpp)
+# and embedyn's generated scalar and lane functions (benches/lanes.rs),
 # built twice: for the baseline x86-64 target (SSE2) and with -C target-cpu=native (the host's widest
 # SIMD). Each binary runs from COPIES fresh copies (bench/placement.py); then the table "Many states per
 # call" in BENCHMARKS.md (bench/lanes_table.py).
@@ -14,6 +15,11 @@ python3 bench/placement.py command "$copies" bench/results/pinocchio_lanes_z1.js
   models/peers/z1.urdf
 python3 bench/placement.py command "$copies" bench/results/pinocchio_lanes_anymal.jsonl "$PINOCCHIO_BENCH" \
   --floating models/peers/anymal_b.urdf
+# Pinocchio's OpenMP abaInParallel over 1024 states, 1 and 2 threads.
+python3 bench/placement.py command "$copies" bench/results/pinocchio_parallel_z1.jsonl "$PINOCCHIO_PARALLEL" \
+  --states 1024 models/peers/z1.urdf
+python3 bench/placement.py command "$copies" bench/results/pinocchio_parallel_anymal.jsonl "$PINOCCHIO_PARALLEL" \
+  --states 1024 --floating models/peers/anymal_b.urdf
 # The bench binary of one build: `lanes_binary TARGET_DIR RUSTFLAGS`.
 lanes_binary() {
   local log="target/cargo_bench_lanes.log"

@@ -8,6 +8,8 @@ from benchmarks_md import ROOT, last_json, write_section
 
 ROBOTS = [("z1", "pinocchio_lanes_z1.jsonl", {"aba": 0.05}),
           ("anymal_b_floating", "pinocchio_lanes_anymal.jsonl", {"aba": 0.08})]
+PARALLEL = {"z1": "pinocchio_parallel_z1.jsonl", "anymal_b_floating": "pinocchio_parallel_anymal.jsonl"}
+BATCH = 1024
 CALLS = ["aba", "rnea", "crba"]
 LANES = 4
 
@@ -56,12 +58,35 @@ def main():
               "function becomes one operation on four states. What they do not remove is the scalar code's own cost "
               "per operation (spills of long functions, issue 13's first item), which the lane values, four times "
               "wider, pay four times over in memory traffic. Sines and cosines of f64 lanes run the scalar kernel "
-              "on whole SIMD values; f32 lanes take them lane by lane. The `_batch` forms add the transposition of "
-              "states into lanes and back. Eight f64 lanes (two 256-bit values per number) measured 7–9 % slower per "
-              "state than four (`_batch` of 64 with AVX2, 2026-12-02: z1 140 against 128 ns, ANYmal B 441 against "
-              "412 ns): twice the live values, more spills; they are not offered. `embedyn bench` reports the `_batch` forms of its "
-              "baseline build as `generated_f64_batch`. Not yet here: threads over a batch (the caller's `rayon`), "
-              "`embedyn eval` through the lanes, and Pinocchio's OpenMP `abaInParallel` beside them."]
+              "on whole SIMD values (in three passes over all the angles, as the scalar batch); f32 lanes take them "
+              "lane by lane. The `_batch` forms add the transposition of states into lanes and back. Eight f64 lanes "
+              "(two 256-bit values per number) measured 7–9 % slower per state than four (`_batch` of 64 with AVX2, "
+              "on an earlier host: z1 140 against 128 ns, ANYmal B 441 against 412 ns): twice the live values, more "
+              "spills; they are not offered. `embedyn bench` reports the `_batch` forms of its baseline build as "
+              "`generated_f64_batch`."]
+    lines += ["", f"### Threads over a batch", "",
+              f"{BATCH} states per call of `aba`, ns per state. Pinocchio: a loop of `aba` over the states, and its "
+              "OpenMP `abaInParallel` (one state per thread, a `ModelPool` of one `Data` per thread) with 1 and 2 "
+              "threads (bench/peers/pinocchio_parallel.cpp). embedyn: `f64x4::aba_batch` on one thread and "
+              "`embedyn::parallel::par_batch` (rayon's pool, pieces of 64 states, each an `aba_batch`) on this "
+              f"machine's {os.cpu_count()} cores, both builds.", "",
+              "| robot | Pinocchio loop | `abaInParallel` 1 thread | 2 threads | build | `aba_batch` 1 thread | "
+              "`par_batch` | speedup of threads | `par_batch` / `abaInParallel` (2 threads) |",
+              "|---|---:|---:|---:|---|---:|---:|---:|---:|"]
+    for robot, _, _ in ROBOTS:
+        path = os.path.join(ROOT, "bench", "results", PARALLEL[robot])
+        if not os.path.exists(path):
+            continue
+        pin = last_json(path)
+        for build, runs in builds:
+            one = runs["benches"].get(f"gen_aba_batch{BATCH}/{robot}")
+            par = runs["benches"].get(f"gen_aba_par{BATCH}/{robot}")
+            if not one or not par:
+                continue
+            one, par = statistics.median(one) / BATCH, statistics.median(par) / BATCH
+            lines.append(
+                f"| {robot} | {pin['aba_serial']:,.0f} | {pin['aba_parallel_1']:,.0f} | {pin['aba_parallel_2']:,.0f} | "
+                f"{build} | {one:,.0f} | {par:,.0f} | {one / par:.2f}× | {par / pin['aba_parallel_2']:.3f} |")
     write_section("\n".join(lines) + "\n")
 
 

@@ -84,6 +84,36 @@ macro_rules! bench_robot {
                 black_box(out64[0][0])
             })
         });
+        // Threads over a batch: 1024 states, one thread (`aba_batch`) against rayon's pool
+        // (`embedyn::parallel::par_batch`, pieces of 64 states), per call of 1024.
+        let q1k: Vec<[f64; NQ]> = (0..1024).map(|s| q[s & 63]).collect();
+        let v1k: Vec<[f64; NV]> = (0..1024).map(|s| v[s & 63]).collect();
+        let u1k: Vec<[f64; NV]> = (0..1024).map(|s| u[s & 63]).collect();
+        let mut out1k = vec![[0.0; NV]; 1024];
+        $c.bench_function(concat!("gen_aba_batch1024/", $name), |b| {
+            b.iter(|| {
+                assert!($m::f64x4::aba_batch(
+                    black_box(&q1k),
+                    &v1k,
+                    &u1k,
+                    &mut out1k
+                ));
+                black_box(out1k[0][0])
+            })
+        });
+        $c.bench_function(concat!("gen_aba_par1024/", $name), |b| {
+            b.iter(|| {
+                let slices = (black_box(&q1k[..]), &v1k[..], &u1k[..], &mut out1k[..]);
+                assert!(embedyn::parallel::par_batch(
+                    slices,
+                    64,
+                    |(q, v, u, out)| {
+                        assert!($m::f64x4::aba_batch(q, v, u, out));
+                    }
+                ));
+                black_box(out1k[0][0])
+            })
+        });
         $c.bench_function(concat!("gen_rnea/", $name), |b| {
             b.iter(|| {
                 k = (k + 1) & 63;

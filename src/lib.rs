@@ -40,4 +40,6 @@ pub use embedyn_codegen as codegen;
 #[cfg(feature = "std")]
 pub use embedyn_codegen::{load, LoadError, Loaded, LockedJoint, ModelOptions, Rotors, Warning};
 pub use embedyn_macros::robot;
+#[cfg(feature = "std")]
+pub mod parallel;
 pub use embedyn_runtime::*;

@@ -227,3 +227,77 @@ fn batch_functions_equal_the_scalar_ones_for_any_number_of_states() {
         assert_eq!(measure[k].to_bits(), c.to_bits());
     }
 }
+
+/// Threads over a batch: `embedyn::parallel::par_batch` cuts every slice at the same states and runs the
+/// pieces' `_batch` calls on rayon's pool; each of 203 states (pieces of 16 and a last one of 11, padded
+/// inside its lane chunk) is bit-identical to the scalar call, the loop model's measures included.
+#[test]
+fn threads_over_a_batch_equal_the_scalar_calls() {
+    const NQ: usize = anymal::NQ;
+    const NV: usize = anymal::NV;
+    let model: Model<f64> = load_model("tests/data/pinocchio/anymal_b.urdf", true);
+    let mut rng = SplitMix64::new(31);
+    let mut noise = Rng::new(32);
+    let n = 203;
+    let mut q = vec![[0.0; NQ]; n];
+    let mut v = vec![[0.0; NV]; n];
+    let mut u = vec![[0.0; NV]; n];
+    for k in 0..n {
+        random_configuration_within_limits(&model, &mut rng, &mut q[k]).unwrap();
+        v[k].copy_from_slice(&noise.vec(NV, -2.0, 2.0));
+        u[k].copy_from_slice(&noise.vec(NV, -20.0, 20.0));
+    }
+    let mut qdd = vec![[f64::NAN; NV]; n];
+    let ok = embedyn::parallel::par_batch(
+        (&q[..], &v[..], &u[..], &mut qdd[..]),
+        16,
+        |(q, v, u, qdd)| {
+            assert!(q.len() <= 16);
+            assert!(anymal::f64x4::aba_batch(q, v, u, qdd));
+        },
+    );
+    assert!(ok);
+    for k in 0..n {
+        let mut expected = [0.0; NV];
+        anymal::f64::aba(&q[k], &v[k], &u[k], &mut expected);
+        assert_eq!(bits(&qdd[k]), bits(&expected), "aba, state {k}");
+    }
+    // Slices of different lengths: refused before any thread starts, nothing written.
+    let mut short = vec![[f64::NAN; NV]; n - 1];
+    let ok = embedyn::parallel::par_batch((&q[..], &v[..], &u[..], &mut short[..]), 16, |_| {
+        panic!("called on mismatched slices")
+    });
+    assert!(!ok);
+    assert!(short.iter().flatten().all(|x| x.is_nan()));
+
+    // A loop model: the measure slice is cut with the others.
+    let model: Model<f64> = load_model("models/loops/four_bar_internal.urdf", false);
+    let mut ws = embedyn::Workspace::new(&model);
+    let (mut q, mut v, mut u) = (Vec::new(), Vec::new(), Vec::new());
+    for k in 0..37 {
+        let mut state = model.neutral_configuration();
+        state[0] = -1.0 + 0.05 * k as f64;
+        embedyn::constraints::complete_configuration(&model, &mut ws, &mut state).unwrap();
+        let mut vel = noise.vec(four_bar::NV, -1.0, 1.0);
+        embedyn::constraints::complete_velocity(&model, &mut ws, &state, &mut vel).unwrap();
+        q.push(<[f64; four_bar::NQ]>::try_from(state).unwrap());
+        v.push(<[f64; four_bar::NV]>::try_from(vel).unwrap());
+        u.push(<[f64; four_bar::NV]>::try_from(noise.vec(four_bar::NV, -1.0, 1.0)).unwrap());
+    }
+    let mut qdd = vec![[0.0; four_bar::NV]; 37];
+    let mut measure = vec![0.0; 37];
+    let slices = (&q[..], &v[..], &u[..], &mut qdd[..], &mut measure[..]);
+    assert!(embedyn::parallel::par_batch(
+        slices,
+        8,
+        |(q, v, u, qdd, measure)| {
+            assert!(four_bar::f64x4::aba_batch(q, v, u, qdd, measure));
+        }
+    ));
+    for k in 0..37 {
+        let mut expected = [0.0; four_bar::NV];
+        let c = four_bar::f64::aba(&q[k], &v[k], &u[k], &mut expected);
+        assert_eq!(bits(&qdd[k]), bits(&expected), "four-bar, state {k}");
+        assert_eq!(measure[k].to_bits(), c.to_bits());
+    }
+}

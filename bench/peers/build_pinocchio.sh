@@ -4,9 +4,10 @@
 # and the compile is skipped when the binary is newer than the source and this script.
 #
 # Usage: bench/peers/build_pinocchio.sh [--force]
-# Stdout is exactly two KEY=VALUE lines (everything else goes to stderr), so a script can
+# Stdout is exactly three KEY=VALUE lines (everything else goes to stderr), so a script can
 # `eval "$(bench/peers/build_pinocchio.sh)"`:
 #   PINOCCHIO_BENCH=<path of the binary>        (target/peers/pinocchio_bench)
+#   PINOCCHIO_PARALLEL=<path of the binary>     (target/peers/pinocchio_parallel: abaInParallel, OpenMP)
 #   ERD_ROBOTS=<example-robot-data's robots folder>
 #
 # Env: PYTHON (default python3), CXX (default g++).
@@ -62,23 +63,32 @@ robots="$prefix/share/example-robot-data/robots"
 # these flags, rather than called in the wheel's prebuilt libpinocchio_default. No -march=native: the prebuilt URDF parser in the wheel is compiled for generic
 # x86-64 and Eigen's alignment must match it, or buildModel corrupts the model.
 mkdir -p "$out_dir"
-if (( force == 0 )) && [[ -x "$bin" && "$bin" -nt "$src" && "$bin" -nt "${BASH_SOURCE[0]}" ]] \
-   && [[ "$(cat "$bin.prefix" 2>/dev/null)" == "$prefix" ]]; then
-  echo "up to date: $bin" >&2
-else
-  cmd=("$CXX" -std=c++17 -O3 -DNDEBUG
+# compile SOURCE BINARY [EXTRA FLAGS...]: skipped when the binary is newer than its source and this script.
+compile() {
+  local source="$1" binary="$2"
+  shift 2
+  if (( force == 0 )) && [[ -x "$binary" && "$binary" -nt "$source" && "$binary" -nt "${BASH_SOURCE[0]}" ]] \
+     && [[ "$(cat "$binary.prefix" 2>/dev/null)" == "$prefix" ]]; then
+    echo "up to date: $binary" >&2
+    return
+  fi
+  local cmd=("$CXX" -std=c++17 -O3 -DNDEBUG "$@"
     -I"$prefix/include" -I"$prefix/include/eigen3" -I"$prefix/include/urdfdom_headers"
     -DPINOCCHIO_WITH_URDFDOM
     -DBOOST_MPL_LIMIT_LIST_SIZE=30 -DBOOST_MPL_LIMIT_VECTOR_SIZE=30
     -DBOOST_MPL_CFG_NO_PREPROCESSED_HEADERS
     -DBOOST_FUSION_INVOKE_MAX_ARITY=12
-    "$src" -o "$bin"
+    "$source" -o "$binary"
     -L"$prefix/lib" -Wl,-rpath,"$prefix/lib"
     -lpinocchio_parsers -lpinocchio_default -lurdfdom_model -lboost_serialization)
   echo "${cmd[*]}" >&2
   "${cmd[@]}"
-  echo "$prefix" > "$bin.prefix"
-fi
+  echo "$prefix" > "$binary.prefix"
+}
+compile "$src" "$bin"
+# abaInParallel is OpenMP (gcc's libgomp).
+compile "$here/pinocchio_parallel.cpp" "$out_dir/pinocchio_parallel" -fopenmp
 
 echo "PINOCCHIO_BENCH=$bin"
+echo "PINOCCHIO_PARALLEL=$out_dir/pinocchio_parallel"
 echo "ERD_ROBOTS=$robots"

@@ -841,7 +841,7 @@ pub(crate) fn batch_wrapper(name: &str, args: &[Arg], outputs: &[Output]) -> Tok
          chunks of `LANES` states through the lane function `{name}` (a last partial chunk padded with its first \
          state, whose results are dropped); every state's results are bit-identical to the scalar function's. \
          Returns `false`, computing nothing, when the slices' lengths differ. Split a large batch across threads \
-         with `rayon`'s `par_chunks` (each thread calling this on its chunk)."
+         with `embedyn::parallel::par_batch` (or `rayon`'s `par_chunks`), each thread calling this on its piece."
     );
     let mut params = Vec::new();
     let mut lane_args = Vec::new();

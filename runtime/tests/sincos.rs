@@ -88,6 +88,56 @@ fn batch_is_the_single_call_bit_for_bit() {
     assert_eq!((s32[1], c32[1]), (-7.0f32).sincos());
 }
 
+/// The batch (its passes over all the angles) against the one-angle
+/// kernel, bit for bit, over dense sweeps: batches of 12 (a quadruped's joints) and of 5 (an odd tail for
+/// the vectorized loops), angles from −8e5 to 8e5 on a log scale, both signs, and every quadrant
+/// boundary k π/2 with its neighbours one ulp away.
+#[test]
+fn batch_equals_the_kernel_over_dense_sweeps() {
+    use embedyn_runtime::codegen_support::sincos_batch;
+    let mut angles = Vec::new();
+    let mut x = 1e-12f64;
+    while x < 8.2e5 {
+        angles.push(x);
+        angles.push(-x);
+        x *= 1.0173;
+    }
+    for k in -400i32..=400 {
+        let b = f64::from(k) * core::f64::consts::FRAC_PI_2;
+        angles.extend([
+            b,
+            f64::from_bits(b.to_bits() + 1),
+            f64::from_bits(b.to_bits().saturating_sub(1)),
+        ]);
+    }
+    for chunk in angles.chunks_exact(12) {
+        let batch: [f64; 12] = chunk.try_into().unwrap();
+        let (s, c) = sincos_batch(batch);
+        for k in 0..12 {
+            let (es, ec) = sincos_f64(batch[k]);
+            assert_eq!(
+                (s[k].to_bits(), c[k].to_bits()),
+                (es.to_bits(), ec.to_bits()),
+                "angle {:e}",
+                batch[k]
+            );
+        }
+    }
+    for chunk in angles.chunks_exact(5) {
+        let batch: [f64; 5] = chunk.try_into().unwrap();
+        let (s, c) = sincos_batch(batch);
+        for k in 0..5 {
+            let (es, ec) = sincos_f64(batch[k]);
+            assert_eq!(
+                (s[k].to_bits(), c[k].to_bits()),
+                (es.to_bits(), ec.to_bits()),
+                "angle {:e}",
+                batch[k]
+            );
+        }
+    }
+}
+
 /// The lane types' batch (the scalar kernel on whole SIMD values for f64 lanes, per lane for f32) equals
 /// the scalar batch bit for bit, lane by lane: every quadrant and both signs, ±0, the boundaries of the
 /// quadrants, and batches with an angle beyond the reduction's range or NaN in one lane (the libm path).
