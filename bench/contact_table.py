@@ -33,29 +33,37 @@ def main():
         "",
         f"Floating ANYmal B (nv = 18), generated f64 code vs Pinocchio {pin.get('pinocchio', '?')} in one session "
         f"({datetime.date.today()}, {platform.machine()}, `bench/contact.sh`; Pinocchio's process CPU/wall "
-        f"{pin.get('cpu_wall_min', '?')}). Each side ran from {copies} fresh copies of its binary: the times are "
-        "the medians over copies, the ranges their spread (the same executable runs up to 1.6× slower from one "
+        f"{pin.get('cpu_wall_min', '?')}). Each side ran from {copies} fresh copies of its binary, interleaved (one of "
+        "Pinocchio's, then one of ours, so that a pair saw one state of the shared machine): the times are "
+        "the medians over copies, the ranges their spread, the ratio the median of the pairs' ratios (the same executable runs up to 1.6× slower from one "
         "copy of the file than from another; see `bench/placement.py`). Pinocchio's calls: `computeFrameJacobian` + `forwardKinematics(q, v, 0)` + "
         "`getFrameClassicalAcceleration`; `jacobianCenterOfMass` (which also gives the com; Pinocchio's vcom "
         "needs another call); `ccrba`; `dccrba` (then Ȧ_g v is one more product); `aba` with `fext`, the four "
         "link-frame wrenches moved into their joints' frames inside the timed call.",
         "",
-        "| call | embedyn generated (ns) | range | Pinocchio (ns) | range | ratio | target |",
-        "|---|---:|---:|---:|---:|---:|---:|",
+        "| call | embedyn generated (ns) | range | Pinocchio (ns) | range | ratio | pairs' ratios | target |",
+        "|---|---:|---:|---:|---:|---:|---:|---:|",
     ]
 
     def median_ns(group):
         xs = ours.get(group)
         return statistics.median(xs) if xs else None
 
+    pin_runs = pin.get("runs", [])
+
     for label, group, theirs, target in rows:
         a, b = median_ns(group), pin.get(theirs)
-        r = f"{a / b:.2f}" if a and b else "—"
+        # Run k of Pinocchio and copy k of ours ran one after the other (bench/placement.py pairs): the
+        # ratio is the median of the pairs' ratios, its range theirs.
+        pairs = [x / r[theirs] for x, r in zip(ours.get(group, []), pin_runs) if r.get(theirs)]
+        r = statistics.median(pairs) if pairs else (a / b if a and b else None)
+        r_text = f"{r:.2f}" if r else "—"
+        pair_text = f"{min(pairs):.2f}–{max(pairs):.2f}" if pairs else ""
         t = f"≤ {target}" if target else ""
         their_range = pin.get(f"{theirs}_range")
         their_spread = spread(their_range) if their_range else ""
-        lines.append(f"| {label} | {a:,.0f} | {spread(ours[group])} | {b:,.0f} | {their_spread} | {r} | {t} |"
-                     if a and b else f"| {label} | — | | — | | — | {t} |")
+        lines.append(f"| {label} | {a:,.0f} | {spread(ours[group])} | {b:,.0f} | {their_spread} | {r_text} | {pair_text} | {t} |"
+                     if a and b else f"| {label} | — | | — | | — | | {t} |")
     plain, ext = median_ns("gen_aba"), median_ns("gen_aba_ext4")
     if plain and ext:
         lines += ["", f"Generated `aba_ext` with four foot wrenches takes {ext / plain:.2f}× the time of the generated "

@@ -16,6 +16,11 @@ Usage:
   placement.py command COPIES OUT.jsonl BINARY [ARGS...]
       runs the command from COPIES copies of BINARY; keeps the last JSON line of each run's output and
       writes one line per key: the median over copies (numbers), with "<key>_range": [min, max]
+  placement.py pairs COPIES PEER_OUT.jsonl CRITERION_OUT.json CRITERION_BINARY -- PEER_BINARY [ARGS...]
+      both of the above, interleaved: a copy of the peer's command, then a copy of the criterion binary,
+      COPIES times, so that each pair of runs sees the same state of the shared machine (other tenants
+      come and go over minutes). PEER_OUT also keeps each run ("runs", in order): run k of the peer and
+      copy k of the criterion binary are a pair, and the tables take the median of the pairs' ratios.
 """
 import json
 import os
@@ -59,13 +64,8 @@ def criterion_estimates():
 def run_criterion(binary, copies, out_path, bench_filter=None):
     runs = {}
     for k, path in enumerate(fresh_copies(binary, copies)):
-        crit = os.path.join(ROOT, "target", "criterion")
-        shutil.rmtree(crit, ignore_errors=True)
-        args = [path, "--bench"] + ([bench_filter] if bench_filter else [])
-        print(f"copy {k + 1}/{copies}: {' '.join(args[1:])}", file=sys.stderr, flush=True)
-        subprocess.run(args, cwd=ROOT, check=True, stdout=subprocess.DEVNULL)
-        for bench_id, ns in criterion_estimates().items():
-            runs.setdefault(bench_id, []).append(ns)
+        print(f"copy {k + 1}/{copies}: --bench {bench_filter or ''}", file=sys.stderr, flush=True)
+        run_one_criterion(path, bench_filter, runs)
     with open(out_path, "w") as f:
         json.dump({"copies": copies, "benches": runs}, f, indent=1, sort_keys=True)
         f.write("\n")
@@ -74,13 +74,44 @@ def run_criterion(binary, copies, out_path, bench_filter=None):
               file=sys.stderr)
 
 
+def run_one_command(path, args):
+    text = subprocess.run([path] + args, cwd=ROOT, check=True, capture_output=True, text=True).stdout
+    lines = [line for line in text.splitlines() if line.startswith("{")]
+    return json.loads(lines[-1])
+
+
+def run_one_criterion(path, bench_filter, runs):
+    crit = os.path.join(ROOT, "target", "criterion")
+    shutil.rmtree(crit, ignore_errors=True)
+    args = [path, "--bench"] + ([bench_filter] if bench_filter else [])
+    subprocess.run(args, cwd=ROOT, check=True, stdout=subprocess.DEVNULL)
+    for bench_id, ns in criterion_estimates().items():
+        runs.setdefault(bench_id, []).append(ns)
+
+
 def run_command(copies, out_path, binary, args):
     results = []
     for k, path in enumerate(fresh_copies(binary, copies)):
         print(f"copy {k + 1}/{copies}: {os.path.basename(binary)} {' '.join(args)}", file=sys.stderr, flush=True)
-        text = subprocess.run([path] + args, cwd=ROOT, check=True, capture_output=True, text=True).stdout
-        lines = [line for line in text.splitlines() if line.startswith("{")]
-        results.append(json.loads(lines[-1]))
+        results.append(run_one_command(path, args))
+    write_merged(results, copies, out_path)
+
+
+def run_pairs(copies, peer_out, crit_out, crit_binary, peer_binary, peer_args):
+    results, runs = [], {}
+    peers, crits = fresh_copies(peer_binary, copies), fresh_copies(crit_binary, copies)
+    for k in range(copies):
+        print(f"pair {k + 1}/{copies}: {os.path.basename(peer_binary)} {' '.join(peer_args)}; "
+              f"{os.path.basename(crit_binary)} --bench", file=sys.stderr, flush=True)
+        results.append(run_one_command(peers[k], peer_args))
+        run_one_criterion(crits[k], None, runs)
+    write_merged(results, copies, peer_out, keep_runs=True)
+    with open(crit_out, "w") as f:
+        json.dump({"copies": copies, "benches": runs}, f, indent=1, sort_keys=True)
+        f.write("\n")
+
+
+def write_merged(results, copies, out_path, keep_runs=False):
     merged = dict(results[0])
     for key, value in results[0].items():
         xs = [r.get(key) for r in results]
@@ -89,6 +120,8 @@ def run_command(copies, out_path, binary, args):
             merged[key] = statistics.median(xs)
             merged[f"{key}_range"] = [min(xs), max(xs)]
     merged["copies"] = copies
+    if keep_runs:
+        merged["runs"] = results
     with open(out_path, "w") as f:
         f.write(json.dumps(merged) + "\n")
 
@@ -96,6 +129,8 @@ def run_command(copies, out_path, binary, args):
 def main():
     if len(sys.argv) >= 5 and sys.argv[1] == "criterion":
         run_criterion(sys.argv[2], int(sys.argv[3]), sys.argv[4], sys.argv[5] if len(sys.argv) > 5 else None)
+    elif len(sys.argv) >= 8 and sys.argv[1] == "pairs" and sys.argv[6] == "--":
+        run_pairs(int(sys.argv[2]), sys.argv[3], sys.argv[4], sys.argv[5], sys.argv[7], sys.argv[8:])
     elif len(sys.argv) >= 5 and sys.argv[1] == "command":
         run_command(int(sys.argv[2]), sys.argv[3], sys.argv[4], sys.argv[5:])
     else:
