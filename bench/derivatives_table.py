@@ -7,7 +7,12 @@ import datetime, json, os, platform, re, statistics, subprocess, tempfile
 from benchmarks_md import ROOT, last_json, spread, write_section
 
 ROBOTS = [("z1", "models/peers/z1.urdf", False, "pinocchio_derivatives_z1.jsonl"),
-          ("anymal_b_floating", "models/peers/anymal_b.urdf", True, "pinocchio_derivatives_anymal.jsonl")]
+          ("anymal_b_floating", "models/peers/anymal_b.urdf", True, "pinocchio_derivatives_anymal.jsonl"),
+          ("talos_reduced_floating", "tests/data/erd/talos_reduced.urdf", True, "pinocchio_derivatives_talos.jsonl")]
+# GRBDA's robots with constraints (benches/derivatives_large.rs): no peer has these derivatives.
+CONSTRAINED = [("mini_cheetah", "tests/data/grbda/mini_cheetah.urdf", "floating base, 12 geared rotors (couplings)"),
+               ("mit_humanoid_leg", "tests/data/grbda/mit_humanoid_leg.urdf", "5 geared rotors (couplings)"),
+               ("six_bar", "tests/data/grbda/six_bar.urdf", "a closed loop")]
 CALLS = [("aba", "aba", "aba", None),
          ("aba_derivatives", "aba_derivatives", "computeABADerivatives", 0.25),
          ("rnea_derivatives", "rnea_derivatives", "computeRNEADerivatives", None)]
@@ -28,6 +33,10 @@ def main():
     with open(os.path.join(ROOT, "bench", "results", "derivatives_copies.json")) as f:
         runs = json.load(f)
     copies = runs["copies"]
+    large_path = os.path.join(ROOT, "bench", "results", "derivatives_large_copies.json")
+    if os.path.exists(large_path):
+        with open(large_path) as f:
+            runs["benches"].update(json.load(f)["benches"])
     lines = [
         "## Derivatives (issue 12)",
         "",
@@ -40,18 +49,34 @@ def main():
         "|---|---|---:|---:|---:|---:|---:|---:|---:|",
     ]
     for robot, urdf, floating, pin_file in ROBOTS:
-        pin = last_json(os.path.join(ROOT, "bench", "results", pin_file))
+        pin_path = os.path.join(ROOT, "bench", "results", pin_file)
+        if not os.path.exists(pin_path):
+            continue
+        pin = last_json(pin_path)
         for call, ours_name, theirs_label, target in CALLS:
             xs = runs["benches"].get(f"gen_{ours_name}/{robot}")
             theirs = pin.get(call)
             their_range = pin.get(f"{call}_range")
-            ops = operations(urdf, floating, ours_name)
             if not xs or not theirs:
                 continue
+            ops = operations(urdf, floating, ours_name)
             ours = statistics.median(xs)
             lines.append(
                 f"| {robot} | `{ours_name}` / `{theirs_label}` | {ops:,} | {ours:,.0f} | {spread(xs)} | {theirs:,.0f} | "
                 f"{spread(their_range) if their_range else ''} | {ours / theirs:.2f} | {f'≤ {target}' if target else ''} |")
+    lines += ["", "Closed loops and couplings (GRBDA's URDF+ files, benches/derivatives_large.rs, same session): "
+              "`aba_derivatives_independent`, the derivatives of the independent accelerations along the constraint "
+              "manifold, against the same model's generated `aba`; no peer computes these.", "",
+              "| robot | what | operations | `aba` (ns) | `aba_derivatives_independent` (ns) | range | × `aba` |",
+              "|---|---|---:|---:|---:|---:|---:|"]
+    for robot, urdf, what in CONSTRAINED:
+        base = runs["benches"].get(f"gen_aba/{robot}")
+        xs = runs["benches"].get(f"gen_aba_derivatives_independent/{robot}")
+        if not base or not xs:
+            continue
+        ops = operations(urdf, False, "aba_derivatives_independent")
+        a, d = statistics.median(base), statistics.median(xs)
+        lines.append(f"| {robot} | {what} | {ops:,} | {a:,.0f} | {d:,.0f} | {spread(xs)} | {d / a:.1f} |")
     lines += ["", "Forward mode costs each direction a pass of the algorithm's tangent arithmetic: on the floating "
               "ANYmal B the 18 directions of q take 19.6k operations of `aba_derivatives`, those of v 20.1k and those "
               "of τ 8.0k (beside the value pass's 4.4k); of `rnea_derivatives` 7.0k, 11.8k and 4.4k (measured by "
