@@ -1,0 +1,31 @@
+#!/usr/bin/env python3
+"""Writes the section "Compile time against model size" of BENCHMARKS.md from bench/results/compile_time.jsonl
+(bench/compile_time.sh, one session)."""
+import datetime, json, os, platform
+
+from benchmarks_md import ROOT, write_section
+
+
+def main():
+    with open(os.path.join(ROOT, "bench", "results", "compile_time.jsonl")) as f:
+        rows = [json.loads(line) for line in f if line.startswith("{")]
+    lines = [
+        "## Compile time against model size (issue 13)",
+        "",
+        f"The standalone crate of `embedyn generate MODEL [--floating]` with the default functions (`kinematics`, "
+        f"`aba`, `rnea`, `crba`, each in f64 and f32), built with `cargo build --release` after its dependency "
+        f"(libm) was built: the time is the generated code's alone ({datetime.date.today()}, {platform.machine()}, "
+        f"{os.cpu_count()} cores, `bench/compile_time.sh`; wall and user seconds and rustc's peak memory from GNU "
+        "time). Issue 13's target: g1_29dof and talos_reduced (floating) under 10 s.",
+        "",
+        "| model | nv | source (KB) | KB per DoF | wall (s) | user (s) | s per DoF (wall) | rustc peak (MB) |",
+        "|---|---:|---:|---:|---:|---:|---:|---:|",
+    ]
+    for r in sorted(rows, key=lambda r: r["nv"]):
+        kb = r["source_bytes"] / 1024
+        lines.append(f"| {r['model']} | {r['nv']} | {kb:,.0f} | {kb / r['nv']:,.1f} | {r['wall_s']:.1f} | "
+                     f"{r['user_s']:.1f} | {r['wall_s'] / r['nv']:.2f} | {r['rustc_peak_mb']:,} |")
+    write_section("\n".join(lines) + "\n")
+
+
+main()
