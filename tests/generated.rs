@@ -68,10 +68,12 @@ mod moon_arm {
 }
 mod four_bar_aba_only {
     // Exactly `aba` (no completion, embedding or XᵀMX): what a firmware loop that integrates needs.
+    // Two `only(…)` lists add up (as repeated `--only` does), so this is `only(aba, kinematics)`.
     embedyn::robot!(
         "models/loops/four_bar_internal.urdf",
         f64_only,
-        only(aba, kinematics)
+        only(aba),
+        only(kinematics)
     );
 }
 mod singular_four_bar {

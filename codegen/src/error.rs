@@ -641,7 +641,7 @@ pub enum LoadErrorKind {
         function: Algorithm,
     },
     /// A link named twice in `wrenches(…)` or `frames(…)`.
-    #[error("the link \"{}\" is named twice in {option} (each link once: one row of `f_ext`, one frame function)", crate::names::shown(.link))]
+    #[error("the link \"{}\" is named twice in {option} (each link once: {})", crate::names::shown(.link), if option.contains("frames") { "one frame function per link" } else { "one row of `f_ext` per link" })]
     LinkNamedTwice {
         /// The link.
         link: String,

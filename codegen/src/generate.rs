@@ -1457,6 +1457,16 @@ mod tests {
         .unwrap_err()
         .to_string();
         assert!(e.contains("the link \"FL_foot\" is named twice"), "{e}");
+        assert!(e.contains("one row of `f_ext` per link"), "{e}");
+        // In frames(…) the reason is the frame function (an attacker's trial: it said `f_ext`).
+        let e = generate_source(&loaded, &with_links(&[], &["trunk", "trunk"], None))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("the link \"trunk\" is named twice"), "{e}");
+        assert!(
+            e.contains("one frame function per link") && !e.contains("f_ext"),
+            "{e}"
+        );
         // Links for functions `only(…)` leaves out are an error, not silently ignored.
         for (wrenches, frames, missing) in [
             (

@@ -180,7 +180,6 @@ impl Parse for Args {
                 "rotors",
                 "max_compile_memory",
                 "lanes",
-                "only",
             ];
             let name = key.to_string();
             if single.contains(&name.as_str()) || (name == "gravity" && input.peek(Token![=])) {
@@ -247,6 +246,12 @@ impl Parse for Args {
                     let content;
                     syn::parenthesized!(content in input);
                     let names = content.parse_terminated(Ident::parse, Token![,])?;
+                    if names.is_empty() {
+                        return Err(syn::Error::new(
+                            key.span(),
+                            "only(…) names no function: list the functions to generate, e.g. only(aba, rnea)",
+                        ));
+                    }
                     let list = names
                         .iter()
                         .map(|name| {
@@ -254,7 +259,15 @@ impl Parse for Args {
                                 .map_err(|e| syn::Error::new(name.span(), e))
                         })
                         .collect::<syn::Result<Vec<_>>>()?;
-                    args.only = Some(list);
+                    // Repeated `only(…)` lists add up, as repeated `--only` does on the command line.
+                    args.only.get_or_insert_with(Vec::new).extend(list);
+                }
+                // `minv = 3`: a function's name with a value.
+                name if on_request().any(|a| a.name() == name) => {
+                    return Err(syn::Error::new(
+                        key.span(),
+                        format!("`{name}` asks for the function of that name and takes no value: write `{name}` alone"),
+                    ));
                 }
                 other => {
                     let requested: Vec<&str> = on_request().map(|a| a.name()).collect();

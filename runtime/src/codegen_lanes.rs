@@ -163,6 +163,7 @@ macro_rules! sincos_simd {
                 const PIO2_1: f64 = 1.570_796_326_734_125_6e0;
                 const PIO2_2: f64 = 6.077_100_506_303_966e-11;
                 const PIO2_3: f64 = 2.022_266_248_711_166_5e-21;
+                const PIO2_3T: f64 = 8.478_427_660_368_899_569_97e-32;
                 const SHIFTER: f64 = 6_755_399_441_055_744.0;
                 const S1: f64 = -1.666_666_666_666_663_2e-1;
                 const S2: f64 = 8.333_333_333_322_49e-3;
@@ -188,7 +189,8 @@ macro_rules! sincos_simd {
                     let shifted = x * c(TWO_OVER_PI) + c(SHIFTER);
                     quadrant[m] = bits(shifted);
                     let k = shifted - c(SHIFTER);
-                    reduced[m] = ((x - k * c(PIO2_1)) - k * c(PIO2_2)) - k * c(PIO2_3);
+                    reduced[m] =
+                        (((x - k * c(PIO2_1)) - k * c(PIO2_2)) - k * c(PIO2_3)) - k * c(PIO2_3T);
                 }
                 for m in 0..M {
                     let r = reduced[m];
