@@ -68,12 +68,14 @@ def main():
     if plain and ext:
         lines += ["", f"Generated `aba_ext` with four foot wrenches takes {ext / plain:.2f}× the time of the generated "
                   "`aba` (target ≤ 1.2×): each wrench is 18 operations on its body's bias force, links without one cost nothing."]
-    lines += ["", "Run to run on this shared machine: in five earlier sessions on a slower host (before the "
-              "medians over copies and before the batched sine and cosine below), foot Jacobian + J̇v 0.05–0.07×, "
-              "`aba_ext`/`aba` 1.02–1.17×, A_g 0.27–0.46× `ccrba` (Pinocchio's `ccrba` itself moved between 1.4 and "
-              "2.3 µs); in this session, on an AMD EPYC host, the same A_g code ran 0.26–0.27× `ccrba` (standalone crate, "
-              "minimum of 30 batches, against Pinocchio's median) and 0.24× with the batched sine and cosine."]
-    lines += ["", "What got A_g to issue 11's 0.25× of `ccrba`: splitting Ȧ_g v into `centroidal_bias` "
+    lines += ["", "Run to run on this shared machine: in five earlier sessions on a slower host (before the medians over "
+              "copies and before the sine and cosine passes below), foot Jacobian + J̇v 0.05–0.07×, `aba_ext`/`aba` "
+              "1.02–1.17×, A_g 0.27–0.46× `ccrba` (Pinocchio's `ccrba` itself moved between 1.4 and 2.3 µs). On "
+              "2026-12-02 on an AMD EPYC host, four runs of this script: A_g 0.20× (5 copies a side, one side after "
+              "the other), 0.25× (likewise), 0.25× (7 interleaved pairs, pairs 0.23–0.34) and 0.31× (9 pairs, "
+              "0.26–0.49, a run in which both sides were 15–25 % slower than an hour before). Issue 11's 0.25× is "
+              "met by some runs and not others: not met with the margin this machine's noise asks for."]
+    lines += ["", "What got A_g here: splitting Ȧ_g v into `centroidal_bias` "
               "(1.93 → 0.67 µs on the slower host); composite inertias in each body's frame (the CRBA's, where the "
               "joint placements keep the transforms sparse) and one com-centred transform per column (1,958 "
               "operations); the free flyer's six columns in closed form about the centre of mass, (m R, R I_c) and "
@@ -81,13 +83,20 @@ def main():
               "coordinate axis in the double angle (1,827; the same change takes `aba` from 4,610 to 4,446 operations "
               "and `crba` from 1,043 to 1,011 on this robot); and computing the twelve joints' sines and cosines in "
               "three passes over all the angles (range reduction, polynomials, quadrant) instead of one kernel after "
-              "another, so that the angles' dependency chains overlap: 49 → 34 ns for the twelve, the same bits, and "
-              "every generated function that has joint angles gains it. Wensing and Orin's A_G = ᴳX₁* H₁ (the mass "
-              "matrix's base rows, then one transform per column) would count more here: carrying each column to the "
-              "base costs about as much as the world placements it saves. Of the 1,804 operations 644 are the "
-              "composite inertias (236 of them the four legs' moved into the base), 377 the world placements, 591 "
-              "the columns (38 per leg joint, 110 for the free flyer's six, 25 for the centre of mass) and 192 "
-              "h_g = A_g v."]
+              "another, so that the angles' dependency chains overlap: 49 → 34 ns for the twelve, the same bits, "
+              "`centroidal` 247 → 229 ns (standalone crate, minimum of 30 batches), and every generated function "
+              "with joint angles gains it. Of the 1,804 operations 644 are the composite inertias (236 of them the "
+              "four legs' moved into the base), 377 the world placements, 591 the columns (38 per leg joint, 110 "
+              "for the free flyer's six, 25 for the centre of mass) and 192 h_g = A_g v. Counted and not better: "
+              "Wensing and Orin's A_G = ᴳX₁* H₁ (carrying each column to the base costs about what the world "
+              "placements save) and the columns in the base frame rotated to the world at the end (42 more "
+              "operations per column than the 38 it saves on placements). The code already runs at about 0.11 ns "
+              "per operation (4,257 instructions, a third of them stack traffic; `aba` runs at 0.23). Tried and "
+              "within 1 %: the trace order instead of the list schedule, a depth-first order from the outputs, an "
+              "AVX2 sine/cosine batch chosen at run time by CPUID (35 → 32 ns alone, nothing inside `centroidal`: "
+              "the call stops the overlap with the base's work). With `-C target-feature=+avx2` the same code takes "
+              "184 ns against 220 (three-operand instructions, fewer copies), which Pinocchio's pip build cannot "
+              "use either."]
     write_section("\n".join(lines) + "\n")
 
 
