@@ -10,16 +10,7 @@ cd "$(dirname "$0")/.."
 copies="${1:-5}"
 mkdir -p bench/results target
 eval "$(bench/peers/build_pinocchio.sh)"
-if ! cargo bench --bench contact --no-run --message-format=json > target/cargo_bench_contact.json 2> target/cargo_bench_contact.log; then
-  tail -20 target/cargo_bench_contact.log >&2
-  echo "cargo bench failed (log: target/cargo_bench_contact.log); BENCHMARKS.md not updated" >&2
-  exit 1
-fi
-bin=$(python3 -c 'import json,sys
-for line in open(sys.argv[1]):
-    m = json.loads(line)
-    if m.get("reason") == "compiler-artifact" and m.get("target", {}).get("name") == "contact" and m.get("executable"):
-        print(m["executable"])' target/cargo_bench_contact.json)
+bin=$(bench/bench_binary.sh contact)
 # Interleaved: a copy of Pinocchio's binary, then a copy of ours, COPIES times (bench/placement.py pairs).
 python3 bench/placement.py pairs "$copies" bench/results/pinocchio_contact.jsonl bench/results/contact_copies.json \
   "$bin" -- "$PINOCCHIO_BENCH" \

@@ -22,18 +22,7 @@ python3 bench/placement.py command "$copies" bench/results/pinocchio_parallel_an
   --states 1024 --floating models/peers/anymal_b.urdf
 # The bench binary of one build: `lanes_binary TARGET_DIR RUSTFLAGS`.
 lanes_binary() {
-  local log="target/cargo_bench_lanes.log"
-  if ! CARGO_TARGET_DIR="$1" RUSTFLAGS="$2" cargo bench --bench lanes --no-run --message-format=json \
-      > target/cargo_bench_lanes.json 2> "$log"; then
-    tail -20 "$log" >&2
-    echo "cargo bench failed (log: $log); BENCHMARKS.md not updated" >&2
-    exit 1
-  fi
-  python3 -c 'import json,sys
-for line in open(sys.argv[1]):
-    m = json.loads(line)
-    if m.get("reason") == "compiler-artifact" and m.get("target", {}).get("name") == "lanes" and m.get("executable"):
-        print(m["executable"])' target/cargo_bench_lanes.json
+  CARGO_TARGET_DIR="$1" RUSTFLAGS="$2" bench/bench_binary.sh lanes
 }
 baseline=$(lanes_binary target "")
 python3 bench/placement.py criterion "$baseline" "$copies" bench/results/lanes_baseline.json

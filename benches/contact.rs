@@ -29,15 +29,7 @@ use anymal::{NQ, NV};
 fn all(c: &mut Criterion) {
     let model = load_model::<f64>("models/peers/anymal_b.urdf", true);
     let mut rng = Rng::new(42);
-    let q: Vec<[f64; NQ]> = (0..64)
-        .map(|_| rng.configuration(&model).try_into().unwrap())
-        .collect();
-    let v: Vec<[f64; NV]> = (0..64)
-        .map(|_| rng.vec(NV, -1.0, 1.0).try_into().unwrap())
-        .collect();
-    let tau: Vec<[f64; NV]> = (0..64)
-        .map(|_| rng.vec(NV, -1.0, 1.0).try_into().unwrap())
-        .collect();
+    let (q, v, tau) = rng.states::<_, NQ, NV>(&model, 64);
     let f_ext: Vec<[[f64; 6]; 4]> = (0..64)
         .map(|_| {
             let mut w = [[0.0; 6]; 4];

@@ -14,6 +14,10 @@ use std::time::Duration;
 mod common;
 use common::{load_model, Rng};
 
+#[path = "shared/derivatives.rs"]
+#[macro_use]
+mod derivatives_macro;
+
 mod z1 {
     embedyn::robot!(
         "models/peers/z1.urdf",
@@ -28,64 +32,6 @@ mod anymal {
         f64_only,
         only(aba, aba_derivatives, rnea_derivatives)
     );
-}
-
-macro_rules! bench_robot {
-    ($c:expr, $robot:ident, $name:literal, $path:literal, $floating:expr) => {{
-        const NQ: usize = $robot::NQ;
-        const NV: usize = $robot::NV;
-        let model = load_model::<f64>($path, $floating);
-        let mut rng = Rng::new(7);
-        let q: Vec<[f64; NQ]> = (0..64)
-            .map(|_| rng.configuration(&model).try_into().unwrap())
-            .collect();
-        let v: Vec<[f64; NV]> = (0..64)
-            .map(|_| rng.vec(NV, -1.0, 1.0).try_into().unwrap())
-            .collect();
-        let u: Vec<[f64; NV]> = (0..64)
-            .map(|_| rng.vec(NV, -1.0, 1.0).try_into().unwrap())
-            .collect();
-        let mut k = 0usize;
-        let mut out = [0.0; NV];
-        let (mut a, mut b, mut m) = ([[0.0; NV]; NV], [[0.0; NV]; NV], [[0.0; NV]; NV]);
-        $c.bench_function(concat!("gen_aba/", $name), |bench| {
-            bench.iter(|| {
-                k = (k + 1) & 63;
-                $robot::f64::aba(black_box(&q[k]), &v[k], &u[k], &mut out);
-                black_box(out[0])
-            })
-        });
-        $c.bench_function(concat!("gen_aba_derivatives/", $name), |bench| {
-            bench.iter(|| {
-                k = (k + 1) & 63;
-                $robot::f64::aba_derivatives(
-                    black_box(&q[k]),
-                    &v[k],
-                    &u[k],
-                    &mut out,
-                    &mut a,
-                    &mut b,
-                    &mut m,
-                );
-                black_box(a[0][0] + b[0][0] + m[0][0])
-            })
-        });
-        $c.bench_function(concat!("gen_rnea_derivatives/", $name), |bench| {
-            bench.iter(|| {
-                k = (k + 1) & 63;
-                $robot::f64::rnea_derivatives(
-                    black_box(&q[k]),
-                    &v[k],
-                    &u[k],
-                    &mut out,
-                    &mut a,
-                    &mut b,
-                    &mut m,
-                );
-                black_box(a[0][0] + b[0][0] + m[0][0])
-            })
-        });
-    }};
 }
 
 fn all(c: &mut Criterion) {

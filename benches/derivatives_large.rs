@@ -18,6 +18,10 @@ use std::time::Duration;
 mod common;
 use common::{load_model, Rng};
 
+#[path = "shared/derivatives.rs"]
+#[macro_use]
+mod derivatives_macro;
+
 mod talos {
     embedyn::robot!(
         "tests/data/erd/talos_reduced.urdf",
@@ -46,64 +50,6 @@ mod six_bar {
         f64_only,
         only(aba, aba_derivatives_independent)
     );
-}
-
-fn talos(c: &mut Criterion) {
-    const NQ: usize = talos::NQ;
-    const NV: usize = talos::NV;
-    let model = load_model::<f64>("tests/data/erd/talos_reduced.urdf", true);
-    let mut rng = Rng::new(7);
-    let q: Vec<[f64; NQ]> = (0..64)
-        .map(|_| rng.configuration(&model).try_into().unwrap())
-        .collect();
-    let v: Vec<[f64; NV]> = (0..64)
-        .map(|_| rng.vec(NV, -1.0, 1.0).try_into().unwrap())
-        .collect();
-    let u: Vec<[f64; NV]> = (0..64)
-        .map(|_| rng.vec(NV, -1.0, 1.0).try_into().unwrap())
-        .collect();
-    let mut k = 0usize;
-    let mut out = [0.0; NV];
-    let mut a = Box::new([[0.0; NV]; NV]);
-    let mut b = Box::new([[0.0; NV]; NV]);
-    let mut m = Box::new([[0.0; NV]; NV]);
-    c.bench_function("gen_aba/talos_reduced_floating", |bench| {
-        bench.iter(|| {
-            k = (k + 1) & 63;
-            talos::f64::aba(black_box(&q[k]), &v[k], &u[k], &mut out);
-            black_box(out[0])
-        })
-    });
-    c.bench_function("gen_aba_derivatives/talos_reduced_floating", |bench| {
-        bench.iter(|| {
-            k = (k + 1) & 63;
-            talos::f64::aba_derivatives(
-                black_box(&q[k]),
-                &v[k],
-                &u[k],
-                &mut out,
-                &mut a,
-                &mut b,
-                &mut m,
-            );
-            black_box(a[0][0] + b[0][0] + m[0][0])
-        })
-    });
-    c.bench_function("gen_rnea_derivatives/talos_reduced_floating", |bench| {
-        bench.iter(|| {
-            k = (k + 1) & 63;
-            talos::f64::rnea_derivatives(
-                black_box(&q[k]),
-                &v[k],
-                &u[k],
-                &mut out,
-                &mut a,
-                &mut b,
-                &mut m,
-            );
-            black_box(a[0][0] + b[0][0] + m[0][0])
-        })
-    });
 }
 
 /// `aba` and `aba_derivatives_independent` of a model with constraints, at 64 states on the manifold
@@ -164,7 +110,13 @@ macro_rules! bench_constrained {
 }
 
 fn all(c: &mut Criterion) {
-    talos(c);
+    bench_robot!(
+        c,
+        talos,
+        "talos_reduced_floating",
+        "tests/data/erd/talos_reduced.urdf",
+        true
+    );
     bench_constrained!(
         c,
         mini_cheetah,

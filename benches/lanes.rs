@@ -44,15 +44,7 @@ macro_rules! bench_robot {
         use $m::{NQ, NV};
         let model = load_model::<f64>($path, $floating);
         let mut rng = Rng::new(42);
-        let q: Vec<[f64; NQ]> = (0..64)
-            .map(|_| rng.configuration(&model).try_into().unwrap())
-            .collect();
-        let v: Vec<[f64; NV]> = (0..64)
-            .map(|_| rng.vec(NV, -1.0, 1.0).try_into().unwrap())
-            .collect();
-        let u: Vec<[f64; NV]> = (0..64)
-            .map(|_| rng.vec(NV, -1.0, 1.0).try_into().unwrap())
-            .collect();
+        let (q, v, u) = rng.states::<_, NQ, NV>(&model, 64);
         // Sixteen packs of four states.
         let ql: Vec<_> = q.chunks(4).map(pack).collect();
         let vl: Vec<_> = v.chunks(4).map(pack).collect();

@@ -44,6 +44,52 @@ fn bits(x: &[f64]) -> Vec<u64> {
     x.iter().map(|v| v.to_bits()).collect()
 }
 
+type AnymalStates = (
+    Vec<[f64; anymal::NQ]>,
+    Vec<[f64; anymal::NV]>,
+    Vec<[f64; anymal::NV]>,
+);
+
+/// `n` random states of the floating ANYmal B: `(q, v, tau)`, joints within their limits.
+fn anymal_states(n: usize, seed: u64) -> AnymalStates {
+    let model: Model<f64> = load_model("tests/data/pinocchio/anymal_b.urdf", true);
+    let mut rng = SplitMix64::new(seed);
+    let mut noise = Rng::new(seed + 1);
+    let mut q = vec![[0.0; anymal::NQ]; n];
+    let mut v = vec![[0.0; anymal::NV]; n];
+    let mut u = vec![[0.0; anymal::NV]; n];
+    for k in 0..n {
+        random_configuration_within_limits(&model, &mut rng, &mut q[k]).unwrap();
+        v[k].copy_from_slice(&noise.vec(anymal::NV, -2.0, 2.0));
+        u[k].copy_from_slice(&noise.vec(anymal::NV, -20.0, 20.0));
+    }
+    (q, v, u)
+}
+
+type FourBarStates = (
+    Vec<[f64; four_bar::NQ]>,
+    Vec<[f64; four_bar::NV]>,
+    Vec<[f64; four_bar::NV]>,
+);
+
+/// `n` states of the four-bar on its constraint manifold, the crank from −1 rad in steps of `step`.
+fn four_bar_states(n: usize, step: f64, noise: &mut Rng) -> FourBarStates {
+    let model: Model<f64> = load_model("models/loops/four_bar_internal.urdf", false);
+    let mut ws = embedyn::Workspace::new(&model);
+    let (mut q, mut v, mut u) = (Vec::new(), Vec::new(), Vec::new());
+    for k in 0..n {
+        let mut state = model.neutral_configuration();
+        state[0] = -1.0 + step * k as f64;
+        embedyn::constraints::complete_configuration(&model, &mut ws, &mut state).unwrap();
+        let mut vel = noise.vec(four_bar::NV, -1.0, 1.0);
+        embedyn::constraints::complete_velocity(&model, &mut ws, &state, &mut vel).unwrap();
+        q.push(<[f64; four_bar::NQ]>::try_from(state).unwrap());
+        v.push(<[f64; four_bar::NV]>::try_from(vel).unwrap());
+        u.push(<[f64; four_bar::NV]>::try_from(noise.vec(four_bar::NV, -1.0, 1.0)).unwrap());
+    }
+    (q, v, u)
+}
+
 #[test]
 fn lane_functions_equal_the_scalar_ones_bit_for_bit_on_a_floating_quadruped() {
     const NQ: usize = anymal::NQ;
@@ -162,20 +208,10 @@ fn f32_lane_functions_equal_the_scalar_ones() {
 /// slices of different lengths refused (false, nothing written).
 #[test]
 fn batch_functions_equal_the_scalar_ones_for_any_number_of_states() {
-    const NQ: usize = anymal::NQ;
     const NV: usize = anymal::NV;
-    let model: Model<f64> = load_model("tests/data/pinocchio/anymal_b.urdf", true);
-    let mut rng = SplitMix64::new(21);
-    let mut noise = Rng::new(22);
     let n = 7;
-    let mut q = vec![[0.0; NQ]; n];
-    let mut v = vec![[0.0; NV]; n];
-    let mut u = vec![[0.0; NV]; n];
-    for k in 0..n {
-        random_configuration_within_limits(&model, &mut rng, &mut q[k]).unwrap();
-        v[k].copy_from_slice(&noise.vec(NV, -2.0, 2.0));
-        u[k].copy_from_slice(&noise.vec(NV, -20.0, 20.0));
-    }
+    let (q, v, u) = anymal_states(n, 21);
+    let mut noise = Rng::new(22);
     let mut qdd = vec![[f64::NAN; NV]; n];
     assert!(anymal::f64x4::aba_batch(&q, &v, &u, &mut qdd));
     let mut m = vec![[[f64::NAN; NV]; NV]; n];
@@ -198,19 +234,7 @@ fn batch_functions_equal_the_scalar_ones_for_any_number_of_states() {
     assert!(anymal::f64x4::aba_batch(&[], &[], &[], &mut []));
 
     // A loop model: the measure per state.
-    let model: Model<f64> = load_model("models/loops/four_bar_internal.urdf", false);
-    let mut ws = embedyn::Workspace::new(&model);
-    let (mut q, mut v, mut u) = (Vec::new(), Vec::new(), Vec::new());
-    for k in 0..5 {
-        let mut state = model.neutral_configuration();
-        state[0] = -1.0 + 0.5 * k as f64;
-        embedyn::constraints::complete_configuration(&model, &mut ws, &mut state).unwrap();
-        let mut vel = noise.vec(four_bar::NV, -1.0, 1.0);
-        embedyn::constraints::complete_velocity(&model, &mut ws, &state, &mut vel).unwrap();
-        q.push(<[f64; four_bar::NQ]>::try_from(state).unwrap());
-        v.push(<[f64; four_bar::NV]>::try_from(vel).unwrap());
-        u.push(<[f64; four_bar::NV]>::try_from(noise.vec(four_bar::NV, -1.0, 1.0)).unwrap());
-    }
+    let (q, v, u) = four_bar_states(5, 0.5, &mut noise);
     let mut qdd = vec![[0.0; four_bar::NV]; 5];
     let mut measure = vec![0.0; 5];
     assert!(four_bar::f64x4::aba_batch(
@@ -233,20 +257,10 @@ fn batch_functions_equal_the_scalar_ones_for_any_number_of_states() {
 /// inside its lane chunk) is bit-identical to the scalar call, the loop model's measures included.
 #[test]
 fn threads_over_a_batch_equal_the_scalar_calls() {
-    const NQ: usize = anymal::NQ;
     const NV: usize = anymal::NV;
-    let model: Model<f64> = load_model("tests/data/pinocchio/anymal_b.urdf", true);
-    let mut rng = SplitMix64::new(31);
-    let mut noise = Rng::new(32);
     let n = 203;
-    let mut q = vec![[0.0; NQ]; n];
-    let mut v = vec![[0.0; NV]; n];
-    let mut u = vec![[0.0; NV]; n];
-    for k in 0..n {
-        random_configuration_within_limits(&model, &mut rng, &mut q[k]).unwrap();
-        v[k].copy_from_slice(&noise.vec(NV, -2.0, 2.0));
-        u[k].copy_from_slice(&noise.vec(NV, -20.0, 20.0));
-    }
+    let (q, v, u) = anymal_states(n, 31);
+    let mut noise = Rng::new(32);
     let mut qdd = vec![[f64::NAN; NV]; n];
     let ok = embedyn::parallel::par_batch(
         (&q[..], &v[..], &u[..], &mut qdd[..]),
@@ -271,19 +285,7 @@ fn threads_over_a_batch_equal_the_scalar_calls() {
     assert!(short.iter().flatten().all(|x| x.is_nan()));
 
     // A loop model: the measure slice is cut with the others.
-    let model: Model<f64> = load_model("models/loops/four_bar_internal.urdf", false);
-    let mut ws = embedyn::Workspace::new(&model);
-    let (mut q, mut v, mut u) = (Vec::new(), Vec::new(), Vec::new());
-    for k in 0..37 {
-        let mut state = model.neutral_configuration();
-        state[0] = -1.0 + 0.05 * k as f64;
-        embedyn::constraints::complete_configuration(&model, &mut ws, &mut state).unwrap();
-        let mut vel = noise.vec(four_bar::NV, -1.0, 1.0);
-        embedyn::constraints::complete_velocity(&model, &mut ws, &state, &mut vel).unwrap();
-        q.push(<[f64; four_bar::NQ]>::try_from(state).unwrap());
-        v.push(<[f64; four_bar::NV]>::try_from(vel).unwrap());
-        u.push(<[f64; four_bar::NV]>::try_from(noise.vec(four_bar::NV, -1.0, 1.0)).unwrap());
-    }
+    let (q, v, u) = four_bar_states(37, 0.05, &mut noise);
     let mut qdd = vec![[0.0; four_bar::NV]; 37];
     let mut measure = vec![0.0; 37];
     let slices = (&q[..], &v[..], &u[..], &mut qdd[..], &mut measure[..]);

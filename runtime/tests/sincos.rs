@@ -129,7 +129,6 @@ fn batch_is_the_single_call_bit_for_bit() {
 /// boundary k π/2 with its neighbours one ulp away.
 #[test]
 fn batch_equals_the_kernel_over_dense_sweeps() {
-    use embedyn_runtime::codegen_support::sincos_batch;
     let mut angles = Vec::new();
     let mut x = 1e-12f64;
     while x < 8.2e5 {
@@ -145,32 +144,24 @@ fn batch_equals_the_kernel_over_dense_sweeps() {
             f64::from_bits(b.to_bits().saturating_sub(1)),
         ]);
     }
-    for chunk in angles.chunks_exact(12) {
-        let batch: [f64; 12] = chunk.try_into().unwrap();
-        let (s, c) = sincos_batch(batch);
-        for k in 0..12 {
-            let (es, ec) = sincos_f64(batch[k]);
-            assert_eq!(
-                (s[k].to_bits(), c[k].to_bits()),
-                (es.to_bits(), ec.to_bits()),
-                "angle {:e}",
-                batch[k]
-            );
+    fn check_batches<const N: usize>(angles: &[f64]) {
+        use embedyn_runtime::codegen_support::sincos_batch;
+        for chunk in angles.chunks_exact(N) {
+            let batch: [f64; N] = chunk.try_into().unwrap();
+            let (s, c) = sincos_batch(batch);
+            for k in 0..N {
+                let (es, ec) = sincos_f64(batch[k]);
+                assert_eq!(
+                    (s[k].to_bits(), c[k].to_bits()),
+                    (es.to_bits(), ec.to_bits()),
+                    "angle {:e}",
+                    batch[k]
+                );
+            }
         }
     }
-    for chunk in angles.chunks_exact(5) {
-        let batch: [f64; 5] = chunk.try_into().unwrap();
-        let (s, c) = sincos_batch(batch);
-        for k in 0..5 {
-            let (es, ec) = sincos_f64(batch[k]);
-            assert_eq!(
-                (s[k].to_bits(), c[k].to_bits()),
-                (es.to_bits(), ec.to_bits()),
-                "angle {:e}",
-                batch[k]
-            );
-        }
-    }
+    check_batches::<12>(&angles);
+    check_batches::<5>(&angles);
 }
 
 /// The lane types' batch (the scalar kernel on whole SIMD values for f64 lanes, per lane for f32) equals

@@ -74,6 +74,25 @@ impl Rng {
         }
         q
     }
+    /// `n` random states `(q, v, u)` of fixed size for generated functions: configurations as
+    /// [`Rng::configuration`], `v` and `u` uniform in [−1, 1) (the benchmarks' states).
+    #[allow(dead_code, clippy::type_complexity)]
+    pub fn states<T: Real, const NQ: usize, const NV: usize>(
+        &mut self,
+        model: &Model<T>,
+        n: usize,
+    ) -> (Vec<[f64; NQ]>, Vec<[f64; NV]>, Vec<[f64; NV]>) {
+        let q = (0..n)
+            .map(|_| self.configuration(model).try_into().unwrap())
+            .collect();
+        let v = (0..n)
+            .map(|_| self.vec(NV, -1.0, 1.0).try_into().unwrap())
+            .collect();
+        let u = (0..n)
+            .map(|_| self.vec(NV, -1.0, 1.0).try_into().unwrap())
+            .collect();
+        (q, v, u)
+    }
 }
 
 pub fn cast<T: Real>(x: &[f64]) -> Vec<T> {
