@@ -90,6 +90,35 @@ fn four_bar_states(n: usize, step: f64, noise: &mut Rng) -> FourBarStates {
     (q, v, u)
 }
 
+/// Each state's `qdd` from a batch equals the scalar `aba`'s, bit for bit.
+fn assert_anymal_aba_per_state(states: &AnymalStates, qdd: &[[f64; anymal::NV]]) {
+    let (q, v, u) = states;
+    for k in 0..q.len() {
+        let mut expected = [0.0; anymal::NV];
+        anymal::f64::aba(&q[k], &v[k], &u[k], &mut expected);
+        assert_eq!(bits(&qdd[k]), bits(&expected), "aba, state {k}");
+    }
+}
+
+/// Each four-bar state's `qdd` and measure from a batch equal the scalar `aba`'s, bit for bit.
+fn assert_four_bar_aba_per_state(
+    states: &FourBarStates,
+    qdd: &[[f64; four_bar::NV]],
+    measure: &[f64],
+) {
+    let (q, v, u) = states;
+    for k in 0..q.len() {
+        let mut expected = [0.0; four_bar::NV];
+        let c = four_bar::f64::aba(&q[k], &v[k], &u[k], &mut expected);
+        assert_eq!(bits(&qdd[k]), bits(&expected), "four-bar, state {k}");
+        assert_eq!(
+            measure[k].to_bits(),
+            c.to_bits(),
+            "four-bar measure, state {k}"
+        );
+    }
+}
+
 #[test]
 fn lane_functions_equal_the_scalar_ones_bit_for_bit_on_a_floating_quadruped() {
     const NQ: usize = anymal::NQ;
@@ -210,16 +239,15 @@ fn f32_lane_functions_equal_the_scalar_ones() {
 fn batch_functions_equal_the_scalar_ones_for_any_number_of_states() {
     const NV: usize = anymal::NV;
     let n = 7;
-    let (q, v, u) = anymal_states(n, 21);
+    let states = anymal_states(n, 21);
+    let (q, v, u) = &states;
     let mut noise = Rng::new(22);
     let mut qdd = vec![[f64::NAN; NV]; n];
-    assert!(anymal::f64x4::aba_batch(&q, &v, &u, &mut qdd));
+    assert!(anymal::f64x4::aba_batch(q, v, u, &mut qdd));
+    assert_anymal_aba_per_state(&states, &qdd);
     let mut m = vec![[[f64::NAN; NV]; NV]; n];
-    assert!(anymal::f64x4::crba_batch(&q, &mut m));
+    assert!(anymal::f64x4::crba_batch(q, &mut m));
     for k in 0..n {
-        let mut expected = [0.0; NV];
-        anymal::f64::aba(&q[k], &v[k], &u[k], &mut expected);
-        assert_eq!(bits(&qdd[k]), bits(&expected), "aba, state {k}");
         let mut mass = [[0.0; NV]; NV];
         anymal::f64::crba(&q[k], &mut mass);
         for r in 0..NV {
@@ -228,28 +256,18 @@ fn batch_functions_equal_the_scalar_ones_for_any_number_of_states() {
     }
     // Different lengths: refused, nothing written.
     let mut short = vec![[f64::NAN; NV]; n - 1];
-    assert!(!anymal::f64x4::aba_batch(&q, &v, &u, &mut short));
+    assert!(!anymal::f64x4::aba_batch(q, v, u, &mut short));
     assert!(short.iter().flatten().all(|x| x.is_nan()));
     // No states: nothing to do.
     assert!(anymal::f64x4::aba_batch(&[], &[], &[], &mut []));
 
     // A loop model: the measure per state.
-    let (q, v, u) = four_bar_states(5, 0.5, &mut noise);
+    let loops = four_bar_states(5, 0.5, &mut noise);
+    let (q, v, u) = &loops;
     let mut qdd = vec![[0.0; four_bar::NV]; 5];
     let mut measure = vec![0.0; 5];
-    assert!(four_bar::f64x4::aba_batch(
-        &q,
-        &v,
-        &u,
-        &mut qdd,
-        &mut measure
-    ));
-    for k in 0..5 {
-        let mut expected = [0.0; four_bar::NV];
-        let c = four_bar::f64::aba(&q[k], &v[k], &u[k], &mut expected);
-        assert_eq!(bits(&qdd[k]), bits(&expected), "four-bar, state {k}");
-        assert_eq!(measure[k].to_bits(), c.to_bits());
-    }
+    assert!(four_bar::f64x4::aba_batch(q, v, u, &mut qdd, &mut measure));
+    assert_four_bar_aba_per_state(&loops, &qdd, &measure);
 }
 
 /// Threads over a batch: `embedyn::parallel::par_batch` cuts every slice at the same states and runs the
@@ -259,7 +277,8 @@ fn batch_functions_equal_the_scalar_ones_for_any_number_of_states() {
 fn threads_over_a_batch_equal_the_scalar_calls() {
     const NV: usize = anymal::NV;
     let n = 203;
-    let (q, v, u) = anymal_states(n, 31);
+    let states = anymal_states(n, 31);
+    let (q, v, u) = &states;
     let mut noise = Rng::new(32);
     let mut qdd = vec![[f64::NAN; NV]; n];
     let ok = embedyn::parallel::par_batch(
@@ -271,11 +290,7 @@ fn threads_over_a_batch_equal_the_scalar_calls() {
         },
     );
     assert!(ok);
-    for k in 0..n {
-        let mut expected = [0.0; NV];
-        anymal::f64::aba(&q[k], &v[k], &u[k], &mut expected);
-        assert_eq!(bits(&qdd[k]), bits(&expected), "aba, state {k}");
-    }
+    assert_anymal_aba_per_state(&states, &qdd);
     // Slices of different lengths: refused before any thread starts, nothing written.
     let mut short = vec![[f64::NAN; NV]; n - 1];
     let ok = embedyn::parallel::par_batch((&q[..], &v[..], &u[..], &mut short[..]), 16, |_| {
@@ -285,7 +300,8 @@ fn threads_over_a_batch_equal_the_scalar_calls() {
     assert!(short.iter().flatten().all(|x| x.is_nan()));
 
     // A loop model: the measure slice is cut with the others.
-    let (q, v, u) = four_bar_states(37, 0.05, &mut noise);
+    let loops = four_bar_states(37, 0.05, &mut noise);
+    let (q, v, u) = &loops;
     let mut qdd = vec![[0.0; four_bar::NV]; 37];
     let mut measure = vec![0.0; 37];
     let slices = (&q[..], &v[..], &u[..], &mut qdd[..], &mut measure[..]);
@@ -296,10 +312,5 @@ fn threads_over_a_batch_equal_the_scalar_calls() {
             assert!(four_bar::f64x4::aba_batch(q, v, u, qdd, measure));
         }
     ));
-    for k in 0..37 {
-        let mut expected = [0.0; four_bar::NV];
-        let c = four_bar::f64::aba(&q[k], &v[k], &u[k], &mut expected);
-        assert_eq!(bits(&qdd[k]), bits(&expected), "four-bar, state {k}");
-        assert_eq!(measure[k].to_bits(), c.to_bits());
-    }
+    assert_four_bar_aba_per_state(&loops, &qdd, &measure);
 }

@@ -641,12 +641,14 @@ pub enum LoadErrorKind {
         function: Algorithm,
     },
     /// A link named twice in `wrenches(…)` or `frames(…)`.
-    #[error("the link \"{}\" is named twice in {option} (each link once: {})", crate::names::shown(.link), if option.contains("frames") { "one frame function per link" } else { "one row of `f_ext` per link" })]
+    #[error("the link \"{}\" is named twice in {option} (each link once: {per_link})", crate::names::shown(.link))]
     LinkNamedTwice {
         /// The link.
         link: String,
         /// The option (`--wrenches / wrenches(…)`, …).
         option: &'static str,
+        /// What each link named there gets (`one row of \`f_ext\` per link`, …).
+        per_link: &'static str,
     },
     /// Links named for functions that `only(…)` leaves out: they would be silently ignored.
     #[error("{option} names links, but no function generated takes them: add {functions} to `only(…)` / `--only`, or drop the links")]

@@ -211,12 +211,13 @@ pub fn frame_function_names<T: Real>(model: &Model<T>, links: &[&str]) -> Vec<St
 }
 
 /// The frames of the links `names`, in order; a name of no link of the model is an error at `option`
-/// naming it and the closest link names, and so is a link named twice.
+/// naming it and the closest link names, and so is a link named twice (`per_link` says why once).
 fn resolve_links(
     loaded: &Loaded,
     model: &Model<f64>,
     names: &[String],
     option: &'static str,
+    per_link: &'static str,
 ) -> Result<Vec<(String, FrameId)>, LoadError> {
     let mut links: Vec<(String, FrameId)> = Vec::new();
     for name in names {
@@ -226,6 +227,7 @@ fn resolve_links(
                 LoadErrorKind::LinkNamedTwice {
                     link: name.clone(),
                     option,
+                    per_link,
                 },
             ));
         }
@@ -435,12 +437,14 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
         &model64,
         &options.links.wrenches,
         "--wrenches / wrenches(…)",
+        "one row of `f_ext` per link",
     )?;
     let frame_links = resolve_links(
         loaded,
         &model64,
         &options.links.frames,
         "--frames / frames(…)",
+        "one frame function per link",
     )?;
     let algorithms = options.generated_algorithms(model64.has_constraints());
     if let Some(a) = algorithms

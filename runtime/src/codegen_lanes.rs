@@ -149,7 +149,6 @@ macro_rules! sincos_simd {
     ($name:ident, $float:ident, $bits:ident, $n:literal) => {
         impl $name {
             #[inline(always)]
-            #[allow(clippy::excessive_precision)]
             fn sincos_batch_simd<const M: usize>(x: &[Self; M]) -> Option<([Self; M], [Self; M])> {
                 use wide::{$bits, $float};
                 let limit = $float::splat(REDUCTION_LIMIT);
@@ -159,24 +158,7 @@ macro_rules! sincos_simd {
                         return None;
                     }
                 }
-                const TWO_OVER_PI: f64 = core::f64::consts::FRAC_2_PI;
-                const PIO2_1: f64 = 1.570_796_326_734_125_6e0;
-                const PIO2_2: f64 = 6.077_100_506_303_966e-11;
-                const PIO2_3: f64 = 2.022_266_248_711_166_5e-21;
-                const PIO2_3T: f64 = 8.478_427_660_368_899_569_97e-32;
-                const SHIFTER: f64 = 6_755_399_441_055_744.0;
-                const S1: f64 = -1.666_666_666_666_663_2e-1;
-                const S2: f64 = 8.333_333_333_322_49e-3;
-                const S3: f64 = -1.984_126_982_985_795e-4;
-                const S4: f64 = 2.755_731_370_707_006_8e-6;
-                const S5: f64 = -2.505_076_025_340_686_3e-8;
-                const S6: f64 = 1.589_690_995_211_55e-10;
-                const C1: f64 = 4.166_666_666_666_660_2e-2;
-                const C2: f64 = -1.388_888_888_887_411e-3;
-                const C3: f64 = 2.480_158_728_947_673e-5;
-                const C4: f64 = -2.755_731_435_139_066_3e-7;
-                const C5: f64 = 2.087_572_321_298_175e-9;
-                const C6: f64 = -1.135_964_755_778_819_5e-11;
+                // The scalar kernel's constants (codegen_support.rs), splat.
                 let c = |v: f64| $float::splat(v);
                 let bits = |v: $float| $bits::from(v.to_array().map(f64::to_bits));
                 let float = |v: $bits| $float::from(v.to_array().map(f64::from_bits));

@@ -172,21 +172,54 @@ fn sincos_kernel(x: f64) -> (f64, f64) {
     place_in_quadrant(n, s, c)
 }
 
+/// The constants of the sine/cosine kernels, shared by the scalar kernel and the lanes' (codegen_lanes.rs),
+/// which must compute the same bits.
+const TWO_OVER_PI: f64 = core::f64::consts::FRAC_2_PI;
+/// π/2 in three parts of 33 bits (fdlibm's), so that k times each is exact for |k| < 2²⁰ …
+#[allow(clippy::excessive_precision)]
+const PIO2_1: f64 = 1.570_796_326_734_125_6e0;
+#[allow(clippy::excessive_precision)]
+const PIO2_2: f64 = 6.077_100_506_303_966e-11;
+#[allow(clippy::excessive_precision)]
+const PIO2_3: f64 = 2.022_266_248_711_166_5e-21;
+/// … and π/2 − PIO2_1 − PIO2_2 − PIO2_3: without it an angle next to a multiple of π/2 (where r is tiny
+/// and the three exact subtractions cancel) keeps an absolute error of k·8.5e-32, 7 ulps of sin(π) and up
+/// to 4e-10 relative near |x| = 6e5; with it r is good to a few parts in 1e-23 there.
+#[allow(clippy::excessive_precision)]
+const PIO2_3T: f64 = 8.478_427_660_368_899_569_97e-32;
+/// Rounds to the nearest integer without `f64::round` (not in core): adding 1.5·2⁵² leaves k in the low
+/// bits of the sum (two's complement), removing it again gives k as a float.
+const SHIFTER: f64 = 6_755_399_441_055_744.0;
+/// The sin kernel's minimax coefficients on [−π/4, π/4] (fdlibm's).
+#[allow(clippy::excessive_precision)]
+const S1: f64 = -1.666_666_666_666_663_2e-1;
+#[allow(clippy::excessive_precision)]
+const S2: f64 = 8.333_333_333_322_49e-3;
+#[allow(clippy::excessive_precision)]
+const S3: f64 = -1.984_126_982_985_795e-4;
+#[allow(clippy::excessive_precision)]
+const S4: f64 = 2.755_731_370_707_006_8e-6;
+#[allow(clippy::excessive_precision)]
+const S5: f64 = -2.505_076_025_340_686_3e-8;
+#[allow(clippy::excessive_precision)]
+const S6: f64 = 1.589_690_995_211_55e-10;
+/// The cos kernel's (fdlibm's).
+#[allow(clippy::excessive_precision)]
+const C1: f64 = 4.166_666_666_666_660_2e-2;
+#[allow(clippy::excessive_precision)]
+const C2: f64 = -1.388_888_888_887_411e-3;
+#[allow(clippy::excessive_precision)]
+const C3: f64 = 2.480_158_728_947_673e-5;
+#[allow(clippy::excessive_precision)]
+const C4: f64 = -2.755_731_435_139_066_3e-7;
+#[allow(clippy::excessive_precision)]
+const C5: f64 = 2.087_572_321_298_175e-9;
+#[allow(clippy::excessive_precision)]
+const C6: f64 = -1.135_964_755_778_819_5e-11;
+
 /// `x = k π/2 + r` with |r| ≤ π/4: returns the bits of k's shifted float (its low bits are k) and r.
 #[inline(always)]
-#[allow(clippy::excessive_precision)]
 fn reduce(x: f64) -> (u64, f64) {
-    const TWO_OVER_PI: f64 = core::f64::consts::FRAC_2_PI;
-    const PIO2_1: f64 = 1.570_796_326_734_125_6e0;
-    const PIO2_2: f64 = 6.077_100_506_303_966e-11;
-    const PIO2_3: f64 = 2.022_266_248_711_166_5e-21;
-    // π/2 − PIO2_1 − PIO2_2 − PIO2_3: without it an angle next to a multiple of π/2 (where r is tiny and
-    // the three exact subtractions cancel) keeps an absolute error of k·8.5e-32, 7 ulps of sin(π) and up
-    // to 4e-10 relative near |x| = 6e5; with it r is good to a few parts in 1e-23 there.
-    const PIO2_3T: f64 = 8.478_427_660_368_899_569_97e-32;
-    // Rounds to the nearest integer without `f64::round` (not in core): adding 1.5·2⁵² leaves k in the
-    // low bits of the sum (two's complement), removing it again gives k as a float.
-    const SHIFTER: f64 = 6_755_399_441_055_744.0;
     let shifted = x * TWO_OVER_PI + SHIFTER;
     let k = shifted - SHIFTER;
     (shifted.to_bits(), (((x - k * PIO2_1) - k * PIO2_2) - k * PIO2_3) - k * PIO2_3T)
@@ -194,25 +227,11 @@ fn reduce(x: f64) -> (u64, f64) {
 
 /// sin r and cos r for |r| ≤ π/4.
 #[inline(always)]
-#[allow(clippy::excessive_precision)]
 fn polynomials(r: f64) -> (f64, f64) {
     let z = r * r;
-    // sin kernel.
-    const S1: f64 = -1.666_666_666_666_663_2e-1;
-    const S2: f64 = 8.333_333_333_322_49e-3;
-    const S3: f64 = -1.984_126_982_985_795e-4;
-    const S4: f64 = 2.755_731_370_707_006_8e-6;
-    const S5: f64 = -2.505_076_025_340_686_3e-8;
-    const S6: f64 = 1.589_690_995_211_55e-10;
     let sr = S2 + z * (S3 + z * (S4 + z * (S5 + z * S6)));
     let s = r + z * r * (S1 + z * sr);
-    // cos kernel, with the fdlibm correction that keeps 1 − z/2 exact.
-    const C1: f64 = 4.166_666_666_666_660_2e-2;
-    const C2: f64 = -1.388_888_888_887_411e-3;
-    const C3: f64 = 2.480_158_728_947_673e-5;
-    const C4: f64 = -2.755_731_435_139_066_3e-7;
-    const C5: f64 = 2.087_572_321_298_175e-9;
-    const C6: f64 = -1.135_964_755_778_819_5e-11;
+    // The cos kernel, with the fdlibm correction that keeps 1 − z/2 exact.
     let cr = z * (C1 + z * (C2 + z * (C3 + z * (C4 + z * (C5 + z * C6)))));
     let hz = 0.5 * z;
     let w = 1.0 - hz;
