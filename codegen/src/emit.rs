@@ -235,6 +235,9 @@ pub struct ModuleContext<'a> {
     pub taken: &'a mut HashSet<String>,
     /// A lane module (`f64x4`, …): constants as `S::splat(…)`, comparisons through `select_gt`.
     pub lanes: bool,
+    /// The model's isomorphic branches, whose values a scalar function computes side by side
+    /// ([`crate::pairing`]); `None` keeps every value scalar.
+    pub pairs: Option<&'a crate::pairing::BranchPairs>,
 }
 
 /// Emits `pub fn name(args…, outputs…)` for one scalar module.
@@ -314,9 +317,28 @@ pub fn function(
     let live_nodes: Vec<u32> = (0..nodes.len() as u32)
         .filter(|&i| live[i as usize])
         .collect();
-    let mut reserved: Vec<&str> = vec!["s", "sin_batch", "cos_batch"];
-    reserved.extend(args.iter().map(|a| a.name));
-    reserved.extend(outputs.iter().filter_map(Output::name));
+    // Isomorphic branches side by side: in scalar functions short enough to be one chunk.
+    let pairing = match module.pairs {
+        Some(pairs) if !module.lanes && order.len() <= CHUNK => {
+            let arg_lens: Vec<Option<usize>> = args
+                .iter()
+                .map(|a| (!a.scalar && a.columns.is_none()).then_some(a.len))
+                .collect();
+            let found = crate::pairing::find(nodes, &live, &pairs.seeds(nodes, &arg_lens));
+            (found.computed(nodes) >= crate::pairing::MIN_PAIRS).then_some(found)
+        }
+        _ => None,
+    };
+    let mut firsts: Vec<u32> = pairing
+        .as_ref()
+        .map(|p| p.second.keys().copied().collect())
+        .unwrap_or_default();
+    firsts.sort_unstable();
+    let pair_name_text: Vec<String> = (0..firsts.len()).map(|k| format!("p{k}")).collect();
+    let mut reserved: Vec<&str> = vec!["s", "sin_batch", "cos_batch", "P"];
+    reserved.extend(pair_name_text.iter().map(String::as_str));
+    reserved.extend(args.iter().map(|a| -> &str { a.name }));
+    reserved.extend(outputs.iter().filter_map(|o| -> Option<&str> { o.name() }));
     let names = ValueNames::new(tape, &live_nodes, &reserved, owners);
     if order.len() > SCHEDULE_LIMIT {
         let (order, batch) = batch_angles(nodes, order, &sin_of, &cos_of);
@@ -389,19 +411,30 @@ pub fn function(
     let arg_names: Vec<Ident> = args.iter().map(|a| format_ident!("{}", a.name)).collect();
     let nslots = num(slot.len().max(1));
 
-    let lanes = module.lanes;
-    let operand = |s: &Sym| -> TokenStream {
-        match s {
-            Sym::Const(c) if lanes => {
-                let c = lit(*c);
-                quote!(S::splat(#c))
-            }
-            Sym::Const(c) => lit(*c),
-            Sym::Node(n) => {
-                let id = node_ident(&names, *n);
-                quote!(#id)
-            }
-        }
+    let writer = Writer {
+        nodes,
+        names: &names,
+        helpers,
+        lanes: module.lanes,
+        batch: &batch,
+        angles: &angles,
+        sin_of: &sin_of,
+        cos_of: &cos_of,
+    };
+    let operand = |s: &Sym| writer.operand(s);
+    let pair_names: HashMap<u32, Ident> = firsts
+        .iter()
+        .zip(&pair_name_text)
+        .map(|(&a, name)| (a, format_ident!("{}", name)))
+        .collect();
+    let mut paired_body = match &pairing {
+        Some(p) if !split => crate::pairing::statements(&writer, &order, p, &out_syms, &pair_names),
+        _ => None,
+    };
+    let pair_type = if paired_body.is_some() {
+        quote!(type P = <S as #helpers::Float>::Pair;)
+    } else {
+        quote!()
     };
     let chunk_bodies: Vec<Vec<&str>> = chunks.iter().map(|ns| names.bodies(ns.iter())).collect();
     let chunk_names = part_names(name, &chunk_bodies, module.taken);
@@ -437,97 +470,13 @@ pub fn function(
             }
             defined.insert(m);
         }
-        for &n in ns.iter() {
-            if defined.contains(&n) {
-                continue;
+        match paired_body.take() {
+            Some(paired) => stmts.extend(paired),
+            None => {
+                for &n in ns.iter() {
+                    writer.scalar(n, &mut stmts, &mut defined);
+                }
             }
-            let id = node_ident(&names, n);
-            let expr = match &nodes[n as usize] {
-                Op::Input { .. } => unreachable!("inputs are read, not computed"),
-                Op::Add(a, b) => {
-                    let (a, b) = (operand(a), operand(b));
-                    quote!(#a + #b)
-                }
-                Op::Sub(a, b) => {
-                    let (a, b) = (operand(a), operand(b));
-                    quote!(#a - #b)
-                }
-                Op::Mul(a, b) => {
-                    let (a, b) = (operand(a), operand(b));
-                    quote!(#a * #b)
-                }
-                Op::Div(a, b) => {
-                    let (a, b) = (operand(a), operand(b));
-                    quote!(#a / #b)
-                }
-                Op::Neg(a) => {
-                    let a = operand(a);
-                    quote!(-#a)
-                }
-                Op::Sqrt(a) => {
-                    let a = operand(a);
-                    quote!(#helpers::sqrt(#a))
-                }
-                Op::Abs(a) => {
-                    let a = operand(a);
-                    quote!(#helpers::abs(#a))
-                }
-                Op::Select {
-                    lhs,
-                    rhs,
-                    then,
-                    otherwise,
-                } => {
-                    let (l, r, t, o) = (
-                        operand(lhs),
-                        operand(rhs),
-                        operand(then),
-                        operand(otherwise),
-                    );
-                    if lanes {
-                        quote!(#helpers::select_gt(#l, #r, #t, #o))
-                    } else {
-                        quote!(if #l > #r { #t } else { #o })
-                    }
-                }
-                Op::Sin(_) | Op::Cos(_) if batch.contains(&n) => {
-                    // All angles that depend on the inputs alone, in one helper call.
-                    let args: Vec<TokenStream> = angles.iter().map(&operand).collect();
-                    stmts.push(quote!(
-                        let (sin_batch, cos_batch) = #helpers::sincos_batch([#(#args),*]);
-                    ));
-                    for (k, a) in angles.iter().enumerate() {
-                        let k = num(k);
-                        if let Some(&si) = sin_of.get(a) {
-                            let id = node_ident(&names, si);
-                            stmts.push(quote!(let #id: S = sin_batch[#k];));
-                            defined.insert(si);
-                        }
-                        if let Some(&ci) = cos_of.get(a) {
-                            let id = node_ident(&names, ci);
-                            stmts.push(quote!(let #id: S = cos_batch[#k];));
-                            defined.insert(ci);
-                        }
-                    }
-                    continue;
-                }
-                Op::Sin(a) | Op::Cos(a) => {
-                    let (s_id, c_id) = (sin_of.get(a).copied(), cos_of.get(a).copied());
-                    let x = operand(a);
-                    let s_tok = s_id.map_or_else(|| format_ident!("_"), |x| node_ident(&names, x));
-                    let c_tok = c_id.map_or_else(|| format_ident!("_"), |x| node_ident(&names, x));
-                    stmts.push(quote!(let (#s_tok, #c_tok): (S, S) = #helpers::sincos(#x);));
-                    if let Some(si) = s_id {
-                        defined.insert(si);
-                    }
-                    if let Some(ci) = c_id {
-                        defined.insert(ci);
-                    }
-                    continue;
-                }
-            };
-            stmts.push(quote!(let #id: S = #expr;));
-            defined.insert(n);
         }
         if split {
             for &n in ns.iter() {
@@ -621,6 +570,7 @@ pub fn function(
     } else {
         let stmts = bodies.pop().unwrap_or_default();
         quote! {
+            #pair_type
             #(#stmts)*
             #(#out_stmts)*
             #ret_value
@@ -957,5 +907,134 @@ pub(crate) fn batch_wrapper(name: &str, args: &[Arg], outputs: &[Output]) -> Tok
             }
             true
         }
+    }
+}
+
+/// Writes one function's scalar statements.
+pub(crate) struct Writer<'a> {
+    pub nodes: &'a [Op],
+    pub names: &'a ValueNames,
+    pub helpers: &'a TokenStream,
+    /// A lane module: constants as `S::splat(…)`, comparisons through `select_gt`.
+    pub lanes: bool,
+    /// The sines and cosines of the batched helper call, and its angles.
+    pub batch: &'a [u32],
+    pub angles: &'a [Sym],
+    pub sin_of: &'a HashMap<Sym, u32>,
+    pub cos_of: &'a HashMap<Sym, u32>,
+}
+
+impl Writer<'_> {
+    /// A scalar operand: a literal (splat in a lane module) or the value's name.
+    pub(crate) fn operand(&self, s: &Sym) -> TokenStream {
+        match s {
+            Sym::Const(c) if self.lanes => {
+                let c = lit(*c);
+                quote!(S::splat(#c))
+            }
+            Sym::Const(c) => lit(*c),
+            Sym::Node(n) => {
+                let id = node_ident(self.names, *n);
+                quote!(#id)
+            }
+        }
+    }
+
+    /// The statement (or, for a sine or cosine, the helper call) that defines scalar value `n`, unless
+    /// `defined` has it already; records what it defines.
+    pub(crate) fn scalar(&self, n: u32, stmts: &mut Vec<TokenStream>, defined: &mut HashSet<u32>) {
+        let (nodes, names, helpers, lanes) = (self.nodes, self.names, self.helpers, self.lanes);
+        let (batch, angles, sin_of, cos_of) = (self.batch, self.angles, self.sin_of, self.cos_of);
+        let operand = |s: &Sym| self.operand(s);
+        if defined.contains(&n) {
+            return;
+        }
+        let id = node_ident(names, n);
+        let expr = match &nodes[n as usize] {
+            Op::Input { .. } => unreachable!("inputs are read, not computed"),
+            Op::Add(a, b) => {
+                let (a, b) = (operand(a), operand(b));
+                quote!(#a + #b)
+            }
+            Op::Sub(a, b) => {
+                let (a, b) = (operand(a), operand(b));
+                quote!(#a - #b)
+            }
+            Op::Mul(a, b) => {
+                let (a, b) = (operand(a), operand(b));
+                quote!(#a * #b)
+            }
+            Op::Div(a, b) => {
+                let (a, b) = (operand(a), operand(b));
+                quote!(#a / #b)
+            }
+            Op::Neg(a) => {
+                let a = operand(a);
+                quote!(-#a)
+            }
+            Op::Sqrt(a) => {
+                let a = operand(a);
+                quote!(#helpers::sqrt(#a))
+            }
+            Op::Abs(a) => {
+                let a = operand(a);
+                quote!(#helpers::abs(#a))
+            }
+            Op::Select {
+                lhs,
+                rhs,
+                then,
+                otherwise,
+            } => {
+                let (l, r, t, o) = (
+                    operand(lhs),
+                    operand(rhs),
+                    operand(then),
+                    operand(otherwise),
+                );
+                if lanes {
+                    quote!(#helpers::select_gt(#l, #r, #t, #o))
+                } else {
+                    quote!(if #l > #r { #t } else { #o })
+                }
+            }
+            Op::Sin(_) | Op::Cos(_) if batch.contains(&n) => {
+                // All angles that depend on the inputs alone, in one helper call.
+                let args: Vec<TokenStream> = angles.iter().map(&operand).collect();
+                stmts.push(quote!(
+                    let (sin_batch, cos_batch) = #helpers::sincos_batch([#(#args),*]);
+                ));
+                for (k, a) in angles.iter().enumerate() {
+                    let k = num(k);
+                    if let Some(&si) = sin_of.get(a) {
+                        let id = node_ident(names, si);
+                        stmts.push(quote!(let #id: S = sin_batch[#k];));
+                        defined.insert(si);
+                    }
+                    if let Some(&ci) = cos_of.get(a) {
+                        let id = node_ident(names, ci);
+                        stmts.push(quote!(let #id: S = cos_batch[#k];));
+                        defined.insert(ci);
+                    }
+                }
+                return;
+            }
+            Op::Sin(a) | Op::Cos(a) => {
+                let (s_id, c_id) = (sin_of.get(a).copied(), cos_of.get(a).copied());
+                let x = operand(a);
+                let s_tok = s_id.map_or_else(|| format_ident!("_"), |x| node_ident(names, x));
+                let c_tok = c_id.map_or_else(|| format_ident!("_"), |x| node_ident(names, x));
+                stmts.push(quote!(let (#s_tok, #c_tok): (S, S) = #helpers::sincos(#x);));
+                if let Some(si) = s_id {
+                    defined.insert(si);
+                }
+                if let Some(ci) = c_id {
+                    defined.insert(ci);
+                }
+                return;
+            }
+        };
+        stmts.push(quote!(let #id: S = #expr;));
+        defined.insert(n);
     }
 }

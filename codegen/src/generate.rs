@@ -1146,6 +1146,7 @@ fn generate_algorithm(
             owners: &owners,
             taken,
             lanes: false,
+            pairs: Some(&crate::pairing::BranchPairs::of(model)),
         },
     )
     .map_err(|e| located_at_robot(loaded, e.into()))?;
@@ -1169,6 +1170,7 @@ fn generate_algorithm(
                     owners: &owners,
                     taken: &mut lane_taken,
                     lanes: true,
+                    pairs: None,
                 },
             )
             .map_err(|e| located_at_robot(loaded, e.into()))?;

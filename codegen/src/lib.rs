@@ -23,6 +23,7 @@ mod error;
 mod generate;
 pub mod ir;
 pub mod names;
+mod pairing;
 pub mod scene;
 mod size;
 #[cfg(feature = "standalone")]

@@ -133,6 +133,20 @@ macro_rules! lanes_type {
                 // An ordered comparison: false where either side is NaN, as the scalar `>`.
                 $name(wide::CmpGt::cmp_gt(lhs.0, rhs.0).blend(then.0, otherwise.0))
             }
+            // Lane functions are not paired (their lanes are states).
+            type Pair = ArrayPair<Self>;
+            #[inline(always)]
+            fn pair(first: Self, second: Self) -> ArrayPair<Self> {
+                ArrayPair::new(first, second)
+            }
+            #[inline(always)]
+            fn first(pair: ArrayPair<Self>) -> Self {
+                pair.first()
+            }
+            #[inline(always)]
+            fn second(pair: ArrayPair<Self>) -> Self {
+                pair.second()
+            }
         }
     };
 }

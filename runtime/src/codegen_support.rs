@@ -13,6 +13,38 @@ pub trait Float: Copy {
     fn abs(self) -> Self;
     /// `if lhs > rhs { then } else { otherwise }` (lane by lane for [`Lanes`]).
     fn select_gt(lhs: Self, rhs: Self, then: Self, otherwise: Self) -> Self;
+    /// Two values of this type side by side (see [`PairF64`]).
+    type Pair: Copy
+        + core::ops::Add<Output = Self::Pair>
+        + core::ops::Sub<Output = Self::Pair>
+        + core::ops::Mul<Output = Self::Pair>
+        + core::ops::Div<Output = Self::Pair>
+        + core::ops::Neg<Output = Self::Pair>;
+    /// `(first, second)` side by side.
+    fn pair(first: Self, second: Self) -> Self::Pair;
+    /// The first of a pair.
+    fn first(pair: Self::Pair) -> Self;
+    /// The second of a pair.
+    fn second(pair: Self::Pair) -> Self;
+}
+
+/// `(first, second)` as one pair: generated code computes the isomorphic branches of a tree (a robot's
+/// left and right legs) side by side (see [`PairF64`]).
+#[inline(always)]
+pub fn pair<S: Float>(first: S, second: S) -> S::Pair {
+    S::pair(first, second)
+}
+
+/// The first value of a pair (`first::<S>(p)`).
+#[inline(always)]
+pub fn first<S: Float>(pair: S::Pair) -> S {
+    S::first(pair)
+}
+
+/// The second value of a pair (`second::<S>(p)`).
+#[inline(always)]
+pub fn second<S: Float>(pair: S::Pair) -> S {
+    S::second(pair)
 }
 
 /// `if lhs > rhs { then } else { otherwise }`, lane by lane for [`Lanes`]: generated lane functions
@@ -69,6 +101,19 @@ impl Float for f64 {
             otherwise
         }
     }
+    type Pair = PairF64;
+    #[inline(always)]
+    fn pair(first: f64, second: f64) -> PairF64 {
+        PairF64::new(first, second)
+    }
+    #[inline(always)]
+    fn first(pair: PairF64) -> f64 {
+        pair.first()
+    }
+    #[inline(always)]
+    fn second(pair: PairF64) -> f64 {
+        pair.second()
+    }
 }
 
 impl Float for f32 {
@@ -99,7 +144,208 @@ impl Float for f32 {
             otherwise
         }
     }
+    type Pair = PairF32;
+    #[inline(always)]
+    fn pair(first: f32, second: f32) -> PairF32 {
+        PairF32::new(first, second)
+    }
+    #[inline(always)]
+    fn first(pair: PairF32) -> f32 {
+        pair.first()
+    }
+    #[inline(always)]
+    fn second(pair: PairF32) -> f32 {
+        pair.second()
+    }
 }
+
+/// Two numbers side by side, each operated on with the scalar's own IEEE arithmetic (no fused
+/// multiply-add), so each is bit-identical to the scalar computation: what [`PairF64`] is where the target
+/// has no two-lane SIMD type here, and the pair of the lane types.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ArrayPair<T>(pub [T; 2]);
+
+macro_rules! array_pair_op {
+    ($trait:ident, $method:ident, $op:tt) => {
+        impl<T: Copy + core::ops::$trait<Output = T>> core::ops::$trait for ArrayPair<T> {
+            type Output = Self;
+            #[inline(always)]
+            fn $method(self, rhs: Self) -> Self {
+                ArrayPair([self.0[0] $op rhs.0[0], self.0[1] $op rhs.0[1]])
+            }
+        }
+    };
+}
+array_pair_op!(Add, add, +);
+array_pair_op!(Sub, sub, -);
+array_pair_op!(Mul, mul, *);
+array_pair_op!(Div, div, /);
+impl<T: Copy + core::ops::Neg<Output = T>> core::ops::Neg for ArrayPair<T> {
+    type Output = Self;
+    #[inline(always)]
+    fn neg(self) -> Self {
+        ArrayPair([-self.0[0], -self.0[1]])
+    }
+}
+
+impl<T: Copy> ArrayPair<T> {
+    /// `(first, second)`.
+    #[inline(always)]
+    pub fn new(first: T, second: T) -> Self {
+        ArrayPair([first, second])
+    }
+    /// The first value.
+    #[inline(always)]
+    pub fn first(self) -> T {
+        self.0[0]
+    }
+    /// The second value.
+    #[inline(always)]
+    pub fn second(self) -> T {
+        self.0[1]
+    }
+}
+
+/// Two `f64` in one SIMD register, for the isomorphic branches of a tree (a robot's left and right legs,
+/// or arms) that generated code computes side by side: one instruction does the same step of both
+/// branches. Each lane is the scalar's IEEE arithmetic (SSE2 `addpd`, `mulpd`, … are exact like `addsd`,
+/// `mulsd`), so the results are bit-identical to the scalar code's. On x86-64 an SSE2 register (every
+/// x86-64 has SSE2); elsewhere an [`ArrayPair`], which the compiler may or may not vectorize.
+#[cfg(target_arch = "x86_64")]
+#[derive(Clone, Copy, Debug)]
+#[repr(transparent)]
+pub struct PairF64(core::arch::x86_64::__m128d);
+
+/// Two `f32` side by side (see [`PairF64`]): on x86-64 the two low lanes of an SSE register.
+#[cfg(target_arch = "x86_64")]
+#[derive(Clone, Copy, Debug)]
+#[repr(transparent)]
+pub struct PairF32(core::arch::x86_64::__m128);
+
+// SSE2 is part of x86-64, so these intrinsics are always available; they take no pointers. (`unsafe` for
+// the compilers before intrinsics of enabled target features became safe to call.)
+#[cfg(target_arch = "x86_64")]
+#[allow(unused_unsafe)]
+mod pair_sse2 {
+    use super::{PairF32, PairF64};
+    use core::arch::x86_64::*;
+
+    impl PairF64 {
+        /// `(first, second)`.
+        #[inline(always)]
+        pub fn new(first: f64, second: f64) -> Self {
+            PairF64(unsafe { _mm_set_pd(second, first) })
+        }
+        /// The first value.
+        #[inline(always)]
+        pub fn first(self) -> f64 {
+            unsafe { _mm_cvtsd_f64(self.0) }
+        }
+        /// The second value.
+        #[inline(always)]
+        pub fn second(self) -> f64 {
+            unsafe { _mm_cvtsd_f64(_mm_unpackhi_pd(self.0, self.0)) }
+        }
+    }
+    impl core::ops::Add for PairF64 {
+        type Output = Self;
+        #[inline(always)]
+        fn add(self, rhs: Self) -> Self {
+            PairF64(unsafe { _mm_add_pd(self.0, rhs.0) })
+        }
+    }
+    impl core::ops::Sub for PairF64 {
+        type Output = Self;
+        #[inline(always)]
+        fn sub(self, rhs: Self) -> Self {
+            PairF64(unsafe { _mm_sub_pd(self.0, rhs.0) })
+        }
+    }
+    impl core::ops::Mul for PairF64 {
+        type Output = Self;
+        #[inline(always)]
+        fn mul(self, rhs: Self) -> Self {
+            PairF64(unsafe { _mm_mul_pd(self.0, rhs.0) })
+        }
+    }
+    impl core::ops::Div for PairF64 {
+        type Output = Self;
+        #[inline(always)]
+        fn div(self, rhs: Self) -> Self {
+            PairF64(unsafe { _mm_div_pd(self.0, rhs.0) })
+        }
+    }
+    /// The sign bits flipped, as the scalar `-x` does.
+    impl core::ops::Neg for PairF64 {
+        type Output = Self;
+        #[inline(always)]
+        fn neg(self) -> Self {
+            PairF64(unsafe { _mm_xor_pd(self.0, _mm_set1_pd(-0.0)) })
+        }
+    }
+
+    impl PairF32 {
+        /// `(first, second)` (the upper two lanes zero).
+        #[inline(always)]
+        pub fn new(first: f32, second: f32) -> Self {
+            PairF32(unsafe { _mm_set_ps(0.0, 0.0, second, first) })
+        }
+        /// The first value.
+        #[inline(always)]
+        pub fn first(self) -> f32 {
+            unsafe { _mm_cvtss_f32(self.0) }
+        }
+        /// The second value.
+        #[inline(always)]
+        pub fn second(self) -> f32 {
+            unsafe { _mm_cvtss_f32(_mm_shuffle_ps::<0b01_01_01_01>(self.0, self.0)) }
+        }
+    }
+    impl core::ops::Add for PairF32 {
+        type Output = Self;
+        #[inline(always)]
+        fn add(self, rhs: Self) -> Self {
+            PairF32(unsafe { _mm_add_ps(self.0, rhs.0) })
+        }
+    }
+    impl core::ops::Sub for PairF32 {
+        type Output = Self;
+        #[inline(always)]
+        fn sub(self, rhs: Self) -> Self {
+            PairF32(unsafe { _mm_sub_ps(self.0, rhs.0) })
+        }
+    }
+    impl core::ops::Mul for PairF32 {
+        type Output = Self;
+        #[inline(always)]
+        fn mul(self, rhs: Self) -> Self {
+            PairF32(unsafe { _mm_mul_ps(self.0, rhs.0) })
+        }
+    }
+    impl core::ops::Div for PairF32 {
+        type Output = Self;
+        #[inline(always)]
+        fn div(self, rhs: Self) -> Self {
+            PairF32(unsafe { _mm_div_ps(self.0, rhs.0) })
+        }
+    }
+    /// The sign bits flipped, as the scalar `-x` does.
+    impl core::ops::Neg for PairF32 {
+        type Output = Self;
+        #[inline(always)]
+        fn neg(self) -> Self {
+            PairF32(unsafe { _mm_xor_ps(self.0, _mm_set1_ps(-0.0)) })
+        }
+    }
+}
+
+/// Two `f64` side by side (see the x86-64 definition).
+#[cfg(not(target_arch = "x86_64"))]
+pub type PairF64 = ArrayPair<f64>;
+
+/// Two `f32` side by side (see the x86-64 definition).
+#[cfg(not(target_arch = "x86_64"))]
+pub type PairF32 = ArrayPair<f32>;
 
 /// Below this magnitude the three-part reduction is exact; beyond it [`sincos_f64`] defers to libm.
 const REDUCTION_LIMIT: f64 = 823_550.0;

@@ -1,0 +1,534 @@
+//! Pairs of isomorphic branches computed side by side: a robot's left and right legs (or front and hind,
+//! or its arms) go through the same operations on different numbers, so generated code computes each
+//! step of two such branches with one two-lane SIMD instruction (the helpers' `Float::Pair`: one SSE2
+//! register on x86-64).
+//!
+//! Which values pair is decided on the tape, not assumed from the model: the model only proposes seeds
+//! (the coordinates of corresponding joints of two sibling subtrees of the same shape, [`BranchPairs`]),
+//! and [`find`] pairs two operations only where they are the same operation on operands that pair in
+//! turn, are the same value, or are both constants. So any pairing is exact: each lane does the scalar
+//! code's IEEE operation on the scalar code's operands, and the results are bit-identical. Where the
+//! branches differ (a joint axis flipped, an offset folded to zero on one side) the differing values
+//! simply stay scalar.
+
+use crate::trace::{Op, Sym};
+use embedyn_runtime::Model;
+use embedyn_runtime::Real;
+use std::collections::HashMap;
+
+/// Corresponding coordinates of the model's isomorphic sibling branches: `q` indices and `v` indices,
+/// first branch then second.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct BranchPairs {
+    /// Pairs of `q` indices.
+    pub q: Vec<(u32, u32)>,
+    /// Pairs of `v` indices.
+    pub v: Vec<(u32, u32)>,
+    /// Length of `q`, for recognizing a configuration argument.
+    pub nq: usize,
+    /// Length of `v`, for recognizing a velocity-like argument.
+    pub nv: usize,
+}
+
+impl BranchPairs {
+    /// From the kinematic tree: children of one parent (or roots) whose subtrees have the same shape
+    /// (joint types and the same shape below, child by child) pair up in order of appearance; inside a
+    /// pair the joints correspond one to one. Unpaired subtrees are searched for pairs further down.
+    pub fn of<T: Real>(model: &Model<T>) -> BranchPairs {
+        let n = model.joints.len();
+        let mut children: Vec<Vec<usize>> = vec![Vec::new(); n];
+        let mut roots = Vec::new();
+        for (i, j) in model.joints.iter().enumerate() {
+            match j.parent {
+                Some(p) => children[p].push(i),
+                None => roots.push(i),
+            }
+        }
+        // Shape of each subtree, as an interned number (children are after their parent).
+        let mut shape = vec![0usize; n];
+        let mut shapes: HashMap<(String, Vec<usize>), usize> = HashMap::new();
+        for i in (0..n).rev() {
+            let key = (
+                format!("{:?}", model.joints[i].joint_type),
+                children[i].iter().map(|&c| shape[c]).collect::<Vec<_>>(),
+            );
+            let next = shapes.len();
+            shape[i] = *shapes.entry(key).or_insert(next);
+        }
+        let mut pairs = BranchPairs {
+            nq: model.nq(),
+            nv: model.nv(),
+            ..BranchPairs::default()
+        };
+        let mut stack = vec![roots];
+        while let Some(siblings) = stack.pop() {
+            let mut open: Vec<usize> = Vec::new();
+            for &c in &siblings {
+                match open.iter().position(|&o| shape[o] == shape[c]) {
+                    Some(k) => {
+                        let a = open.remove(k);
+                        pairs.add_subtrees(model, &children, a, c);
+                    }
+                    None => open.push(c),
+                }
+            }
+            for c in open {
+                stack.push(children[c].clone());
+            }
+        }
+        pairs
+    }
+
+    fn add_subtrees<T: Real>(
+        &mut self,
+        model: &Model<T>,
+        children: &[Vec<usize>],
+        a: usize,
+        b: usize,
+    ) {
+        let (ja, jb) = (&model.joints[a], &model.joints[b]);
+        for k in 0..ja.nq() {
+            self.q
+                .push(((ja.q_index + k) as u32, (jb.q_index + k) as u32));
+        }
+        for k in 0..ja.nv() {
+            self.v
+                .push(((ja.v_index + k) as u32, (jb.v_index + k) as u32));
+        }
+        for (&ca, &cb) in children[a].iter().zip(&children[b]) {
+            self.add_subtrees(model, children, ca, cb);
+        }
+    }
+
+    /// The seeds on a tape: pairs of input nodes of corresponding coordinates, for each argument as long
+    /// as `q` (configuration) or `v` (velocities, torques, accelerations). `arg_lens[a]` is the number of
+    /// entries of argument `a` (matrices and single numbers: `None`, never seeded).
+    pub(crate) fn seeds(&self, nodes: &[Op], arg_lens: &[Option<usize>]) -> Vec<(u32, u32)> {
+        let mut input: HashMap<(u8, u32), u32> = HashMap::new();
+        for (n, op) in nodes.iter().enumerate() {
+            if let Op::Input { arg, index } = *op {
+                input.insert((arg, index), n as u32);
+            }
+        }
+        let mut seeds = Vec::new();
+        for (arg, len) in arg_lens.iter().enumerate() {
+            let table = match len {
+                Some(l) if *l == self.nq => &self.q,
+                Some(l) if *l == self.nv => &self.v,
+                _ => continue,
+            };
+            for &(i, j) in table {
+                if let (Some(&a), Some(&b)) =
+                    (input.get(&(arg as u8, i)), input.get(&(arg as u8, j)))
+                {
+                    seeds.push((a, b));
+                }
+            }
+        }
+        seeds
+    }
+}
+
+/// Which live values of a tape are computed as pairs: `second[a] = b` puts `a` in the first lane and `b`
+/// in the second. A pair of inputs, sines or cosines is packed from its two scalars; any other pair is
+/// one operation on pairs.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Pairing {
+    /// First member → second member.
+    pub second: HashMap<u32, u32>,
+    /// Second member → first member.
+    pub first: HashMap<u32, u32>,
+    /// First members of commutative pairs whose second member's operands are in the other order.
+    pub swapped: std::collections::HashSet<u32>,
+}
+
+impl Pairing {
+    fn taken(&self, n: u32) -> bool {
+        self.second.contains_key(&n) || self.first.contains_key(&n)
+    }
+
+    /// Whether the pair of first member `a` is packed from two scalars rather than computed.
+    pub(crate) fn is_packed(nodes: &[Op], a: u32) -> bool {
+        matches!(
+            nodes[a as usize],
+            Op::Input { .. } | Op::Sin(_) | Op::Cos(_)
+        )
+    }
+
+    /// Number of pairs computed by one operation.
+    pub(crate) fn computed(&self, nodes: &[Op]) -> usize {
+        self.second
+            .keys()
+            .filter(|&&a| !Pairing::is_packed(nodes, a))
+            .count()
+    }
+}
+
+/// How deep [`find`] follows operands that are not yet paired.
+const MAX_DEPTH: usize = 10;
+
+/// Pairs the live operations of `nodes` (in trace order, operands before users) that the seeds lead
+/// to: an operation that reads the first member of a pair pairs with an operation of the same kind that
+/// reads the second member at the same place, when their other operands pair too (recursively: both
+/// constants, one and the same value, an existing pair, or two operations that pair in turn).
+pub(crate) fn find(nodes: &[Op], live: &[bool], seeds: &[(u32, u32)]) -> Pairing {
+    let mut pairing = Pairing::default();
+    for &(a, b) in seeds {
+        if a != b && live[a as usize] && live[b as usize] && !pairing.taken(a) && !pairing.taken(b)
+        {
+            pairing.second.insert(a, b);
+            pairing.first.insert(b, a);
+        }
+    }
+    let mut users: Vec<Vec<u32>> = vec![Vec::new(); nodes.len()];
+    for (n, op) in nodes.iter().enumerate() {
+        if !live[n] {
+            continue;
+        }
+        for o in crate::emit::operands(op) {
+            if let Sym::Node(m) = o {
+                users[m as usize].push(n as u32);
+            }
+        }
+    }
+    for n in 0..nodes.len() as u32 {
+        if !live[n as usize] || pairing.taken(n) || !pairable(&nodes[n as usize]) {
+            continue;
+        }
+        'operands: for o in crate::emit::operands(&nodes[n as usize]) {
+            let Sym::Node(o) = o else { continue };
+            let Some(&o2) = pairing.second.get(&o) else {
+                continue;
+            };
+            for &c in &users[o2 as usize] {
+                if c == n || pairing.taken(c) || !same_kind(&nodes[n as usize], &nodes[c as usize])
+                {
+                    continue;
+                }
+                let mut trial = Trial::default();
+                if unify(nodes, &pairing, Sym::Node(n), Sym::Node(c), &mut trial, 0) {
+                    for (a, b) in trial.pairs {
+                        pairing.second.insert(a, b);
+                        pairing.first.insert(b, a);
+                    }
+                    pairing.swapped.extend(trial.swapped);
+                    break 'operands;
+                }
+            }
+        }
+    }
+    pairing
+}
+
+/// Operations that can pair: the arithmetic (one SIMD instruction), sines and cosines (packed).
+fn pairable(op: &Op) -> bool {
+    matches!(
+        op,
+        Op::Add(..)
+            | Op::Sub(..)
+            | Op::Mul(..)
+            | Op::Div(..)
+            | Op::Neg(_)
+            | Op::Sin(_)
+            | Op::Cos(_)
+    )
+}
+
+fn same_kind(a: &Op, b: &Op) -> bool {
+    core::mem::discriminant(a) == core::mem::discriminant(b)
+}
+
+/// Pairs tried for one candidate, kept only if the whole candidate pairs.
+#[derive(Default)]
+struct Trial {
+    pairs: Vec<(u32, u32)>,
+    swapped: Vec<u32>,
+}
+
+impl Trial {
+    fn get(&self, a: u32) -> Option<u32> {
+        self.pairs.iter().find(|p| p.0 == a).map(|p| p.1)
+    }
+    fn uses(&self, n: u32) -> bool {
+        self.pairs.iter().any(|p| p.0 == n || p.1 == n)
+    }
+}
+
+fn unify(nodes: &[Op], pairing: &Pairing, a: Sym, b: Sym, trial: &mut Trial, depth: usize) -> bool {
+    let (a, b) = match (a, b) {
+        (Sym::Const(_), Sym::Const(_)) => return true,
+        (Sym::Node(a), Sym::Node(b)) => (a, b),
+        _ => return false,
+    };
+    if a == b || pairing.second.get(&a) == Some(&b) || trial.get(a) == Some(b) {
+        return true;
+    }
+    if depth > MAX_DEPTH || pairing.taken(a) || pairing.taken(b) || trial.uses(a) || trial.uses(b) {
+        return false;
+    }
+    let (opa, opb) = (&nodes[a as usize], &nodes[b as usize]);
+    if !pairable(opa) || !same_kind(opa, opb) {
+        return false;
+    }
+    let (xa, xb) = (crate::emit::operands(opa), crate::emit::operands(opb));
+    let commutative = matches!(opa, Op::Add(..) | Op::Mul(..));
+    let mark = (trial.pairs.len(), trial.swapped.len());
+    trial.pairs.push((a, b));
+    if xa
+        .iter()
+        .zip(&xb)
+        .all(|(&x, &y)| unify(nodes, pairing, x, y, trial, depth + 1))
+    {
+        return true;
+    }
+    trial.pairs.truncate(mark.0 + 1);
+    trial.swapped.truncate(mark.1);
+    if commutative
+        && unify(nodes, pairing, xa[0], xb[1], trial, depth + 1)
+        && unify(nodes, pairing, xa[1], xb[0], trial, depth + 1)
+    {
+        trial.swapped.push(a);
+        return true;
+    }
+    trial.pairs.truncate(mark.0);
+    trial.swapped.truncate(mark.1);
+    false
+}
+
+/// Fewer computed pairs than this are not worth the packing: the function stays scalar.
+pub(crate) const MIN_PAIRS: usize = 8;
+
+/// One statement group of a paired function body.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+enum Item {
+    /// A scalar value (or the batched sines and cosines, at the first of them).
+    Scalar(u32),
+    /// A pair computed by one operation, named by its first member.
+    Computed(u32),
+    /// A pair packed from its two scalars (inputs, sines, cosines), named by its first member.
+    Packed(u32),
+}
+
+/// The statements of a paired function body, in `order` (the scheduled scalar order) as far as the
+/// pairs allow: a pair comes when both its members would have, after everything it reads. A member of a
+/// computed pair that something reads as a scalar (a scalar operation, an output, an operand shared by
+/// both lanes) is taken out of its pair right after it. `None` where the pairing would need a value before
+/// it exists (a pair whose member depends on the other's pair): then the function stays scalar.
+pub(crate) fn statements(
+    writer: &crate::emit::Writer,
+    order: &[u32],
+    pairing: &Pairing,
+    outputs: &[Sym],
+    pair_names: &HashMap<u32, proc_macro2::Ident>,
+) -> Option<Vec<proc_macro2::TokenStream>> {
+    use proc_macro2::TokenStream;
+    use quote::quote;
+    use std::cmp::Reverse;
+    use std::collections::{BinaryHeap, HashSet};
+    let nodes = writer.nodes;
+    let helpers = writer.helpers;
+    let computed = |a: u32| !Pairing::is_packed(nodes, a);
+    let pos: HashMap<u32, usize> = order.iter().enumerate().map(|(i, &n)| (n, i)).collect();
+    let at = |n: u32| pos.get(&n).copied().unwrap_or(0);
+    // The items and when the scalar order would reach them.
+    let mut items: Vec<(Item, usize)> = Vec::new();
+    for &n in order {
+        match (pairing.first.get(&n), pairing.second.get(&n)) {
+            (Some(&a), _) if computed(a) => {}
+            (_, Some(&b)) if computed(n) => items.push((Item::Computed(n), at(n).max(at(b)))),
+            _ => items.push((Item::Scalar(n), at(n))),
+        }
+    }
+    // Packed pairs that some computed pair reads (the others would be dead code).
+    let mut read_as_pair: HashSet<u32> = HashSet::new();
+    for (&a, &b) in &pairing.second {
+        if computed(a) {
+            let (xa, xb) = (
+                crate::emit::operands(&nodes[a as usize]),
+                crate::emit::operands(&nodes[b as usize]),
+            );
+            read_as_pair.extend(xa.into_iter().filter_map(|x| match x {
+                Sym::Node(x) if pairing.second.contains_key(&x) => Some(x),
+                _ => None,
+            }));
+            read_as_pair.extend(xb.into_iter().filter_map(|y| match y {
+                Sym::Node(y) => pairing.first.get(&y).copied(),
+                _ => None,
+            }));
+        }
+    }
+    let mut packed: Vec<(u32, u32)> = pairing
+        .second
+        .iter()
+        .filter(|(&a, _)| !computed(a) && read_as_pair.contains(&a))
+        .map(|(&a, &b)| (a, b))
+        .collect();
+    packed.sort_unstable();
+    for (a, b) in packed {
+        items.push((Item::Packed(a), at(a).max(at(b))));
+    }
+    let index: HashMap<Item, usize> = items
+        .iter()
+        .enumerate()
+        .map(|(i, (it, _))| (*it, i))
+        .collect();
+    // Operand positions of a computed pair: (first's operand, second's operand).
+    let operand_pairs = |a: u32| -> Vec<(Sym, Sym)> {
+        let b = pairing.second[&a];
+        let (xa, mut xb) = (
+            crate::emit::operands(&nodes[a as usize]),
+            crate::emit::operands(&nodes[b as usize]),
+        );
+        if pairing.swapped.contains(&a) {
+            xb.reverse();
+        }
+        xa.into_iter().zip(xb).collect()
+    };
+    let is_pair = |x: u32, y: u32| pairing.second.get(&x) == Some(&y);
+    // Who provides a value as a scalar, and who as a pair (None: an input, always there).
+    let scalar_from = |m: u32| -> Option<usize> {
+        if matches!(nodes[m as usize], Op::Input { .. }) {
+            return None;
+        }
+        let item = match pairing.first.get(&m) {
+            Some(&a) if computed(a) => Item::Computed(a),
+            _ if pairing.second.contains_key(&m) && computed(m) => Item::Computed(m),
+            _ => Item::Scalar(m),
+        };
+        index.get(&item).copied()
+    };
+    let pair_from = |a: u32| -> Option<usize> {
+        let item = if computed(a) {
+            Item::Computed(a)
+        } else {
+            Item::Packed(a)
+        };
+        index.get(&item).copied()
+    };
+    let batched: HashSet<u32> = writer.batch.iter().copied().collect();
+    let mut needs_scalar: HashSet<u32> = HashSet::new();
+    let mut deps: Vec<Vec<usize>> = vec![Vec::new(); items.len()];
+    for (i, (item, _)) in items.iter().enumerate() {
+        let mut reads_scalar: Vec<u32> = Vec::new();
+        match *item {
+            Item::Scalar(n) => {
+                for o in crate::emit::operands(&nodes[n as usize]) {
+                    if let Sym::Node(m) = o {
+                        reads_scalar.push(m);
+                    }
+                }
+                if batched.contains(&n) {
+                    reads_scalar.extend(writer.angles.iter().filter_map(|s| match s {
+                        Sym::Node(m) => Some(*m),
+                        Sym::Const(_) => None,
+                    }));
+                }
+            }
+            Item::Computed(a) => {
+                for (x, y) in operand_pairs(a) {
+                    match (x, y) {
+                        (Sym::Node(x), Sym::Node(y)) if is_pair(x, y) => {
+                            deps[i].extend(pair_from(x));
+                        }
+                        (Sym::Node(x), Sym::Node(y)) => reads_scalar.extend([x, y]),
+                        (Sym::Node(x), Sym::Const(_)) | (Sym::Const(_), Sym::Node(x)) => {
+                            reads_scalar.push(x)
+                        }
+                        (Sym::Const(_), Sym::Const(_)) => {}
+                    }
+                }
+            }
+            Item::Packed(a) => reads_scalar.extend([a, pairing.second[&a]]),
+        }
+        for m in reads_scalar {
+            needs_scalar.insert(m);
+            deps[i].extend(scalar_from(m));
+        }
+    }
+    for s in outputs {
+        if let Sym::Node(m) = s {
+            needs_scalar.insert(*m);
+        }
+    }
+    // Kahn's order, earliest scalar position first.
+    let mut pending: Vec<usize> = vec![0; items.len()];
+    let mut users: Vec<Vec<usize>> = vec![Vec::new(); items.len()];
+    for (i, d) in deps.iter_mut().enumerate() {
+        d.sort_unstable();
+        d.dedup();
+        d.retain(|&j| j != i);
+        pending[i] = d.len();
+        for &j in d.iter() {
+            users[j].push(i);
+        }
+    }
+    let mut ready: BinaryHeap<Reverse<(usize, usize)>> = (0..items.len())
+        .filter(|&i| pending[i] == 0)
+        .map(|i| Reverse((items[i].1, i)))
+        .collect();
+    let mut stmts: Vec<TokenStream> = Vec::new();
+    let mut defined: HashSet<u32> = HashSet::new();
+    let mut emitted = 0;
+    let vector = |x: Sym, y: Sym| -> TokenStream {
+        match (x, y) {
+            (Sym::Node(x), Sym::Node(y)) if is_pair(x, y) => {
+                let id = &pair_names[&x];
+                quote!(#id)
+            }
+            _ => {
+                let (x, y) = (writer.operand(&x), writer.operand(&y));
+                quote!(#helpers::pair::<S>(#x, #y))
+            }
+        }
+    };
+    while let Some(Reverse((_, i))) = ready.pop() {
+        emitted += 1;
+        match items[i].0 {
+            Item::Scalar(n) => writer.scalar(n, &mut stmts, &mut defined),
+            Item::Packed(a) => {
+                let id = &pair_names[&a];
+                let (x, y) = (
+                    writer.operand(&Sym::Node(a)),
+                    writer.operand(&Sym::Node(pairing.second[&a])),
+                );
+                stmts.push(quote!(let #id: P = #helpers::pair::<S>(#x, #y);));
+            }
+            Item::Computed(a) => {
+                let b = pairing.second[&a];
+                let id = &pair_names[&a];
+                let xs = operand_pairs(a);
+                let expr = match nodes[a as usize] {
+                    Op::Neg(_) => {
+                        let x = vector(xs[0].0, xs[0].1);
+                        quote!(-#x)
+                    }
+                    ref op => {
+                        let (x, y) = (vector(xs[0].0, xs[0].1), vector(xs[1].0, xs[1].1));
+                        match op {
+                            Op::Add(..) => quote!(#x + #y),
+                            Op::Sub(..) => quote!(#x - #y),
+                            Op::Mul(..) => quote!(#x * #y),
+                            Op::Div(..) => quote!(#x / #y),
+                            _ => unreachable!("only arithmetic pairs are computed"),
+                        }
+                    }
+                };
+                stmts.push(quote!(let #id: P = #expr;));
+                for (m, lane) in [(a, quote!(first)), (b, quote!(second))] {
+                    if needs_scalar.contains(&m) {
+                        let mid = writer.operand(&Sym::Node(m));
+                        stmts.push(quote!(let #mid: S = #helpers::#lane::<S>(#id);));
+                        defined.insert(m);
+                    }
+                }
+            }
+        }
+        for &u in &users[i] {
+            pending[u] -= 1;
+            if pending[u] == 0 {
+                ready.push(Reverse((items[u].1, u)));
+            }
+        }
+    }
+    (emitted == items.len()).then_some(stmts)
+}
