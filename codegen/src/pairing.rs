@@ -295,6 +295,10 @@ fn unify(nodes: &[Op], pairing: &Pairing, a: Sym, b: Sym, trial: &mut Trial, dep
     false
 }
 
+/// Functions of up to this many operations are paired ([`crate::emit`] then emits them as one function
+/// if their statements, a pair counting once, fit its schedule limit).
+pub(crate) const PAIRING_LIMIT: usize = 6000;
+
 /// Fewer computed pairs than this are not worth the packing: the function stays scalar.
 pub(crate) const MIN_PAIRS: usize = 8;
 
@@ -475,6 +479,14 @@ pub(crate) fn statements(
                 let id = &pair_names[&x];
                 quote!(#id)
             }
+            (Sym::Const(c), Sym::Const(d)) if c.to_bits() == d.to_bits() => {
+                let c = writer.operand(&x);
+                quote!(#helpers::splat::<S>(#c))
+            }
+            (Sym::Node(m), Sym::Node(n)) if m == n => {
+                let m = writer.operand(&x);
+                quote!(#helpers::splat::<S>(#m))
+            }
             _ => {
                 let (x, y) = (writer.operand(&x), writer.operand(&y));
                 quote!(#helpers::pair::<S>(#x, #y))
@@ -531,4 +543,83 @@ pub(crate) fn statements(
         }
     }
     (emitted == items.len()).then_some(stmts)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn model(file: &str) -> Model<f64> {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(file);
+        let loaded = crate::load(&path).unwrap();
+        crate::generation_model(&loaded, &crate::ModelOptions::default()).unwrap()
+    }
+
+    /// The biped's legs pair joint by joint (hips, then knees), in q and in v.
+    #[test]
+    fn mirrored_legs_pair_joint_by_joint() {
+        let m = model("tests/golden/biped.urdf");
+        let index = |name: &str| {
+            let j = m.joints.iter().find(|j| j.name == name).unwrap();
+            j.q_index as u32
+        };
+        let pairs = BranchPairs::of(&m);
+        let want = vec![
+            (index("l_hip"), index("r_hip")),
+            (index("l_knee"), index("r_knee")),
+        ];
+        assert_eq!(pairs.q, want);
+        assert_eq!(pairs.v, want);
+    }
+
+    /// A lone leg has no partner: nothing to pair.
+    #[test]
+    fn a_single_branch_has_no_pairs() {
+        let pairs = BranchPairs::of(&model("tests/golden/leg.urdf"));
+        assert!(pairs.q.is_empty() && pairs.v.is_empty());
+    }
+
+    /// Two operations pair where they are the same kind on pairing operands (constants may differ, a
+    /// shared operand is broadcast, a commutative pair may read its operands in the other order), and not
+    /// where the kinds differ.
+    #[test]
+    fn operations_pair_only_where_they_agree() {
+        let c = Sym::Const;
+        let n = Sym::Node;
+        let nodes = vec![
+            Op::Input { arg: 0, index: 0 }, // 0: left
+            Op::Input { arg: 0, index: 1 }, // 1: right
+            Op::Input { arg: 0, index: 2 }, // 2: shared
+            Op::Mul(n(0), c(2.0)),          // 3
+            Op::Mul(n(1), c(3.0)),          // 4: pairs with 3 (constants differ)
+            Op::Add(n(3), n(2)),            // 5
+            Op::Add(n(2), n(4)),            // 6: pairs with 5, operands swapped
+            Op::Sub(n(5), n(2)),            // 7
+            Op::Add(n(6), n(2)),            // 8: another kind, no pair
+            Op::Neg(n(0)),                  // 9
+            Op::Mul(n(1), c(-1.0)),         // 10: another kind, no pair
+            Op::Sin(n(0)),                  // 11
+            Op::Sin(n(1)),                  // 12: packed pair
+        ];
+        let live = vec![true; nodes.len()];
+        let p = find(&nodes, &live, &[(0, 1)]);
+        let mut got: Vec<(u32, u32)> = p.second.iter().map(|(&a, &b)| (a, b)).collect();
+        got.sort_unstable();
+        assert_eq!(got, vec![(0, 1), (3, 4), (5, 6), (11, 12)]);
+        assert!(p.swapped.contains(&5));
+        assert_eq!(p.computed(&nodes), 2);
+    }
+
+    /// Without seeds nothing pairs, however alike the operations.
+    #[test]
+    fn nothing_pairs_without_seeds() {
+        let nodes = vec![
+            Op::Input { arg: 0, index: 0 },
+            Op::Input { arg: 0, index: 1 },
+            Op::Mul(Sym::Node(0), Sym::Const(2.0)),
+            Op::Mul(Sym::Node(1), Sym::Const(2.0)),
+        ];
+        let p = find(&nodes, &[true; 4], &[]);
+        assert!(p.second.is_empty());
+    }
 }

@@ -65,3 +65,10 @@ fn four_bar_matches_its_golden_file() {
         "four_bar_internal.rs",
     );
 }
+
+/// Two mirrored legs (isomorphic branches): the legs' steps computed side by side as pairs
+/// (`let p3: P = p1 * p2;`, codegen/src/pairing.rs).
+#[test]
+fn biped_matches_its_golden_file() {
+    check_golden("tests/golden/biped.urdf", "biped.rs");
+}

@@ -35,6 +35,12 @@ pub fn pair<S: Float>(first: S, second: S) -> S::Pair {
     S::pair(first, second)
 }
 
+/// `(x, x)` as one pair.
+#[inline(always)]
+pub fn splat<S: Float>(x: S) -> S::Pair {
+    S::pair(x, x)
+}
+
 /// The first value of a pair (`first::<S>(p)`).
 #[inline(always)]
 pub fn first<S: Float>(pair: S::Pair) -> S {
