@@ -1107,12 +1107,25 @@ pub const ALGORITHMS: &[AlgorithmSpec] = &[
             forward_kinematics(model, ws, &inputs[0], &vec![Sym::Const(0.0); nv])?;
             let mut a_g = Matrix6xX::from_element(nv, Sym::Const(0.0));
             centroidal_momentum_matrix(model, ws, &mut a_g)?;
-            // h_g = A_g v: six dot products, no velocity sweep.
-            let h: Vec<Sym> = (0..6)
-                .map(|r| {
-                    (0..nv).fold(Sym::Const(0.0), |acc, c| acc + a_g[(r, c)] * inputs[1][c])
-                })
-                .collect();
+            // h_g = A_g v: six dot products, no velocity sweep, summed subtree by subtree (leaves
+            // first), so that isomorphic branches' sums are alike and pair (codegen/src/pairing.rs).
+            let mut partial: Vec<Vec<Sym>> = vec![vec![Sym::Const(0.0); 6]; model.joints.len()];
+            let mut h = vec![Sym::Const(0.0); 6];
+            for (i, joint) in model.joints.iter().enumerate().rev() {
+                for k in joint.v_index..joint.v_index + joint.nv() {
+                    for r in 0..6 {
+                        partial[i][r] += a_g[(r, k)] * inputs[1][k];
+                    }
+                }
+                let sum = std::mem::take(&mut partial[i]);
+                let into = match joint.parent {
+                    Some(p) => &mut partial[p],
+                    None => &mut h,
+                };
+                for r in 0..6 {
+                    into[r] += sum[r];
+                }
+            }
             Ok(Traced {
                 outputs: vec![h, row_major6(&a_g)],
                 returned: None,

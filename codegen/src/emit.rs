@@ -317,8 +317,7 @@ pub fn function(
     let live_nodes: Vec<u32> = (0..nodes.len() as u32)
         .filter(|&i| live[i as usize])
         .collect();
-    // Isomorphic branches side by side, in scalar functions whose statements (a pair counting once) are
-    // few enough to be scheduled as one function.
+    // Isomorphic branches side by side, in scalar functions of up to PAIRING_LIMIT operations.
     let pairing = match module.pairs {
         Some(pairs) if !module.lanes && order.len() <= crate::pairing::PAIRING_LIMIT => {
             let arg_lens: Vec<Option<usize>> = args
@@ -326,9 +325,7 @@ pub fn function(
                 .map(|a| (!a.scalar && a.columns.is_none()).then_some(a.len))
                 .collect();
             let found = crate::pairing::find(nodes, &live, &pairs.seeds(nodes, &arg_lens));
-            let computed = found.computed(nodes);
-            (computed >= crate::pairing::MIN_PAIRS && order.len() - computed <= SCHEDULE_LIMIT)
-                .then_some(found)
+            (found.computed(nodes) >= crate::pairing::MIN_PAIRS).then_some(found)
         }
         _ => None,
     };
@@ -343,7 +340,48 @@ pub fn function(
     reserved.extend(args.iter().map(|a| -> &str { a.name }));
     reserved.extend(outputs.iter().filter_map(|o| -> Option<&str> { o.name() }));
     let names = ValueNames::new(tape, &live_nodes, &reserved, owners);
-    if order.len() > SCHEDULE_LIMIT && pairing.is_none() {
+    let pair_names: HashMap<u32, Ident> = firsts
+        .iter()
+        .zip(&pair_name_text)
+        .map(|(&a, name)| (a, format_ident!("{}", name)))
+        .collect();
+    // The paired body, in the schedule's order; None where the pairs could not be ordered.
+    let paired = pairing.as_ref().and_then(|p| {
+        let order = schedule(nodes, order.clone(), true);
+        let (order, batch) = batch_angles(nodes, order, &sin_of, &cos_of);
+        let angles = batch_args(nodes, &batch);
+        let writer = Writer {
+            nodes,
+            names: &names,
+            helpers,
+            lanes: false,
+            batch: &batch,
+            angles: &angles,
+            sin_of: &sin_of,
+            cos_of: &cos_of,
+        };
+        let statements = crate::pairing::statements(&writer, &order, p, &out_syms, &pair_names)?;
+        Some((order, batch, statements))
+    });
+    if let Some((order, batch, statements)) = &paired {
+        if statements.len() > CHUNK {
+            return Ok(paired_parts(
+                name,
+                doc,
+                args,
+                outputs,
+                nodes,
+                order,
+                batch,
+                statements,
+                &names,
+                &pair_names,
+                module,
+                largest_constant,
+            ));
+        }
+    }
+    if order.len() > SCHEDULE_LIMIT && paired.is_none() {
         let (order, batch) = batch_angles(nodes, order, &sin_of, &cos_of);
         let angles = batch_args(nodes, &batch);
         let helpers = helpers.to_string().replace(' ', "");
@@ -371,11 +409,26 @@ pub fn function(
             code: Code::Text(text),
         });
     }
-    let order = schedule(nodes, order, pairing.is_some());
-    let (order, batch) = batch_angles(nodes, order, &sin_of, &cos_of);
+    let (order, batch, mut paired_body) = match paired {
+        Some((order, batch, statements)) => (
+            order,
+            batch,
+            Some(
+                statements
+                    .into_iter()
+                    .flat_map(|s| s.tokens)
+                    .collect::<Vec<_>>(),
+            ),
+        ),
+        None => {
+            let (order, batch) =
+                batch_angles(nodes, schedule(nodes, order, false), &sin_of, &cos_of);
+            (order, batch, None)
+        }
+    };
     let angles = batch_args(nodes, &batch);
-    // A paired function is one function: its pairs are as many statements fewer.
-    let chunks: Vec<&[u32]> = if order.is_empty() || pairing.is_some() {
+    // A paired body short enough for one function is one function.
+    let chunks: Vec<&[u32]> = if order.is_empty() || paired_body.is_some() {
         vec![&order[..]]
     } else {
         order.chunks(CHUNK).collect()
@@ -426,15 +479,6 @@ pub fn function(
         cos_of: &cos_of,
     };
     let operand = |s: &Sym| writer.operand(s);
-    let pair_names: HashMap<u32, Ident> = firsts
-        .iter()
-        .zip(&pair_name_text)
-        .map(|(&a, name)| (a, format_ident!("{}", name)))
-        .collect();
-    let mut paired_body = match &pairing {
-        Some(p) if !split => crate::pairing::statements(&writer, &order, p, &out_syms, &pair_names),
-        _ => None,
-    };
     let pair_type = if paired_body.is_some() {
         quote!(type P = <S as #helpers::Float>::Pair;)
     } else {
@@ -1041,5 +1085,251 @@ impl Writer<'_> {
         };
         stmts.push(quote!(let #id: S = #expr;));
         defined.insert(n);
+    }
+}
+
+/// A paired body longer than one chunk, as parts of up to [`CHUNK`] statements each (a pair counting
+/// once): values that cross parts go through two scratch arrays, `s` of scalars and `sp` of pairs.
+#[allow(clippy::too_many_arguments)]
+fn paired_parts(
+    name: &str,
+    doc: &str,
+    args: &[Arg],
+    outputs: &[Output],
+    nodes: &[Op],
+    order: &[u32],
+    batch: &[u32],
+    statements: &[crate::pairing::Statement],
+    names: &ValueNames,
+    pair_names: &HashMap<u32, Ident>,
+    module: &mut ModuleContext,
+    largest_constant: f64,
+) -> Emitted {
+    let helpers = module.helpers;
+    let chunks: Vec<&[crate::pairing::Statement]> = statements.chunks(CHUNK).collect();
+    let mut scalar_chunk: HashMap<u32, usize> = HashMap::new();
+    let mut pair_chunk: HashMap<u32, usize> = HashMap::new();
+    for (c, part) in chunks.iter().enumerate() {
+        for st in part.iter() {
+            scalar_chunk.extend(st.scalars.iter().map(|&m| (m, c)));
+            pair_chunk.extend(st.pair.map(|a| (a, c)));
+        }
+    }
+    // The last part that reads each value (outputs: after every part).
+    let mut scalar_last: HashMap<u32, usize> = HashMap::new();
+    let mut pair_last: HashMap<u32, usize> = HashMap::new();
+    for (c, part) in chunks.iter().enumerate() {
+        for st in part.iter() {
+            for &m in &st.reads_scalars {
+                let e = scalar_last.entry(m).or_insert(c);
+                *e = (*e).max(c);
+            }
+            for &a in &st.reads_pairs {
+                let e = pair_last.entry(a).or_insert(c);
+                *e = (*e).max(c);
+            }
+        }
+    }
+    let mut out_syms: Vec<Sym> = Vec::new();
+    for o in outputs {
+        match o {
+            Output::Vector { values, .. } | Output::Matrix { values, .. } => {
+                out_syms.extend(values.iter().copied())
+            }
+            Output::Return(v) => out_syms.push(*v),
+        }
+    }
+    for v in &out_syms {
+        if let Sym::Node(m) = v {
+            scalar_last.insert(*m, usize::MAX);
+        }
+    }
+    let slots = |chunk_of: &HashMap<u32, usize>, last: &HashMap<u32, usize>| {
+        let mut crossing: Vec<u32> = chunk_of
+            .iter()
+            .filter(|(m, &c)| last.get(m).is_some_and(|&l| l > c))
+            .map(|(&m, _)| m)
+            .collect();
+        crossing.sort_unstable();
+        crossing
+            .into_iter()
+            .enumerate()
+            .map(|(k, m)| (m, k))
+            .collect::<HashMap<u32, usize>>()
+    };
+    let slot = slots(&scalar_chunk, &scalar_last);
+    let pair_slot = slots(&pair_chunk, &pair_last);
+    let (nslots, npair_slots) = (num(slot.len().max(1)), num(pair_slot.len().max(1)));
+    let pair_type = quote!(<S as #helpers::Float>::Pair);
+    let scalar_args: Vec<TokenStream> = args.iter().map(Arg::tokens).collect();
+    let arg_names: Vec<Ident> = args.iter().map(|a| format_ident!("{}", a.name)).collect();
+    let writer = Writer {
+        nodes,
+        names,
+        helpers,
+        lanes: false,
+        batch,
+        angles: &[],
+        sin_of: &HashMap::new(),
+        cos_of: &HashMap::new(),
+    };
+    let chunk_defined: Vec<Vec<u32>> = chunks
+        .iter()
+        .map(|part| {
+            part.iter()
+                .flat_map(|st| st.scalars.iter().copied())
+                .collect()
+        })
+        .collect();
+    let chunk_bodies: Vec<Vec<&str>> = chunk_defined
+        .iter()
+        .map(|d| names.bodies(d.iter()))
+        .collect();
+    let chunk_names = part_names(name, &chunk_bodies, module.taken);
+    let mut chunk_fns = Vec::new();
+    for (c, part) in chunks.iter().enumerate() {
+        let mut stmts: Vec<TokenStream> = Vec::new();
+        let mut scalar_reads: Vec<u32> = part
+            .iter()
+            .flat_map(|st| st.reads_scalars.iter().copied())
+            .filter(|m| scalar_chunk.get(m) != Some(&c))
+            .collect();
+        scalar_reads.sort_unstable();
+        scalar_reads.dedup();
+        for m in scalar_reads {
+            let id = node_ident(names, m);
+            match nodes[m as usize] {
+                Op::Input { arg, index } => {
+                    let entry = args[arg as usize].entry(index);
+                    stmts.push(quote!(let #id: S = #entry;));
+                }
+                _ => {
+                    let k = num(slot[&m]);
+                    stmts.push(quote!(let #id: S = s[#k];));
+                }
+            }
+        }
+        let mut pair_reads: Vec<u32> = part
+            .iter()
+            .flat_map(|st| st.reads_pairs.iter().copied())
+            .filter(|a| pair_chunk.get(a) != Some(&c))
+            .collect();
+        pair_reads.sort_unstable();
+        pair_reads.dedup();
+        for a in pair_reads {
+            let id = &pair_names[&a];
+            let k = num(pair_slot[&a]);
+            stmts.push(quote!(let #id: P = sp[#k];));
+        }
+        for st in part.iter() {
+            stmts.extend(st.tokens.iter().cloned());
+        }
+        for st in part.iter() {
+            for m in &st.scalars {
+                if let Some(&k) = slot.get(m) {
+                    let (id, k) = (node_ident(names, *m), num(k));
+                    stmts.push(quote!(s[#k] = #id;));
+                }
+            }
+            if let Some(a) = st.pair {
+                if let Some(&k) = pair_slot.get(&a) {
+                    let (id, k) = (&pair_names[&a], num(k));
+                    stmts.push(quote!(sp[#k] = #id;));
+                }
+            }
+        }
+        let fname = format_ident!("{}", chunk_names[c]);
+        let part_lines = doc_lines(&part_doc(name, c, chunks.len(), &chunk_bodies[c]));
+        chunk_fns.push(quote! {
+            #(#[doc = #part_lines])*
+            #[inline(never)]
+            #[allow(unused_variables, clippy::all)]
+            fn #fname(#(#scalar_args,)* s: &mut [S; #nslots], sp: &mut [#pair_type; #npair_slots]) {
+                type P = #pair_type;
+                #(#stmts)*
+            }
+        });
+    }
+    let operand = |v: &Sym| writer.operand(v);
+    let mut out_params = Vec::new();
+    let mut out_stmts = Vec::new();
+    let mut ret_type = quote!();
+    let mut ret_value = quote!();
+    for o in outputs {
+        match o {
+            Output::Return(v) => {
+                ret_type = quote!(-> S);
+                ret_value = value_tokens(v, true, &slot, &operand, nodes, args);
+            }
+            Output::Vector {
+                name: oname,
+                values,
+            } => {
+                let id = format_ident!("{}", oname);
+                let n = num(values.len());
+                out_params.push(quote!(#id: &mut [S; #n]));
+                for (i, v) in values.iter().enumerate() {
+                    let i = num(i);
+                    let val = value_tokens(v, true, &slot, &operand, nodes, args);
+                    out_stmts.push(quote!(#id[#i] = #val;));
+                }
+            }
+            Output::Matrix {
+                name: oname,
+                rows,
+                cols,
+                values,
+            } => {
+                let id = format_ident!("{}", oname);
+                let (cols_lit, rows_lit) = (num(*cols), num(*rows));
+                out_params.push(quote!(#id: &mut [[S; #cols_lit]; #rows_lit]));
+                for r in 0..*rows {
+                    for c in 0..*cols {
+                        let val =
+                            value_tokens(&values[r * cols + c], true, &slot, &operand, nodes, args);
+                        let (r, c) = (num(r), num(c));
+                        out_stmts.push(quote!(#id[#r][#c] = #val;));
+                    }
+                }
+            }
+        }
+    }
+    let zero = operand(&Sym::Const(0.0));
+    let calls: Vec<TokenStream> = chunk_names
+        .iter()
+        .map(|c| {
+            let f = format_ident!("{}", c);
+            quote!(#f(#(#arg_names,)* &mut s, &mut sp);)
+        })
+        .collect();
+    let fname = format_ident!("{}", name);
+    let doc_lines = doc_lines(&function_doc(
+        doc,
+        &names.bodies(order.iter()),
+        &chunk_names,
+    ));
+    let must_use = if ret_value.is_empty() {
+        quote!()
+    } else {
+        quote!(#[must_use = #MUST_USE])
+    };
+    let operations = order.len();
+    Emitted {
+        operations,
+        largest_constant,
+        compile_bytes: TOKEN_BYTES_PER_OPERATION * operations as f64,
+        code: Code::Tokens(quote! {
+            #(#chunk_fns)*
+            #(#[doc = #doc_lines])*
+            #must_use
+            #[allow(unused_variables, clippy::all)]
+            pub fn #fname(#(#scalar_args,)* #(#out_params),*) #ret_type {
+                let mut s: [S; #nslots] = [#zero; #nslots];
+                let mut sp: [#pair_type; #npair_slots] = [#helpers::splat::<S>(#zero); #npair_slots];
+                #(#calls)*
+                #(#out_stmts)*
+                #ret_value
+            }
+        }),
     }
 }

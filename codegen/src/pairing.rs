@@ -295,9 +295,10 @@ fn unify(nodes: &[Op], pairing: &Pairing, a: Sym, b: Sym, trial: &mut Trial, dep
     false
 }
 
-/// Functions of up to this many operations are paired ([`crate::emit`] then emits them as one function
-/// if their statements, a pair counting once, fit its schedule limit).
-pub(crate) const PAIRING_LIMIT: usize = 6000;
+/// Functions of up to this many operations are paired: scheduled as a whole, then emitted as one
+/// function or as parts of `CHUNK` statements (a pair counting once). Longer ones (the derivatives of
+/// large models) are written unpaired by `emit_large`, whose form rustc compiles in less memory.
+pub(crate) const PAIRING_LIMIT: usize = 20_000;
 
 /// Fewer computed pairs than this are not worth the packing: the function stays scalar.
 pub(crate) const MIN_PAIRS: usize = 8;
@@ -324,7 +325,7 @@ pub(crate) fn statements(
     pairing: &Pairing,
     outputs: &[Sym],
     pair_names: &HashMap<u32, proc_macro2::Ident>,
-) -> Option<Vec<proc_macro2::TokenStream>> {
+) -> Option<Vec<Statement>> {
     use proc_macro2::TokenStream;
     use quote::quote;
     use std::cmp::Reverse;
@@ -412,6 +413,8 @@ pub(crate) fn statements(
     let batched: HashSet<u32> = writer.batch.iter().copied().collect();
     let mut needs_scalar: HashSet<u32> = HashSet::new();
     let mut deps: Vec<Vec<usize>> = vec![Vec::new(); items.len()];
+    // What each item reads: scalars (inputs included) and pairs (by first member).
+    let mut reads: Vec<(Vec<u32>, Vec<u32>)> = vec![(Vec::new(), Vec::new()); items.len()];
     for (i, (item, _)) in items.iter().enumerate() {
         let mut reads_scalar: Vec<u32> = Vec::new();
         match *item {
@@ -433,6 +436,7 @@ pub(crate) fn statements(
                     match (x, y) {
                         (Sym::Node(x), Sym::Node(y)) if is_pair(x, y) => {
                             deps[i].extend(pair_from(x));
+                            reads[i].1.push(x);
                         }
                         (Sym::Node(x), Sym::Node(y)) => reads_scalar.extend([x, y]),
                         (Sym::Node(x), Sym::Const(_)) | (Sym::Const(_), Sym::Node(x)) => {
@@ -444,10 +448,11 @@ pub(crate) fn statements(
             }
             Item::Packed(a) => reads_scalar.extend([a, pairing.second[&a]]),
         }
-        for m in reads_scalar {
+        for &m in &reads_scalar {
             needs_scalar.insert(m);
             deps[i].extend(scalar_from(m));
         }
+        reads[i].0 = reads_scalar;
     }
     for s in outputs {
         if let Sym::Node(m) = s {
@@ -470,9 +475,8 @@ pub(crate) fn statements(
         .filter(|&i| pending[i] == 0)
         .map(|i| Reverse((items[i].1, i)))
         .collect();
-    let mut stmts: Vec<TokenStream> = Vec::new();
+    let mut statements: Vec<Statement> = Vec::new();
     let mut defined: HashSet<u32> = HashSet::new();
-    let mut emitted = 0;
     let vector = |x: Sym, y: Sym| -> TokenStream {
         match (x, y) {
             (Sym::Node(x), Sym::Node(y)) if is_pair(x, y) => {
@@ -494,10 +498,28 @@ pub(crate) fn statements(
         }
     };
     while let Some(Reverse((_, i))) = ready.pop() {
-        emitted += 1;
+        let mut stmts: Vec<TokenStream> = Vec::new();
+        let mut scalars: Vec<u32> = Vec::new();
+        let mut pair = None;
         match items[i].0 {
-            Item::Scalar(n) => writer.scalar(n, &mut stmts, &mut defined),
+            Item::Scalar(n) => {
+                // A sine or cosine call defines its partner too, the batch all its values.
+                let trig = matches!(nodes[n as usize], Op::Sin(_) | Op::Cos(_));
+                let before: HashSet<u32> = if trig {
+                    defined.clone()
+                } else {
+                    HashSet::new()
+                };
+                writer.scalar(n, &mut stmts, &mut defined);
+                if trig {
+                    scalars.extend(defined.difference(&before).copied());
+                    scalars.sort_unstable();
+                } else if !stmts.is_empty() {
+                    scalars.push(n);
+                }
+            }
             Item::Packed(a) => {
+                pair = Some(a);
                 let id = &pair_names[&a];
                 let (x, y) = (
                     writer.operand(&Sym::Node(a)),
@@ -506,6 +528,7 @@ pub(crate) fn statements(
                 stmts.push(quote!(let #id: P = #helpers::pair::<S>(#x, #y);));
             }
             Item::Computed(a) => {
+                pair = Some(a);
                 let b = pairing.second[&a];
                 let id = &pair_names[&a];
                 let xs = operand_pairs(a);
@@ -531,10 +554,19 @@ pub(crate) fn statements(
                         let mid = writer.operand(&Sym::Node(m));
                         stmts.push(quote!(let #mid: S = #helpers::#lane::<S>(#id);));
                         defined.insert(m);
+                        scalars.push(m);
                     }
                 }
             }
         }
+        let (reads_scalars, reads_pairs) = std::mem::take(&mut reads[i]);
+        statements.push(Statement {
+            tokens: stmts,
+            scalars,
+            pair,
+            reads_scalars,
+            reads_pairs,
+        });
         for &u in &users[i] {
             pending[u] -= 1;
             if pending[u] == 0 {
@@ -542,7 +574,21 @@ pub(crate) fn statements(
             }
         }
     }
-    (emitted == items.len()).then_some(stmts)
+    (statements.len() == items.len()).then_some(statements)
+}
+
+/// The statements of one item of a paired body, with what they define and read (for cutting a long body
+/// into parts whose crossing values go through scratch arrays).
+pub(crate) struct Statement {
+    pub tokens: Vec<proc_macro2::TokenStream>,
+    /// Scalar values defined (a pair's members taken out of it, the batched sines and cosines).
+    pub scalars: Vec<u32>,
+    /// The pair defined, by its first member.
+    pub pair: Option<u32>,
+    /// Scalar values read (inputs included).
+    pub reads_scalars: Vec<u32>,
+    /// Pairs read, by first member.
+    pub reads_pairs: Vec<u32>,
 }
 
 #[cfg(test)]
