@@ -363,6 +363,12 @@ pub fn function(
         let statements = crate::pairing::statements(&writer, &order, p, &out_syms, &pair_names)?;
         Some((order, batch, statements))
     });
+    // A long function pairs only where that saves much: its paired parts cost rustc more per operation than
+    // the unpaired form of `emit_large` (measured: the 38-joint TALOS, 77 % as many statements as
+    // operations, gained 10–15 % for 3 s more compile time; the 29-joint G1, 56 %, gained 30 %).
+    let paired = paired.filter(|(order, _, statements)| {
+        order.len() <= SCHEDULE_LIMIT || statements.len() * 100 <= order.len() * LONG_PAIRED_PERCENT
+    });
     if let Some((order, batch, statements)) = &paired {
         if statements.len() > CHUNK {
             return Ok(paired_parts(
@@ -700,6 +706,10 @@ fn latency(op: &Op) -> u32 {
         Op::Sin(..) | Op::Cos(..) => 40,
     }
 }
+
+/// A function longer than [`SCHEDULE_LIMIT`] operations is paired only if its statements, a pair counting
+/// once, are at most this percentage of its operations.
+const LONG_PAIRED_PERCENT: usize = 65;
 
 /// Functions up to this many statements are reordered by [`schedule`]; longer ones keep the trace order.
 pub const SCHEDULE_LIMIT: usize = 2 * CHUNK;
@@ -1089,7 +1099,7 @@ impl Writer<'_> {
 }
 
 /// A paired body longer than one chunk, as parts of up to [`CHUNK`] statements each (a pair counting
-/// once): values that cross parts go through two scratch arrays, `s` of scalars and `sp` of pairs.
+/// once; half that for the longest functions): values that cross parts go through two scratch arrays, `s` of scalars and `sp` of pairs.
 #[allow(clippy::too_many_arguments)]
 fn paired_parts(
     name: &str,
@@ -1106,7 +1116,14 @@ fn paired_parts(
     largest_constant: f64,
 ) -> Emitted {
     let helpers = module.helpers;
-    let chunks: Vec<&[crate::pairing::Statement]> = statements.chunks(CHUNK).collect();
+    // Parts of CHUNK statements run fastest (fewer crossing values); above 2 · SCHEDULE_LIMIT operations
+    // (humanoids' `aba`) half-size parts keep rustc's superlinear optimizer fast (G1 crate 8.9 → 7.3 s).
+    let part_size = if order.len() > 2 * SCHEDULE_LIMIT {
+        CHUNK / 2
+    } else {
+        CHUNK
+    };
+    let chunks: Vec<&[crate::pairing::Statement]> = statements.chunks(part_size).collect();
     let mut scalar_chunk: HashMap<u32, usize> = HashMap::new();
     let mut pair_chunk: HashMap<u32, usize> = HashMap::new();
     for (c, part) in chunks.iter().enumerate() {

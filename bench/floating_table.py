@@ -1,0 +1,48 @@
+#!/usr/bin/env python3
+"""Writes the section "Floating bases (issue 13)" of BENCHMARKS.md from bench/results/floating.jsonl (bench/floating.sh:
+each round, Pinocchio's `pinocchio_bench --floating` and `embedyn bench --floating --json` on each model)."""
+import datetime, json, os, platform, statistics
+
+from benchmarks_md import ROOT, spread, write_section
+
+CALLS = [("aba", 0.2), ("rnea", 0.2), ("crba", 0.2)]
+
+
+def main():
+    rows = {}
+    with open(os.path.join(ROOT, "bench", "results", "floating.jsonl")) as f:
+        for line in f:
+            r = json.loads(line)
+            rows.setdefault(r["model"], []).append(r)
+    version = next(iter(rows.values()))[0]["pinocchio"].get("pinocchio", "?")
+    lines = [
+        "## Floating bases (issue 13)",
+        "",
+        f"Generated f64 `aba`, `rnea`, `crba` on robots with a free-flyer root against Pinocchio {version} "
+        f"(`aba` in its faster WORLD convention), {datetime.date.today()}, {platform.machine()}, `bench/floating.sh`: "
+        "the two sides alternate, model by model, for each round; the times are the medians over rounds, the "
+        "ranges their spread, the ratio the median of the rounds' ratios. Ours through `embedyn bench --floating "
+        "--json` (the generated code built for the baseline x86-64 target and timed in-process on random "
+        "states), Pinocchio's through `pinocchio_bench --floating` (g++ -O3, no `-march=native`). Issue 13's "
+        "target: every ratio ≤ 0.2. The generated code computes isomorphic branches (legs, arms) side by side "
+        "as pairs (docs/generated-code.md, \"Left and right side by side: pairs\").",
+        "",
+        "| model | nv | call | embedyn generated (ns) | range | Pinocchio (ns) | range | ratio | rounds' ratios | target |",
+        "|---|---:|---|---:|---:|---:|---:|---:|---:|---:|",
+    ]
+    for model, runs in rows.items():
+        nv = runs[0]["pinocchio"]["nv"]
+        for call, target in CALLS:
+            ours = [r["embedyn"][call]["generated_f64"] for r in runs]
+            pin = [r["pinocchio"][call] for r in runs]
+            ratios = [o / p for o, p in zip(ours, pin)]
+            lines.append(
+                f"| {model} | {nv} | `{call}` | {statistics.median(ours):,.0f} | {spread(ours)} | "
+                f"{statistics.median(pin):,.0f} | {spread(pin)} | {statistics.median(ratios):.2f} | "
+                f"{min(ratios):.2f}–{max(ratios):.2f} | ≤ {target} |"
+            )
+    write_section("\n".join(lines) + "\n")
+
+
+if __name__ == "__main__":
+    main()
