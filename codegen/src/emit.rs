@@ -843,6 +843,7 @@ fn batch_angles(
 /// Returns `false`, computing nothing, where the slices' lengths differ. (A loop over states, not over
 /// bodies: the lane function it calls is straight-line.)
 pub(crate) fn batch_wrapper(name: &str, args: &[Arg], outputs: &[Output]) -> TokenStream {
+    // Called as `self::name`: an output may share the function's name (`com`'s output `com`).
     let fname = format_ident!("{}", name);
     let batch = format_ident!("{}_batch", name);
     let doc = format!(
@@ -932,11 +933,11 @@ pub(crate) fn batch_wrapper(name: &str, args: &[Arg], outputs: &[Output]) -> Tok
         params.push(quote!(measure: &mut [E]));
         lengths.push(quote!(measure.len()));
         (
-            quote!(let returned = #fname(#(#call_args),*);),
+            quote!(let returned = self::#fname(#(#call_args),*);),
             quote!(measure[s] = returned.to_array()[k];),
         )
     } else {
-        (quote!(#fname(#(#call_args),*);), quote!())
+        (quote!(self::#fname(#(#call_args),*);), quote!())
     };
     let first = lengths.first().cloned().unwrap_or_else(|| quote!(0));
     let must_use = "false where the slices' lengths differ (nothing is computed then)";
