@@ -555,56 +555,8 @@ pub fn function(
         }
     }
     // Outputs.
-    let mut out_params = Vec::new();
-    let mut out_stmts = Vec::new();
-    let mut ret_type = quote!();
-    let mut ret_value = quote!();
-    for o in outputs {
-        match o {
-            Output::Return(v) => {
-                ret_type = quote!(-> S);
-                let val = value_tokens(v, split, &slot, &operand, nodes, args);
-                ret_value = quote!(#val);
-            }
-            Output::Vector {
-                name: oname,
-                values,
-            } => {
-                let id = format_ident!("{}", oname);
-                let n = num(values.len());
-                out_params.push(quote!(#id: &mut [S; #n]));
-                for (i, v) in values.iter().enumerate() {
-                    let i = num(i);
-                    let val = value_tokens(v, split, &slot, &operand, nodes, args);
-                    out_stmts.push(quote!(#id[#i] = #val;));
-                }
-            }
-            Output::Matrix {
-                name: oname,
-                rows,
-                cols,
-                values,
-            } => {
-                let id = format_ident!("{}", oname);
-                let (cols_lit, rows_lit) = (num(*cols), num(*rows));
-                out_params.push(quote!(#id: &mut [[S; #cols_lit]; #rows_lit]));
-                for r in 0..*rows {
-                    for c in 0..*cols {
-                        let val = value_tokens(
-                            &values[r * cols + c],
-                            split,
-                            &slot,
-                            &operand,
-                            nodes,
-                            args,
-                        );
-                        let (r, c) = (num(r), num(c));
-                        out_stmts.push(quote!(#id[#r][#c] = #val;));
-                    }
-                }
-            }
-        }
-    }
+    let (out_params, out_stmts, ret_type, ret_value) =
+        output_tokens(outputs, split, &slot, &operand, nodes, args);
     let fname = format_ident!("{}", name);
     let zero = operand(&Sym::Const(0.0));
     let body = if split {
@@ -655,6 +607,62 @@ pub fn function(
             }
         }),
     })
+}
+
+/// The output parameters (`qdd: &mut [S; 18]`), the statements that write the outputs, and the return type
+/// and value of a generated function (values from the scratch array `s` when `split`).
+fn output_tokens(
+    outputs: &[Output],
+    split: bool,
+    slot: &HashMap<u32, usize>,
+    operand: &dyn Fn(&Sym) -> TokenStream,
+    nodes: &[Op],
+    args: &[Arg],
+) -> (Vec<TokenStream>, Vec<TokenStream>, TokenStream, TokenStream) {
+    let mut out_params = Vec::new();
+    let mut out_stmts = Vec::new();
+    let mut ret_type = quote!();
+    let mut ret_value = quote!();
+    for o in outputs {
+        match o {
+            Output::Return(v) => {
+                ret_type = quote!(-> S);
+                ret_value = value_tokens(v, split, slot, operand, nodes, args);
+            }
+            Output::Vector {
+                name: oname,
+                values,
+            } => {
+                let id = format_ident!("{}", oname);
+                let n = num(values.len());
+                out_params.push(quote!(#id: &mut [S; #n]));
+                for (i, v) in values.iter().enumerate() {
+                    let i = num(i);
+                    let val = value_tokens(v, split, slot, operand, nodes, args);
+                    out_stmts.push(quote!(#id[#i] = #val;));
+                }
+            }
+            Output::Matrix {
+                name: oname,
+                rows,
+                cols,
+                values,
+            } => {
+                let id = format_ident!("{}", oname);
+                let (cols_lit, rows_lit) = (num(*cols), num(*rows));
+                out_params.push(quote!(#id: &mut [[S; #cols_lit]; #rows_lit]));
+                for r in 0..*rows {
+                    for c in 0..*cols {
+                        let val =
+                            value_tokens(&values[r * cols + c], split, slot, operand, nodes, args);
+                        let (r, c) = (num(r), num(c));
+                        out_stmts.push(quote!(#id[#r][#c] = #val;));
+                    }
+                }
+            }
+        }
+    }
+    (out_params, out_stmts, ret_type, ret_value)
 }
 
 fn value_tokens(
@@ -1269,49 +1277,8 @@ fn paired_parts(
         });
     }
     let operand = |v: &Sym| writer.operand(v);
-    let mut out_params = Vec::new();
-    let mut out_stmts = Vec::new();
-    let mut ret_type = quote!();
-    let mut ret_value = quote!();
-    for o in outputs {
-        match o {
-            Output::Return(v) => {
-                ret_type = quote!(-> S);
-                ret_value = value_tokens(v, true, &slot, &operand, nodes, args);
-            }
-            Output::Vector {
-                name: oname,
-                values,
-            } => {
-                let id = format_ident!("{}", oname);
-                let n = num(values.len());
-                out_params.push(quote!(#id: &mut [S; #n]));
-                for (i, v) in values.iter().enumerate() {
-                    let i = num(i);
-                    let val = value_tokens(v, true, &slot, &operand, nodes, args);
-                    out_stmts.push(quote!(#id[#i] = #val;));
-                }
-            }
-            Output::Matrix {
-                name: oname,
-                rows,
-                cols,
-                values,
-            } => {
-                let id = format_ident!("{}", oname);
-                let (cols_lit, rows_lit) = (num(*cols), num(*rows));
-                out_params.push(quote!(#id: &mut [[S; #cols_lit]; #rows_lit]));
-                for r in 0..*rows {
-                    for c in 0..*cols {
-                        let val =
-                            value_tokens(&values[r * cols + c], true, &slot, &operand, nodes, args);
-                        let (r, c) = (num(r), num(c));
-                        out_stmts.push(quote!(#id[#r][#c] = #val;));
-                    }
-                }
-            }
-        }
-    }
+    let (out_params, out_stmts, ret_type, ret_value) =
+        output_tokens(outputs, true, &slot, &operand, nodes, args);
     let zero = operand(&Sym::Const(0.0));
     let calls: Vec<TokenStream> = chunk_names
         .iter()
