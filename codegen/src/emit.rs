@@ -376,6 +376,7 @@ pub fn function(
                 doc,
                 args,
                 outputs,
+                &out_syms,
                 nodes,
                 order,
                 batch,
@@ -1115,6 +1116,7 @@ fn paired_parts(
     doc: &str,
     args: &[Arg],
     outputs: &[Output],
+    out_syms: &[Sym],
     nodes: &[Op],
     order: &[u32],
     batch: &[u32],
@@ -1156,16 +1158,7 @@ fn paired_parts(
             }
         }
     }
-    let mut out_syms: Vec<Sym> = Vec::new();
-    for o in outputs {
-        match o {
-            Output::Vector { values, .. } | Output::Matrix { values, .. } => {
-                out_syms.extend(values.iter().copied())
-            }
-            Output::Return(v) => out_syms.push(*v),
-        }
-    }
-    for v in &out_syms {
+    for v in out_syms {
         if let Sym::Node(m) = v {
             scalar_last.insert(*m, usize::MAX);
         }
