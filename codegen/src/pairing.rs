@@ -267,15 +267,6 @@ fn unify(nodes: &[Op], pairing: &Pairing, a: Sym, b: Sym, trial: &mut Trial, dep
         return false;
     }
     let (opa, opb) = (&nodes[a as usize], &nodes[b as usize]);
-    // Two entries of one argument that isomorphic operations read at the same place (the wrenches of two
-    // corresponding feet, rows of `f_ext`): packed like the seeds.
-    if let (Op::Input { arg: x, .. }, Op::Input { arg: y, .. }) = (opa, opb) {
-        if x == y {
-            trial.pairs.push((a, b));
-            return true;
-        }
-        return false;
-    }
     if !pairable(opa) || !same_kind(opa, opb) {
         return false;
     }
@@ -663,28 +654,6 @@ mod tests {
         assert_eq!(got, vec![(0, 1), (3, 4), (5, 6), (11, 12)]);
         assert!(p.swapped.contains(&5));
         assert_eq!(p.computed(&nodes), 2);
-    }
-
-    /// Entries of one argument pair where isomorphic operations read them (the wrenches of two feet),
-    /// entries of different arguments do not.
-    #[test]
-    fn inputs_read_alike_pair() {
-        let n = Sym::Node;
-        let nodes = vec![
-            Op::Input { arg: 0, index: 0 }, // 0: left q
-            Op::Input { arg: 0, index: 1 }, // 1: right q
-            Op::Input { arg: 3, index: 0 }, // 2: left foot's wrench entry
-            Op::Input { arg: 3, index: 6 }, // 3: right foot's
-            Op::Input { arg: 1, index: 6 }, // 4: another argument
-            Op::Mul(n(0), n(2)),            // 5
-            Op::Mul(n(1), n(3)),            // 6: pairs with 5, and 3 with 2
-            Op::Add(n(5), n(2)),            // 7
-            Op::Add(n(6), n(4)),            // 8: reads another argument: no pair
-        ];
-        let p = find(&nodes, &[true; 9], &[(0, 1)]);
-        let mut got: Vec<(u32, u32)> = p.second.iter().map(|(&a, &b)| (a, b)).collect();
-        got.sort_unstable();
-        assert_eq!(got, vec![(0, 1), (2, 3), (5, 6)]);
     }
 
     /// Without seeds nothing pairs, however alike the operations.
