@@ -21,7 +21,10 @@
 //! The text is formatted as it is written (one statement per line, four spaces per level): the
 //! standalone crate needs no pretty-printing pass over millions of tokens.
 
-use crate::emit::{doc_lines, function_doc, operands, part_doc, Arg, Output, CHUNK, MUST_USE};
+use crate::emit::{
+    doc_lines, function_doc, operands, part_doc, part_module_name, part_module_of, Arg, Output,
+    CHUNK, MUST_USE,
+};
 use crate::trace::{Op, Sym};
 use crate::value_names::{part_names, ValueNames};
 use std::collections::HashMap;
@@ -302,6 +305,8 @@ pub(crate) fn function_text(
         .map(|range| names.bodies(order[range].iter()))
         .collect();
     let part_functions = part_names(name, &part_bodies, taken);
+    let part_count = part_bodies.len();
+    let mut module_start = 0;
     for (c, range) in part_ranges(&parts, order.len()).enumerate() {
         let part = Part {
             nodes,
@@ -320,13 +325,45 @@ pub(crate) fn function_text(
             names,
             lanes,
         };
-        write_doc(&mut text, &part_doc(name, c, parts.len(), &part_bodies[c]));
-        writeln!(text, "    #[inline(never)]").unwrap();
-        writeln!(text, "    #[allow(unused_variables, clippy::all)]").unwrap();
+        // Contiguous parts share a module (see `PART_MODULES`): opened before the first, closed after
+        // the last with the parent's import of its functions. Part text is written one level out and
+        // indented as the module's.
+        let module = part_module_of(c, part_count);
+        let first = c == 0 || part_module_of(c - 1, part_count) != module;
+        let last = c + 1 == part_count || part_module_of(c + 1, part_count) != module;
+        if first {
+            module_start = c;
+            let module_name = part_module_name(name, module);
+            writeln!(text, "    mod {module_name} {{").unwrap();
+            writeln!(text, "        #[allow(unused_imports)]").unwrap();
+            writeln!(text, "        use super::*;").unwrap();
+        }
+        let mut part_text = String::new();
+        write_doc(
+            &mut part_text,
+            &part_doc(name, c, part_count, &part_bodies[c]),
+        );
+        writeln!(part_text, "    #[inline(never)]").unwrap();
+        writeln!(part_text, "    #[allow(unused_variables, clippy::all)]").unwrap();
         let part_function = &part_functions[c];
-        writeln!(text, "    fn {part_function}({part_params}) {{").unwrap();
-        part.write_body(&mut text);
-        writeln!(text, "    }}").unwrap();
+        writeln!(
+            part_text,
+            "    pub(super) fn {part_function}({part_params}) {{"
+        )
+        .unwrap();
+        part.write_body(&mut part_text);
+        writeln!(part_text, "    }}").unwrap();
+        for line in part_text.lines() {
+            text.push_str("    ");
+            text.push_str(line);
+            text.push('\n');
+        }
+        if last {
+            let module_name = part_module_name(name, module);
+            let members = part_functions[module_start..=c].join(", ");
+            writeln!(text, "    }}").unwrap();
+            writeln!(text, "    use self::{module_name}::{{{members}}};").unwrap();
+        }
     }
     // The public function: the parts in order, then the outputs no part computes (constants and
     // inputs passed through), then the returned value.

@@ -1392,6 +1392,7 @@ mod tests {
             }
             let Some(rest) = line
                 .strip_prefix("pub fn ")
+                .or_else(|| line.strip_prefix("pub(super) fn "))
                 .or_else(|| line.strip_prefix("fn "))
             else {
                 continue;
