@@ -134,7 +134,7 @@ pub(crate) fn part_doc(function: &str, index: usize, count: usize, bodies: &[&st
 /// The parts of one function are spread over at most this many modules. rustc cuts its code-generation
 /// units along modules, so the parts of a long function written in one module were optimized by one
 /// thread: measured on the floating TALOS's `aba_derivatives` (121 parts, release, 2 cores), 34 s with
-/// the parts in one module, 23.5 s in 16.
+/// the parts in one module, 17 s in 16 (BENCHMARKS.md, "Derivatives").
 pub(crate) const PART_MODULES: usize = 16;
 
 /// The modules part `index` of `count` goes into: contiguous runs, at most [`PART_MODULES`].
