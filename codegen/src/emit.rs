@@ -176,6 +176,9 @@ fn part_modules(function: &str, parts: Vec<TokenStream>, part_names: &[String]) 
     quote!(#(#wrapped)*)
 }
 
+/// The most statements (a pair counting once) in one part of a paired body (see `paired_parts`).
+pub(crate) const PAIRED_PART: usize = CHUNK;
+
 /// Statements per chunk function. At ~2000 statements rustc -O compiles each in about a second, and the
 /// call boundaries cost a few loads and stores of live values.
 pub const CHUNK: usize = 2000;
@@ -1173,13 +1176,18 @@ fn paired_parts(
     largest_constant: f64,
 ) -> Emitted {
     let helpers = module.helpers;
-    // Parts of CHUNK statements run fastest (fewer crossing values); above 2 · SCHEDULE_LIMIT operations
-    // (humanoids' `aba`) half-size parts keep rustc's superlinear optimizer fast (G1 crate 8.9 → 7.3 s).
-    let part_size = if order.len() > 2 * SCHEDULE_LIMIT {
-        CHUNK / 2
-    } else {
-        CHUNK
-    };
+    // Fewer parts run faster (fewer values cross through the scratch arrays): measured on the floating
+    // G1 in one binary (bit-identical results), `aba` in parts of 1,000 / 2,000 / 4,000 statements / whole
+    // took 2,077 / 1,900 / 1,800 / 1,669 ns, `rnea` 1,130 / 1,030 / 936 / 922, `crba` 1,173 / 1,118 /
+    // 1,043 / 1,057, and their crate compiled in 3.1 / 3.2 / 3.3 / 3.5 s, the parts' modules optimized in
+    // parallel (release, no debug info). With debug info, though, every `let` opens a lexical scope
+    // inside the previous one and LLVM's DWARF writer recurses once per scope: parts of 4,000 paired
+    // statements (a pair's statement may add a `let` per lane taken out) overflowed rustc's stack in the
+    // test build (SIGSEGV in `DwarfCompileUnit::createAndAddScopeChildren`). So parts keep at most
+    // PAIRED_PART statements, cut evenly; the former half-size parts above 8,000 operations, a compile-time
+    // measure, are no longer needed now that the parts' modules compile in parallel.
+    let part_count = statements.len().div_ceil(PAIRED_PART).max(1);
+    let part_size = statements.len().div_ceil(part_count).max(1);
     let chunks: Vec<&[crate::pairing::Statement]> = statements.chunks(part_size).collect();
     let mut scalar_chunk: HashMap<u32, usize> = HashMap::new();
     let mut pair_chunk: HashMap<u32, usize> = HashMap::new();

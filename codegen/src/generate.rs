@@ -1262,6 +1262,30 @@ pub fn generation_model(loaded: &Loaded, options: &ModelOptions) -> Result<Model
 mod tests {
     use super::*;
 
+    /// A paired body longer than `PAIRED_PART` statements (the twin arms' `crba`, 8,849) is cut into parts
+    /// that pass scalars and pairs, spread over modules.
+    #[test]
+    fn long_paired_bodies_are_cut_into_parts_in_modules() {
+        let path = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../tests/data/scale/twin_arms.urdf"
+        );
+        let loaded = crate::load(path.as_ref()).unwrap();
+        let options = GenerateOptions {
+            f32: false,
+            ..GenerateOptions::default()
+        }
+        .with_requested(Some(vec![Algorithm::Crba]), &[]);
+        let text = generate_source(&loaded, &options).unwrap();
+        assert!(text.contains("type P = "), "not paired");
+        assert!(text.contains("sp: &mut ["), "no scratch array of pairs");
+        assert!(
+            text.contains("mod crba_parts_1"),
+            "not cut into parts in modules"
+        );
+        assert!(text.contains("use self::crba_parts_0::"));
+    }
+
     fn quadruped() -> Loaded {
         crate::load(concat!(env!("CARGO_MANIFEST_DIR"), "/../models/quadruped.urdf").as_ref())
             .unwrap()
