@@ -30,6 +30,38 @@ mod z1 {
     embedyn::robot!("models/peers/z1.urdf", f32_only, only(aba, com), lanes = 8);
 }
 
+/// Generated lane code compiles in a module without the implicit prelude (attacker's trial: the batch
+/// wrappers named `core::array::from_fn` without the leading `::`).
+#[no_implicit_prelude]
+mod without_prelude {
+    ::embedyn::robot!(
+        "models/loops/four_bar_internal.urdf",
+        f64_only,
+        only(aba),
+        lanes = 2
+    );
+}
+
+#[test]
+fn lane_code_builds_without_the_implicit_prelude() {
+    // The module's existence is the check; its lane batch also agrees with its scalar function.
+    let q = [0.0f64; without_prelude::NQ];
+    let v = [0.0f64; without_prelude::NV];
+    let u = [1.0f64; without_prelude::NV];
+    let (mut batch, mut measure) = ([[0.0f64; without_prelude::NV]; 1], [0.0]);
+    assert!(without_prelude::f64x2::aba_batch(
+        &[q],
+        &[v],
+        &[u],
+        &mut batch,
+        &mut measure
+    ));
+    let mut scalar = [0.0f64; without_prelude::NV];
+    let scalar_measure = without_prelude::f64::aba(&q, &v, &u, &mut scalar);
+    assert_eq!(batch[0].map(f64::to_bits), scalar.map(f64::to_bits));
+    assert_eq!(measure[0].to_bits(), scalar_measure.to_bits());
+}
+
 /// Lane `k` of `x` for each entry.
 fn lane<const N: usize>(x: &[F64x4; N], k: usize) -> [f64; N] {
     std::array::from_fn(|i| x[i].to_array()[k])

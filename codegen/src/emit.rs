@@ -164,20 +164,32 @@ fn part_modules(function: &str, parts: Vec<TokenStream>, part_names: &[String]) 
     }
     let wrapped = modules.into_iter().enumerate().map(|(g, (fns, names))| {
         let module = format_ident!("{}", part_module_name(function, g));
+        // One name without braces (`unused_import_braces`, a lint users may deny).
+        let import = match names.as_slice() {
+            [one] => quote!(use self::#module::#one;),
+            _ => quote!(use self::#module::{#(#names),*};),
+        };
         quote! {
             mod #module {
                 #[allow(unused_imports)]
                 use super::*;
                 #(#fns)*
             }
-            use self::#module::{#(#names),*};
+            #import
         }
     });
     quote!(#(#wrapped)*)
 }
 
-/// The most statements (a pair counting once) in one part of a paired body (see `paired_parts`).
+/// The most `let`s in one part of a paired body, or in a paired function written whole (see
+/// `paired_parts`).
 pub(crate) const PAIRED_PART: usize = CHUNK;
+
+/// The statements (`let`s, mostly) a paired body writes: a statement of a pair adds one per lane taken
+/// out of it.
+fn paired_lets(statements: &[crate::pairing::Statement]) -> usize {
+    statements.iter().map(|s| s.tokens.len()).sum()
+}
 
 /// Statements per chunk function. At ~2000 statements rustc -O compiles each in about a second, and the
 /// call boundaries cost a few loads and stores of live values.
@@ -418,7 +430,7 @@ pub fn function(
         order.len() <= SCHEDULE_LIMIT || statements.len() * 100 <= order.len() * LONG_PAIRED_PERCENT
     });
     if let Some((order, batch, statements)) = &paired {
-        if statements.len() > CHUNK {
+        if paired_lets(statements) > PAIRED_PART {
             return Ok(paired_parts(
                 name,
                 doc,
@@ -930,8 +942,8 @@ pub(crate) fn batch_wrapper(name: &str, args: &[Arg], outputs: &[Output]) -> Tok
             None => {
                 params.push(quote!(#id: &[[E; #len]]));
                 lane_args.push(quote!(
-                    let #lane_id: [S; #len] = core::array::from_fn(|i| {
-                        S::new(core::array::from_fn(|k| #id[at(k)][i]))
+                    let #lane_id: [S; #len] = ::core::array::from_fn(|i| {
+                        S::new(::core::array::from_fn(|k| #id[at(k)][i]))
                     });
                 ));
             }
@@ -939,8 +951,8 @@ pub(crate) fn batch_wrapper(name: &str, args: &[Arg], outputs: &[Output]) -> Tok
                 let c = num(c);
                 params.push(quote!(#id: &[[[E; #c]; #len]]));
                 lane_args.push(quote!(
-                    let #lane_id: [[S; #c]; #len] = core::array::from_fn(|r| {
-                        core::array::from_fn(|c| S::new(core::array::from_fn(|k| #id[at(k)][r][c])))
+                    let #lane_id: [[S; #c]; #len] = ::core::array::from_fn(|r| {
+                        ::core::array::from_fn(|c| S::new(::core::array::from_fn(|k| #id[at(k)][r][c])))
                     });
                 ));
             }
@@ -1186,9 +1198,21 @@ fn paired_parts(
     // test build (SIGSEGV in `DwarfCompileUnit::createAndAddScopeChildren`). So parts keep at most
     // PAIRED_PART statements, cut evenly; the former half-size parts above 8,000 operations, a compile-time
     // measure, are no longer needed now that the parts' modules compile in parallel.
-    let part_count = statements.len().div_ceil(PAIRED_PART).max(1);
-    let part_size = statements.len().div_ceil(part_count).max(1);
-    let chunks: Vec<&[crate::pairing::Statement]> = statements.chunks(part_size).collect();
+    // Cut by `let`s, not statements: a pair taken out to scalars adds a `let` per lane (paired
+    // `kinematics` of two 50-link arms had 1.65 per statement, and its 2,000 statements overflowed
+    // rustc's stack in a debug build: attacker's trial).
+    let part_count = paired_lets(statements).div_ceil(PAIRED_PART).max(1);
+    let per_part = paired_lets(statements).div_ceil(part_count).max(1);
+    let mut chunks: Vec<&[crate::pairing::Statement]> = Vec::new();
+    let (mut start, mut lets) = (0, 0);
+    for (i, st) in statements.iter().enumerate() {
+        if lets > 0 && lets + st.tokens.len() > per_part {
+            chunks.push(&statements[start..i]);
+            (start, lets) = (i, 0);
+        }
+        lets += st.tokens.len();
+    }
+    chunks.push(&statements[start..]);
     let mut scalar_chunk: HashMap<u32, usize> = HashMap::new();
     let mut pair_chunk: HashMap<u32, usize> = HashMap::new();
     for (c, part) in chunks.iter().enumerate() {

@@ -362,7 +362,12 @@ pub(crate) fn function_text(
             let module_name = part_module_name(name, module);
             let members = part_functions[module_start..=c].join(", ");
             writeln!(text, "    }}").unwrap();
-            writeln!(text, "    use self::{module_name}::{{{members}}};").unwrap();
+            // One name without braces (`unused_import_braces`, a lint users may deny).
+            if module_start == c {
+                writeln!(text, "    use self::{module_name}::{members};").unwrap();
+            } else {
+                writeln!(text, "    use self::{module_name}::{{{members}}};").unwrap();
+            }
         }
     }
     // The public function: the parts in order, then the outputs no part computes (constants and

@@ -1284,6 +1284,65 @@ mod tests {
             "not cut into parts in modules"
         );
         assert!(text.contains("use self::crba_parts_0::"));
+        assert!(most_lets(&text).0 <= 2_400);
+
+        // With debug info, LLVM recurses once per nested `let` scope: paired `kinematics` of two 50-link
+        // arms, 2,000 statements and 2,922 `let`s (the pairs taken out to scalars add them), overflowed
+        // rustc's stack in a debug build (attacker's trial). Parts are cut by `let`s now.
+        let mut urdf = String::from("<robot name=\"twin50\"><link name=\"base\"/>");
+        for (side, y) in [("l", 0.2f64), ("r", -0.2)] {
+            let mut parent = "base".to_string();
+            for i in 1..=50 {
+                let axis = ["0 0 1", "0 1 0", "1 0 0"][i % 3];
+                let mass = 1.0 + 0.3 * ((i * 7) % 5) as f64;
+                let offset = if i == 1 { y } else { 0.004 * -y.signum() };
+                urdf += &format!(
+                    "<link name=\"{side}{i}\"><inertial><origin xyz=\"0.003 0 0.08\"/><mass \
+                     value=\"{mass}\"/><inertia ixx=\"4.5e-3\" ixy=\"0\" ixz=\"-7.3e-6\" \
+                     iyy=\"3.8e-3\" iyz=\"0\" izz=\"1.1e-3\"/></inertial></link><joint \
+                     name=\"{side}_joint{i}\" type=\"continuous\"><parent link=\"{parent}\"/><child \
+                     link=\"{side}{i}\"/><origin xyz=\"0.02 {offset} 0.17\"/><axis xyz=\"{axis}\"/></joint>"
+                );
+                parent = format!("{side}{i}");
+            }
+        }
+        urdf += "</robot>";
+        let dir = std::env::temp_dir().join(format!("embedyn-twin50-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let file = dir.join("twin50.urdf");
+        std::fs::write(&file, urdf).unwrap();
+        let loaded = crate::load(&file).unwrap();
+        std::fs::remove_dir_all(&dir).ok();
+        let options = GenerateOptions {
+            f32: false,
+            ..GenerateOptions::default()
+        }
+        .with_requested(Some(vec![Algorithm::Kinematics]), &[]);
+        let text = generate_source(&loaded, &options).unwrap();
+        assert!(text.contains("type P = "), "not paired");
+        let (lets, function) = most_lets(&text);
+        assert!(lets > 1000 && lets <= 2_400, "{lets} lets in `{function}`");
+    }
+
+    /// The most `let` statements of one generated function (or part) in `text`, and its name.
+    fn most_lets(text: &str) -> (usize, String) {
+        let mut most = (0, String::new());
+        let mut current: Option<(usize, String)> = None;
+        for line in text.lines() {
+            let line = line.trim_start();
+            let header = line
+                .strip_prefix("pub fn ")
+                .or_else(|| line.strip_prefix("pub(super) fn "));
+            if let Some(rest) = header {
+                most = most.max(current.take().unwrap_or_default());
+                current = Some((0, rest.split('(').next().unwrap().to_string()));
+            } else if line.starts_with("let ") {
+                if let Some((n, _)) = current.as_mut() {
+                    *n += 1;
+                }
+            }
+        }
+        most.max(current.unwrap_or_default())
     }
 
     fn quadruped() -> Loaded {
