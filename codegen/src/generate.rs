@@ -1270,13 +1270,7 @@ mod tests {
             env!("CARGO_MANIFEST_DIR"),
             "/../tests/data/scale/twin_arms.urdf"
         );
-        let loaded = crate::load(path.as_ref()).unwrap();
-        let options = GenerateOptions {
-            f32: false,
-            ..GenerateOptions::default()
-        }
-        .with_requested(Some(vec![Algorithm::Crba]), &[]);
-        let text = generate_source(&loaded, &options).unwrap();
+        let text = f64_source(&crate::load(path.as_ref()).unwrap(), Algorithm::Crba);
         assert!(text.contains("type P = "), "not paired");
         assert!(text.contains("sp: &mut ["), "no scratch array of pairs");
         assert!(
@@ -1313,15 +1307,20 @@ mod tests {
         std::fs::write(&file, urdf).unwrap();
         let loaded = crate::load(&file).unwrap();
         std::fs::remove_dir_all(&dir).ok();
+        let text = f64_source(&loaded, Algorithm::Kinematics);
+        assert!(text.contains("type P = "), "not paired");
+        let (lets, function) = most_lets(&text);
+        assert!(lets > 1000 && lets <= 2_400, "{lets} lets in `{function}`");
+    }
+
+    /// The generated source of `algorithm` alone, f64 only.
+    fn f64_source(loaded: &Loaded, algorithm: Algorithm) -> String {
         let options = GenerateOptions {
             f32: false,
             ..GenerateOptions::default()
         }
-        .with_requested(Some(vec![Algorithm::Kinematics]), &[]);
-        let text = generate_source(&loaded, &options).unwrap();
-        assert!(text.contains("type P = "), "not paired");
-        let (lets, function) = most_lets(&text);
-        assert!(lets > 1000 && lets <= 2_400, "{lets} lets in `{function}`");
+        .with_requested(Some(vec![algorithm]), &[]);
+        generate_source(loaded, &options).unwrap()
     }
 
     /// The most `let` statements of one generated function (or part) in `text`, and its name.
