@@ -137,10 +137,12 @@ pub(crate) fn part_doc(function: &str, index: usize, count: usize, bodies: &[&st
 /// the parts in one module, 17 s in 16 (BENCHMARKS.md, "Derivatives").
 pub(crate) const PART_MODULES: usize = 16;
 
-/// The modules part `index` of `count` goes into: contiguous runs, at most [`PART_MODULES`].
-pub(crate) fn part_module_of(index: usize, count: usize) -> usize {
+/// The parts each module holds, of `count` parts: contiguous runs, at most [`PART_MODULES`] of them.
+pub(crate) fn part_module_ranges(count: usize) -> impl Iterator<Item = std::ops::Range<usize>> {
     let per = count.div_ceil(PART_MODULES).max(1);
-    index / per
+    (0..count)
+        .step_by(per)
+        .map(move |start| start..(start + per).min(count))
 }
 
 /// The name of the `g`-th module of `function`'s parts: in the type namespace, beside the scalar
@@ -152,32 +154,29 @@ pub(crate) fn part_module_name(function: &str, g: usize) -> String {
 /// Part functions (each `pub(super)`) grouped into modules of contiguous parts, each module importing
 /// its parent's names, and the parent importing the parts back by name.
 fn part_modules(function: &str, parts: Vec<TokenStream>, part_names: &[String]) -> TokenStream {
-    let count = parts.len();
-    let mut modules: Vec<(Vec<TokenStream>, Vec<Ident>)> = Vec::new();
-    for (c, (part, part_name)) in parts.into_iter().zip(part_names).enumerate() {
-        let g = part_module_of(c, count);
-        if modules.len() <= g {
-            modules.push((Vec::new(), Vec::new()));
-        }
-        modules[g].0.push(part);
-        modules[g].1.push(format_ident!("{}", part_name));
-    }
-    let wrapped = modules.into_iter().enumerate().map(|(g, (fns, names))| {
-        let module = format_ident!("{}", part_module_name(function, g));
-        // One name without braces (`unused_import_braces`, a lint users may deny).
-        let import = match names.as_slice() {
-            [one] => quote!(use self::#module::#one;),
-            _ => quote!(use self::#module::{#(#names),*};),
-        };
-        quote! {
-            mod #module {
-                #[allow(unused_imports)]
-                use super::*;
-                #(#fns)*
+    let wrapped = part_module_ranges(parts.len())
+        .enumerate()
+        .map(|(g, range)| {
+            let fns = &parts[range.clone()];
+            let names: Vec<Ident> = part_names[range]
+                .iter()
+                .map(|n| format_ident!("{}", n))
+                .collect();
+            let module = format_ident!("{}", part_module_name(function, g));
+            // One name without braces (`unused_import_braces`, a lint users may deny).
+            let import = match names.as_slice() {
+                [one] => quote!(use self::#module::#one;),
+                _ => quote!(use self::#module::{#(#names),*};),
+            };
+            quote! {
+                mod #module {
+                    #[allow(unused_imports)]
+                    use super::*;
+                    #(#fns)*
+                }
+                #import
             }
-            #import
-        }
-    });
+        });
     quote!(#(#wrapped)*)
 }
 
@@ -1194,15 +1193,15 @@ fn paired_parts(
     // 1,043 / 1,057, and their crate compiled in 3.1 / 3.2 / 3.3 / 3.5 s, the parts' modules optimized in
     // parallel (release, no debug info). With debug info, though, every `let` opens a lexical scope
     // inside the previous one and LLVM's DWARF writer recurses once per scope: parts of 4,000 paired
-    // statements (a pair's statement may add a `let` per lane taken out) overflowed rustc's stack in the
-    // test build (SIGSEGV in `DwarfCompileUnit::createAndAddScopeChildren`). So parts keep at most
-    // PAIRED_PART statements, cut evenly; the former half-size parts above 8,000 operations, a compile-time
-    // measure, are no longer needed now that the parts' modules compile in parallel.
-    // Cut by `let`s, not statements: a pair taken out to scalars adds a `let` per lane (paired
-    // `kinematics` of two 50-link arms had 1.65 per statement, and its 2,000 statements overflowed
-    // rustc's stack in a debug build: attacker's trial).
-    let part_count = paired_lets(statements).div_ceil(PAIRED_PART).max(1);
-    let per_part = paired_lets(statements).div_ceil(part_count).max(1);
+    // statements overflowed rustc's stack in the test build (SIGSEGV in
+    // `DwarfCompileUnit::createAndAddScopeChildren`). So parts are cut evenly by `let`s, at most
+    // PAIRED_PART of them, not by statements: a pair taken out to scalars adds a `let` per lane (paired
+    // `kinematics` of two 50-link arms had 1.65 per statement, and its 2,000 statements overflowed rustc's
+    // stack in a debug build: attacker's trial). The former half-size parts above 8,000 operations, a
+    // compile-time measure, are no longer needed now that the parts' modules compile in parallel.
+    let total_lets = paired_lets(statements);
+    let part_count = total_lets.div_ceil(PAIRED_PART).max(1);
+    let per_part = total_lets.div_ceil(part_count).max(1);
     let mut chunks: Vec<&[crate::pairing::Statement]> = Vec::new();
     let (mut start, mut lets) = (0, 0);
     for (i, st) in statements.iter().enumerate() {

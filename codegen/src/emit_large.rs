@@ -22,7 +22,7 @@
 //! standalone crate needs no pretty-printing pass over millions of tokens.
 
 use crate::emit::{
-    doc_lines, function_doc, operands, part_doc, part_module_name, part_module_of, Arg, Output,
+    doc_lines, function_doc, operands, part_doc, part_module_name, part_module_ranges, Arg, Output,
     CHUNK, MUST_USE,
 };
 use crate::trace::{Op, Sym};
@@ -301,72 +301,65 @@ pub(crate) fn function_text(
         .unwrap();
     }
     let batched: std::collections::HashSet<u32> = batch.iter().copied().collect();
-    let part_bodies: Vec<Vec<&str>> = part_ranges(&parts, order.len())
-        .map(|range| names.bodies(order[range].iter()))
+    let ranges: Vec<_> = part_ranges(&parts, order.len()).collect();
+    let part_bodies: Vec<Vec<&str>> = ranges
+        .iter()
+        .map(|range| names.bodies(order[range.clone()].iter()))
         .collect();
     let part_functions = part_names(name, &part_bodies, taken);
-    let part_count = part_bodies.len();
-    let mut module_start = 0;
-    for (c, range) in part_ranges(&parts, order.len()).enumerate() {
-        let part = Part {
-            nodes,
-            order: &order[range],
-            part_of: &part_of,
-            index: c,
-            slot: &slot,
-            destinations: &destinations,
-            outputs,
-            args,
-            batched: &batched,
-            angles,
-            sin_of,
-            cos_of,
-            helpers,
-            names,
-            lanes,
-        };
-        // Contiguous parts share a module (see `PART_MODULES`): opened before the first, closed after
-        // the last with the parent's import of its functions. Part text is written one level out and
-        // indented as the module's.
-        let module = part_module_of(c, part_count);
-        let first = c == 0 || part_module_of(c - 1, part_count) != module;
-        let last = c + 1 == part_count || part_module_of(c + 1, part_count) != module;
-        if first {
-            module_start = c;
-            let module_name = part_module_name(name, module);
-            writeln!(text, "    mod {module_name} {{").unwrap();
-            writeln!(text, "        #[allow(unused_imports)]").unwrap();
-            writeln!(text, "        use super::*;").unwrap();
+    // Contiguous parts share a module (see `PART_MODULES`), which the parent imports them from. Part
+    // text is written one level out and indented as the module's.
+    for (module, members) in part_module_ranges(ranges.len()).enumerate() {
+        let module_name = part_module_name(name, module);
+        writeln!(text, "    mod {module_name} {{").unwrap();
+        writeln!(text, "        #[allow(unused_imports)]").unwrap();
+        writeln!(text, "        use super::*;").unwrap();
+        for c in members.clone() {
+            let part = Part {
+                nodes,
+                order: &order[ranges[c].clone()],
+                part_of: &part_of,
+                index: c,
+                slot: &slot,
+                destinations: &destinations,
+                outputs,
+                args,
+                batched: &batched,
+                angles,
+                sin_of,
+                cos_of,
+                helpers,
+                names,
+                lanes,
+            };
+            let mut part_text = String::new();
+            write_doc(
+                &mut part_text,
+                &part_doc(name, c, ranges.len(), &part_bodies[c]),
+            );
+            writeln!(part_text, "    #[inline(never)]").unwrap();
+            writeln!(part_text, "    #[allow(unused_variables, clippy::all)]").unwrap();
+            let part_function = &part_functions[c];
+            writeln!(
+                part_text,
+                "    pub(super) fn {part_function}({part_params}) {{"
+            )
+            .unwrap();
+            part.write_body(&mut part_text);
+            writeln!(part_text, "    }}").unwrap();
+            for line in part_text.lines() {
+                text.push_str("    ");
+                text.push_str(line);
+                text.push('\n');
+            }
         }
-        let mut part_text = String::new();
-        write_doc(
-            &mut part_text,
-            &part_doc(name, c, part_count, &part_bodies[c]),
-        );
-        writeln!(part_text, "    #[inline(never)]").unwrap();
-        writeln!(part_text, "    #[allow(unused_variables, clippy::all)]").unwrap();
-        let part_function = &part_functions[c];
-        writeln!(
-            part_text,
-            "    pub(super) fn {part_function}({part_params}) {{"
-        )
-        .unwrap();
-        part.write_body(&mut part_text);
-        writeln!(part_text, "    }}").unwrap();
-        for line in part_text.lines() {
-            text.push_str("    ");
-            text.push_str(line);
-            text.push('\n');
-        }
-        if last {
-            let module_name = part_module_name(name, module);
-            let members = part_functions[module_start..=c].join(", ");
-            writeln!(text, "    }}").unwrap();
-            // One name without braces (`unused_import_braces`, a lint users may deny).
-            if module_start == c {
-                writeln!(text, "    use self::{module_name}::{members};").unwrap();
-            } else {
-                writeln!(text, "    use self::{module_name}::{{{members}}};").unwrap();
+        writeln!(text, "    }}").unwrap();
+        // One name without braces (`unused_import_braces`, a lint users may deny).
+        match &part_functions[members] {
+            [one] => writeln!(text, "    use self::{module_name}::{one};").unwrap(),
+            several => {
+                let several = several.join(", ");
+                writeln!(text, "    use self::{module_name}::{{{several}}};").unwrap()
             }
         }
     }
