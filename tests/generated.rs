@@ -36,6 +36,11 @@ mod slider_crank {
 mod biped {
     embedyn::robot!("models/loops/biped_floating.urdf", f64_only);
 }
+mod half_turn_arms {
+    // Mirrored arms whose grippers hang turned by π against each other (as TALOS's do): pairs whose
+    // second lane carries a sign (`negate_second`, packs of `-x`), in f64 and f32.
+    embedyn::robot!("tests/data/scale/half_turn_arms.urdf");
+}
 mod four_bar_terminal {
     embedyn::robot!("models/loops/four_bar_terminal.urdf");
 }
@@ -263,6 +268,17 @@ fn four_bar_generated_matches_interpreted() {
 #[test]
 fn slider_crank_generated_matches_interpreted() {
     check!(slider_crank, "models/loops/slider_crank.urdf", false);
+}
+
+/// Mirrored arms whose right gripper hangs turned by π against the left (net wrist turns of π and 0, written
+/// to 11 digits): the right gripper's values are the left's up to signs, paired with signed second lanes.
+#[test]
+fn half_turned_mirror_branches_generated_matches_interpreted() {
+    check!(
+        half_turn_arms,
+        "tests/data/scale/half_turn_arms.urdf",
+        false
+    );
 }
 
 #[test]

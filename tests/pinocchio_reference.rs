@@ -1,6 +1,7 @@
 //! Reproduces reference answers computed with Pinocchio 4.1.0 on example-robot-data 6.0.0 URDFs
 //! (tests/data/pinocchio/README.md): ABA, RNEA, non-linear effects and the mass matrix, to 1e-9 relative;
-//! the world pose of every link frame, interpreted and generated, to 1e-12 m / 1e-12.
+//! the world pose of every link frame, interpreted and generated, to 2e-11 m / 2e-11 (quarter turns,
+//! below).
 
 use crate::common;
 
@@ -247,8 +248,12 @@ fn link_frames_match_pinocchio() {
         let listed = model.bodies.iter().map(|b| b.links.len()).sum::<usize>();
         assert_eq!(compared, 5 * listed, "{name}");
         eprintln!("{name}: {listed} link frames, worst difference from Pinocchio {worst:.1e}");
+        // The files write quarter turns to 11 digits (`1.57079632679`, 4.9e-12 rad short of π/2), which
+        // embedyn reads as exact quarter turns and Pinocchio literally (docs/model-format.md): over the
+        // UR5's reach of about 1 m that moves its frames by up to 1e-11 m (measured 9.9e-12; 1e-16 with
+        // the literal reading). Everything else agrees to rounding.
         assert!(
-            worst <= 1e-12,
+            worst <= 2e-11,
             "{name}: link frames differ from Pinocchio by {worst:e}"
         );
     }

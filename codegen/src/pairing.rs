@@ -130,16 +130,28 @@ impl BranchPairs {
 }
 
 /// Which live values of a tape are computed as pairs: `second[a] = b` puts `a` in the first lane and `b`
-/// in the second. A pair of inputs, sines or cosines is packed from its two scalars; any other pair is
-/// one operation on pairs.
+/// in the second (or `-b`, where `a` is in `negated`). A pair of inputs, sines or cosines is packed from
+/// its two scalars; any other pair is one operation on pairs.
+///
+/// Why a lane may hold the negation: mirrored branches often compute the same value with the opposite
+/// sign (TALOS's right gripper hangs turned by π about its wrist against the left one, so its rotations
+/// have -1 where the left's have 1), and the tape folds signs into the operations: `-(x - y)` is traced as
+/// `y - x` and `x + (-c) y` as `x - c y`. Negation is exact in IEEE arithmetic (rounding is symmetric), so
+/// a lane holding `-b` computes with the same roundings and `-b` taken out of it is `b` bit for bit.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Pairing {
     /// First member → second member.
     pub second: HashMap<u32, u32>,
     /// Second member → first member.
     pub first: HashMap<u32, u32>,
-    /// First members of commutative pairs whose second member's operands are in the other order.
+    /// First members of pairs whose second member's operands are in the other order (commutative
+    /// operations, and sums against differences).
     pub swapped: std::collections::HashSet<u32>,
+    /// First members of pairs whose second lane holds the negated second member.
+    pub negated: std::collections::HashSet<u32>,
+    /// The signs the operands' second lanes carry in each computed pair's operation, by first member
+    /// (a pair register read with the other sign is read through `negate_second`).
+    pub signs: HashMap<u32, [bool; 2]>,
 }
 
 impl Pairing {
@@ -155,6 +167,51 @@ impl Pairing {
         )
     }
 
+    /// The sign each operand's second lane must carry for the pair of first member `a` to compute its
+    /// own second lane (`true`: negated), operand by operand in the first member's order, as the
+    /// unification that formed the pair chose them.
+    pub(crate) fn operand_signs(&self, nodes: &[Op], a: u32) -> Vec<bool> {
+        let arity = crate::emit::operands(&nodes[a as usize]).len();
+        self.signs
+            .get(&a)
+            .map_or_else(|| vec![false; arity], |s| s[..arity].to_vec())
+    }
+
+    /// The pair register that holds the operands `x` (first lane) and `y` (second lane, up to its
+    /// sign), where one does: the pair `(x, y)` itself, or through a negation that one side has and the
+    /// other not (`y = -y'` with the pair `(x, y')`, or `x = -x'` with `(x', y)`, read as `-(x', y)`:
+    /// lane one must hold the first member as it is). `None` for constants, a shared operand, or operands
+    /// that only pack from their scalars.
+    pub(crate) fn operand(&self, nodes: &[Op], x: Sym, y: Sym) -> Option<PairOperand> {
+        let (Sym::Node(x), Sym::Node(y)) = (x, y) else {
+            return None;
+        };
+        if self.second.get(&x) == Some(&y) {
+            return Some(PairOperand {
+                first: x,
+                negate: false,
+                second_negated: false,
+                sign: self.negated.contains(&x),
+            });
+        }
+        match (&nodes[x as usize], &nodes[y as usize]) {
+            (Op::Neg(_), Op::Neg(_)) => None,
+            (_, Op::Neg(Sym::Node(y))) if self.second.get(&x) == Some(y) => Some(PairOperand {
+                first: x,
+                negate: false,
+                second_negated: true,
+                sign: !self.negated.contains(&x),
+            }),
+            (Op::Neg(Sym::Node(x)), _) if self.second.get(x) == Some(&y) => Some(PairOperand {
+                first: *x,
+                negate: true,
+                second_negated: false,
+                sign: !self.negated.contains(x),
+            }),
+            _ => None,
+        }
+    }
+
     /// Number of pairs computed by one operation.
     pub(crate) fn computed(&self, nodes: &[Op]) -> usize {
         self.second
@@ -162,6 +219,19 @@ impl Pairing {
             .filter(|&&a| !Pairing::is_packed(nodes, a))
             .count()
     }
+}
+
+/// An operand of a pair operation read from a pair register ([`Pairing::operand`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct PairOperand {
+    /// The register's pair, by first member.
+    pub first: u32,
+    /// Whether the operand is the register negated.
+    pub negate: bool,
+    /// Whether the second member's operand is the negation of the register's second member.
+    pub second_negated: bool,
+    /// Whether the operand's second lane holds the second member's operand negated.
+    pub sign: bool,
 }
 
 /// How deep [`find`] follows operands that are not yet paired.
@@ -196,23 +266,62 @@ pub(crate) fn find(nodes: &[Op], live: &[bool], seeds: &[(u32, u32)]) -> Pairing
             continue;
         }
         'operands: for o in crate::emit::operands(&nodes[n as usize]) {
-            let Sym::Node(o) = o else { continue };
+            let Sym::Node(mut o) = o else { continue };
+            // An operand negated on the first side only.
+            if let (false, Op::Neg(Sym::Node(x))) =
+                (pairing.second.contains_key(&o), &nodes[o as usize])
+            {
+                o = *x;
+            }
             let Some(&o2) = pairing.second.get(&o) else {
                 continue;
             };
-            for &c in &users[o2 as usize] {
-                if c == n || pairing.taken(c) || !same_kind(&nodes[n as usize], &nodes[c as usize])
+            // The second member's readers, and the readers of its negation.
+            let mut candidates: Vec<u32> = users[o2 as usize].clone();
+            for &u in &users[o2 as usize] {
+                if matches!(nodes[u as usize], Op::Neg(_)) {
+                    candidates.extend(&users[u as usize]);
+                }
+            }
+            for c in candidates {
+                if c == n || pairing.taken(c) || !compatible(&nodes[n as usize], &nodes[c as usize])
                 {
                     continue;
                 }
-                let mut trial = Trial::default();
-                if unify(nodes, &pairing, Sym::Node(n), Sym::Node(c), &mut trial, 0) {
-                    for (a, b) in trial.pairs {
-                        pairing.second.insert(a, b);
-                        pairing.first.insert(b, a);
+                // Without reading a pair negated first; with, where that costs fewer negations than
+                // the pairs save.
+                for (flexible, negated) in
+                    [(false, false), (false, true), (true, false), (true, true)]
+                {
+                    let mut trial = Trial {
+                        flexible,
+                        ..Trial::default()
+                    };
+                    if unify(
+                        nodes,
+                        &pairing,
+                        Sym::Node(n),
+                        Sym::Node(c),
+                        negated,
+                        &mut trial,
+                        0,
+                    ) && trial.flips < trial.pairs.len()
+                    {
+                        for (a, b, negated) in trial.pairs {
+                            pairing.second.insert(a, b);
+                            pairing.first.insert(b, a);
+                            if negated {
+                                pairing.negated.insert(a);
+                            }
+                        }
+                        for (a, swapped, signs) in trial.ways {
+                            if swapped {
+                                pairing.swapped.insert(a);
+                            }
+                            pairing.signs.insert(a, signs);
+                        }
+                        break 'operands;
                     }
-                    pairing.swapped.extend(trial.swapped);
-                    break 'operands;
                 }
             }
         }
@@ -238,60 +347,161 @@ fn same_kind(a: &Op, b: &Op) -> bool {
     core::mem::discriminant(a) == core::mem::discriminant(b)
 }
 
+/// Operations one pair instruction can compute: the same kind, or a sum against a difference (the
+/// lanes' signs make up for it, [`addend_signs`]).
+fn compatible(a: &Op, b: &Op) -> bool {
+    same_kind(a, b) || (is_sum(a) && is_sum(b))
+}
+
+fn is_sum(op: &Op) -> bool {
+    matches!(op, Op::Add(..) | Op::Sub(..))
+}
+
+/// The signs of a sum's operands' second lanes. The first member is `x ± y` (`left_minus`: `x - y`), the
+/// second `u ± w` (`right_minus`), and the pair holds `±` it (`negated`); `x` pairs with `u` and `y` with
+/// `w`, or `x` with `w` and `y` with `u` (`swapped`). Lane two computes `σx r + s σy r'` with the first
+/// member's operation `s`, which equals `σ` times the second member when each operand's sign is `σ` times
+/// its coefficients in both members.
+fn addend_signs(negated: bool, left_minus: bool, right_minus: bool, swapped: bool) -> [bool; 2] {
+    if swapped {
+        [negated ^ right_minus, negated ^ left_minus]
+    } else {
+        [negated, negated ^ left_minus ^ right_minus]
+    }
+}
+
 /// Pairs tried for one candidate, kept only if the whole candidate pairs.
 #[derive(Default)]
 struct Trial {
-    pairs: Vec<(u32, u32)>,
-    swapped: Vec<u32>,
+    /// (first, second, negated).
+    pairs: Vec<(u32, u32, bool)>,
+    /// How the operands of computed pairs pair: (first, swapped, the operands' signs).
+    ways: Vec<(u32, bool, [bool; 2])>,
+    /// Unifications tried, bounded by [`MAX_STEPS`].
+    steps: usize,
+    /// Whether an existing pair may be read with its second lane negated (one `negate_second`).
+    flexible: bool,
+    /// Reads that do.
+    flips: usize,
 }
 
+/// Unifications tried per candidate at most: the signs double the ways a product can pair, and this
+/// keeps the search linear in the tape.
+const MAX_STEPS: usize = 2_000;
+
 impl Trial {
-    fn get(&self, a: u32) -> Option<u32> {
-        self.pairs.iter().find(|p| p.0 == a).map(|p| p.1)
+    fn get(&self, a: u32) -> Option<(u32, bool)> {
+        self.pairs.iter().find(|p| p.0 == a).map(|p| (p.1, p.2))
     }
     fn uses(&self, n: u32) -> bool {
         self.pairs.iter().any(|p| p.0 == n || p.1 == n)
     }
+    fn rollback(&mut self, pairs: usize, ways: usize, flips: usize) {
+        self.pairs.truncate(pairs);
+        self.ways.truncate(ways);
+        self.flips = flips;
+    }
 }
 
-fn unify(nodes: &[Op], pairing: &Pairing, a: Sym, b: Sym, trial: &mut Trial, depth: usize) -> bool {
+/// Whether `a` and `b` pair with the second lane holding `b` (`negated`: `-b`), recording the new pairs
+/// in `trial`.
+fn unify(
+    nodes: &[Op],
+    pairing: &Pairing,
+    a: Sym,
+    b: Sym,
+    negated: bool,
+    trial: &mut Trial,
+    depth: usize,
+) -> bool {
     let (a, b) = match (a, b) {
         (Sym::Const(_), Sym::Const(_)) => return true,
         (Sym::Node(a), Sym::Node(b)) => (a, b),
         _ => return false,
     };
-    if a == b || pairing.second.get(&a) == Some(&b) || trial.get(a) == Some(b) {
-        return true;
+    if a == b {
+        return !negated;
     }
-    if depth > MAX_DEPTH || pairing.taken(a) || pairing.taken(b) || trial.uses(a) || trial.uses(b) {
+    // A pair read with the other sign costs one operation: a packed pair (inputs, sines, cosines) is
+    // packed again from its scalars, a computed one goes through `negate_second`.
+    let existing = match pairing.second.get(&a) {
+        Some(&second) if second == b => Some(pairing.negated.contains(&a)),
+        _ => trial.get(a).filter(|t| t.0 == b).map(|t| t.1),
+    };
+    if let Some(sign) = existing {
+        if sign == negated {
+            return true;
+        }
+        trial.flips += 1;
+        return trial.flexible;
+    }
+    if depth > MAX_DEPTH || trial.steps >= MAX_STEPS {
         return false;
     }
+    trial.steps += 1;
     let (opa, opb) = (&nodes[a as usize], &nodes[b as usize]);
-    if !pairable(opa) || !same_kind(opa, opb) {
+    // A negation on one side only: the second lane carries it, or the reader negates the register
+    // (`Pairing::operand`).
+    match (opa, opb) {
+        (Op::Neg(_), Op::Neg(_)) => {}
+        (_, &Op::Neg(y)) => {
+            return unify(nodes, pairing, Sym::Node(a), y, !negated, trial, depth + 1)
+        }
+        (&Op::Neg(x), _) => {
+            return unify(nodes, pairing, x, Sym::Node(b), !negated, trial, depth + 1)
+        }
+        _ => {}
+    }
+    if pairing.taken(a) || pairing.taken(b) || trial.uses(a) || trial.uses(b) {
+        return false;
+    }
+    if !pairable(opa) || !compatible(opa, opb) {
+        return false;
+    }
+    // Sines and cosines are packed from their two scalars as they are.
+    if negated && matches!(opa, Op::Sin(_) | Op::Cos(_)) {
         return false;
     }
     let (xa, xb) = (crate::emit::operands(opa), crate::emit::operands(opb));
-    let commutative = matches!(opa, Op::Add(..) | Op::Mul(..));
-    let mark = (trial.pairs.len(), trial.swapped.len());
-    trial.pairs.push((a, b));
-    if xa
-        .iter()
-        .zip(&xb)
-        .all(|(&x, &y)| unify(nodes, pairing, x, y, trial, depth + 1))
-    {
-        return true;
+    // The ways the operands may pair: (swapped, sign of each operand's second lane).
+    let ways: Vec<(bool, [bool; 2])> = match opa {
+        Op::Add(..) | Op::Sub(..) => {
+            let (l, r) = (matches!(opa, Op::Sub(..)), matches!(opb, Op::Sub(..)));
+            vec![
+                (false, addend_signs(negated, l, r, false)),
+                (true, addend_signs(negated, l, r, true)),
+            ]
+        }
+        // A product's sign is its operands' signs multiplied: either may carry it.
+        Op::Mul(..) => vec![
+            (false, [false, negated]),
+            (false, [true, !negated]),
+            (true, [false, negated]),
+            (true, [true, !negated]),
+        ],
+        Op::Div(..) => vec![(false, [false, negated]), (false, [true, !negated])],
+        Op::Neg(_) => vec![(false, [negated, false])],
+        _ => vec![(false, [false, false])],
+    };
+    let mark = (trial.pairs.len(), trial.ways.len(), trial.flips);
+    trial.pairs.push((a, b, negated));
+    for (swapped, signs) in ways {
+        let mut xb = xb.clone();
+        if swapped {
+            xb.reverse();
+        }
+        if xa
+            .iter()
+            .zip(&xb)
+            .zip(signs)
+            .all(|((&x, &y), sign)| unify(nodes, pairing, x, y, sign, trial, depth + 1))
+        {
+            trial.ways.push((a, swapped, signs));
+            return true;
+        }
+        trial.rollback(mark.0 + 1, mark.1, mark.2);
     }
-    trial.pairs.truncate(mark.0 + 1);
-    trial.swapped.truncate(mark.1);
-    if commutative
-        && unify(nodes, pairing, xa[0], xb[1], trial, depth + 1)
-        && unify(nodes, pairing, xa[1], xb[0], trial, depth + 1)
-    {
-        trial.swapped.push(a);
-        return true;
-    }
-    trial.pairs.truncate(mark.0);
-    trial.swapped.truncate(mark.1);
+    trial.rollback(mark.0, mark.1, mark.2);
     false
 }
 
@@ -348,21 +558,24 @@ pub(crate) fn statements(
         }
     }
     // Packed pairs that some computed pair reads (the others would be dead code).
+    // Operand positions of a computed pair: (first's operand, second's operand).
+    let operand_pairs = |a: u32| -> Vec<(Sym, Sym)> {
+        let b = pairing.second[&a];
+        let (xa, mut xb) = (
+            crate::emit::operands(&nodes[a as usize]),
+            crate::emit::operands(&nodes[b as usize]),
+        );
+        if pairing.swapped.contains(&a) {
+            xb.reverse();
+        }
+        xa.into_iter().zip(xb).collect()
+    };
     let mut read_as_pair: HashSet<u32> = HashSet::new();
-    for (&a, &b) in &pairing.second {
+    for &a in pairing.second.keys() {
         if computed(a) {
-            let (xa, xb) = (
-                crate::emit::operands(&nodes[a as usize]),
-                crate::emit::operands(&nodes[b as usize]),
-            );
-            read_as_pair.extend(xa.into_iter().filter_map(|x| match x {
-                Sym::Node(x) if pairing.second.contains_key(&x) => Some(x),
-                _ => None,
-            }));
-            read_as_pair.extend(xb.into_iter().filter_map(|y| match y {
-                Sym::Node(y) => pairing.first.get(&y).copied(),
-                _ => None,
-            }));
+            for (x, y) in operand_pairs(a) {
+                read_as_pair.extend(pairing.operand(nodes, x, y).map(|o| o.first));
+            }
         }
     }
     let mut packed: Vec<(u32, u32)> = pairing
@@ -380,19 +593,6 @@ pub(crate) fn statements(
         .enumerate()
         .map(|(i, (it, _))| (*it, i))
         .collect();
-    // Operand positions of a computed pair: (first's operand, second's operand).
-    let operand_pairs = |a: u32| -> Vec<(Sym, Sym)> {
-        let b = pairing.second[&a];
-        let (xa, mut xb) = (
-            crate::emit::operands(&nodes[a as usize]),
-            crate::emit::operands(&nodes[b as usize]),
-        );
-        if pairing.swapped.contains(&a) {
-            xb.reverse();
-        }
-        xa.into_iter().zip(xb).collect()
-    };
-    let is_pair = |x: u32, y: u32| pairing.second.get(&x) == Some(&y);
     // Who provides a value as a scalar, and who as a pair (None: an input, always there).
     let scalar_from = |m: u32| -> Option<usize> {
         if matches!(nodes[m as usize], Op::Input { .. }) {
@@ -435,12 +635,22 @@ pub(crate) fn statements(
                 }
             }
             Item::Computed(a) => {
-                for (x, y) in operand_pairs(a) {
-                    match (x, y) {
-                        (Sym::Node(x), Sym::Node(y)) if is_pair(x, y) => {
-                            deps[i].extend(pair_from(x));
-                            reads[i].1.push(x);
+                let signs = pairing.operand_signs(nodes, a);
+                for ((x, y), sign) in operand_pairs(a).into_iter().zip(signs) {
+                    match pairing.operand(nodes, x, y) {
+                        Some(o) if o.sign == sign || !Pairing::is_packed(nodes, o.first) => {
+                            deps[i].extend(pair_from(o.first));
+                            reads[i].1.push(o.first);
+                            continue;
                         }
+                        // Packed again from its scalars, the second lane negated.
+                        Some(o) => {
+                            reads_scalar.extend([o.first, pairing.second[&o.first]]);
+                            continue;
+                        }
+                        None => {}
+                    }
+                    match (x, y) {
                         (Sym::Node(x), Sym::Node(y)) => reads_scalar.extend([x, y]),
                         (Sym::Node(x), Sym::Const(_)) | (Sym::Const(_), Sym::Node(x)) => {
                             reads_scalar.push(x)
@@ -480,23 +690,63 @@ pub(crate) fn statements(
         .collect();
     let mut statements: Vec<Statement> = Vec::new();
     let mut defined: HashSet<u32> = HashSet::new();
-    let vector = |x: Sym, y: Sym| -> TokenStream {
-        match (x, y) {
-            (Sym::Node(x), Sym::Node(y)) if is_pair(x, y) => {
-                let id = &pair_names[&x];
+    // An operand of a pair operation: the first member's operand `x` and the second's `y`, whose second
+    // lane holds `-y` where `negated`.
+    let vector = |x: Sym, y: Sym, negated: bool| -> TokenStream {
+        if let Some(o) = pairing.operand(nodes, x, y) {
+            let id = &pair_names[&o.first];
+            let register = if o.sign == negated {
                 quote!(#id)
+            } else if !Pairing::is_packed(nodes, o.first) {
+                quote!(#helpers::negate_second::<S>(#id))
+            } else {
+                TokenStream::new()
+            };
+            if !register.is_empty() {
+                return if o.negate {
+                    quote!((-#register))
+                } else {
+                    register
+                };
             }
-            (Sym::Const(c), Sym::Const(d)) if c.to_bits() == d.to_bits() => {
-                let c = writer.operand(&x);
-                quote!(#helpers::splat::<S>(#c))
+            let first = writer.operand(&Sym::Node(o.first));
+            let second = writer.operand(&Sym::Node(pairing.second[&o.first]));
+            let first = if o.negate {
+                quote!(-#first)
+            } else {
+                quote!(#first)
+            };
+            let second = if negated ^ o.second_negated {
+                quote!(-#second)
+            } else {
+                quote!(#second)
+            };
+            return quote!(#helpers::pair::<S>(#first, #second));
+        }
+        match (x, y) {
+            (Sym::Const(c), Sym::Const(d)) => {
+                let d = if negated { -d } else { d };
+                let (x, y) = (
+                    writer.operand(&Sym::Const(c)),
+                    writer.operand(&Sym::Const(d)),
+                );
+                if c.to_bits() == d.to_bits() {
+                    quote!(#helpers::splat::<S>(#x))
+                } else {
+                    quote!(#helpers::pair::<S>(#x, #y))
+                }
             }
-            (Sym::Node(m), Sym::Node(n)) if m == n => {
+            (Sym::Node(m), Sym::Node(n)) if m == n && !negated => {
                 let m = writer.operand(&x);
                 quote!(#helpers::splat::<S>(#m))
             }
             _ => {
                 let (x, y) = (writer.operand(&x), writer.operand(&y));
-                quote!(#helpers::pair::<S>(#x, #y))
+                if negated {
+                    quote!(#helpers::pair::<S>(#x, -#y))
+                } else {
+                    quote!(#helpers::pair::<S>(#x, #y))
+                }
             }
         }
     };
@@ -535,13 +785,17 @@ pub(crate) fn statements(
                 let b = pairing.second[&a];
                 let id = &pair_names[&a];
                 let xs = operand_pairs(a);
+                let signs = pairing.operand_signs(nodes, a);
                 let expr = match nodes[a as usize] {
                     Op::Neg(_) => {
-                        let x = vector(xs[0].0, xs[0].1);
+                        let x = vector(xs[0].0, xs[0].1, signs[0]);
                         quote!(-#x)
                     }
                     ref op => {
-                        let (x, y) = (vector(xs[0].0, xs[0].1), vector(xs[1].0, xs[1].1));
+                        let (x, y) = (
+                            vector(xs[0].0, xs[0].1, signs[0]),
+                            vector(xs[1].0, xs[1].1, signs[1]),
+                        );
                         match op {
                             Op::Add(..) => quote!(#x + #y),
                             Op::Sub(..) => quote!(#x - #y),
@@ -552,10 +806,15 @@ pub(crate) fn statements(
                     }
                 };
                 stmts.push(quote!(let #id: P = #expr;));
+                let negated = pairing.negated.contains(&a);
                 for (m, lane) in [(a, quote!(first)), (b, quote!(second))] {
                     if needs_scalar.contains(&m) {
                         let mid = writer.operand(&Sym::Node(m));
-                        stmts.push(quote!(let #mid: S = #helpers::#lane::<S>(#id);));
+                        if m == b && negated {
+                            stmts.push(quote!(let #mid: S = -#helpers::#lane::<S>(#id);));
+                        } else {
+                            stmts.push(quote!(let #mid: S = #helpers::#lane::<S>(#id);));
+                        }
                         defined.insert(m);
                         scalars.push(m);
                     }
@@ -657,6 +916,45 @@ mod tests {
         assert_eq!(got, vec![(0, 1), (3, 4), (5, 6), (11, 12)]);
         assert!(p.swapped.contains(&5));
         assert_eq!(p.computed(&nodes), 2);
+    }
+
+    /// Values that are each other's negation pair, the second lane holding the negation: a difference
+    /// against the reversed difference (the tape writes `-(x - y)` as `y - x`), what is computed from them,
+    /// and a product against one with a negated factor (read through the negation).
+    #[test]
+    fn negated_values_pair_with_a_signed_second_lane() {
+        let c = Sym::Const;
+        let n = Sym::Node;
+        let nodes = vec![
+            Op::Input { arg: 0, index: 0 }, // 0: x, left
+            Op::Input { arg: 0, index: 1 }, // 1: x, right
+            Op::Input { arg: 0, index: 2 }, // 2: y, left
+            Op::Input { arg: 0, index: 3 }, // 3: y, right
+            Op::Sub(n(0), n(2)),            // 4: x - y
+            Op::Sub(n(3), n(1)),            // 5: y' - x' = -(x' - y')
+            Op::Mul(n(4), c(2.0)),          // 6
+            Op::Mul(n(5), c(2.0)),          // 7: -(2 (x' - y'))
+            Op::Mul(n(0), n(2)),            // 8: x y
+            Op::Neg(n(3)),                  // 9: -y'
+            Op::Mul(n(1), n(9)),            // 10: x' (-y') = -(x' y')
+            Op::Add(n(6), n(8)),            // 11
+            Op::Sub(n(7), n(10)),           // 12: -(2 (x' - y')) + x' y': not ± the left
+        ];
+        let live = vec![true; nodes.len()];
+        let p = find(&nodes, &live, &[(0, 1), (2, 3)]);
+        for (a, b) in [(4, 5), (8, 10)] {
+            assert_eq!(p.second.get(&a), Some(&b), "{a} pairs with {b}");
+            assert!(p.negated.contains(&a), "{a}'s second lane is negated");
+        }
+        // A product by a constant needs no sign of its own: the constants' pair carries it (2, -2).
+        assert_eq!(p.second.get(&6), Some(&7));
+        assert!(!p.negated.contains(&6));
+        assert_eq!(p.signs[&6], [true, true]);
+        // x - y against -(x' - y'), read with the second lanes' signs: Add(6, 8) is 2(x - y) + xy, the
+        // right's Sub(7, 10) is -2(x' - y') + x'y': equal up to the sign of one addend only, which a
+        // negated read (`negate_second`) makes up for.
+        assert_eq!(p.second.get(&11), Some(&12));
+        assert_eq!(p.computed(&nodes), 4);
     }
 
     /// Without seeds nothing pairs, however alike the operations.

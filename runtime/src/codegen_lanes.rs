@@ -147,6 +147,10 @@ macro_rules! lanes_type {
             fn second(pair: ArrayPair<Self>) -> Self {
                 pair.second()
             }
+            #[inline(always)]
+            fn negate_second(pair: ArrayPair<Self>) -> ArrayPair<Self> {
+                pair.negate_second()
+            }
         }
     };
 }

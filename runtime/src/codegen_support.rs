@@ -26,6 +26,8 @@ pub trait Float: Copy {
     fn first(pair: Self::Pair) -> Self;
     /// The second of a pair.
     fn second(pair: Self::Pair) -> Self;
+    /// `(first, -second)`: a mirrored branch's value whose sign is the other way (exact, as `-x` is).
+    fn negate_second(pair: Self::Pair) -> Self::Pair;
 }
 
 /// `(first, second)` as one pair: generated code computes the isomorphic branches of a tree (a robot's
@@ -51,6 +53,12 @@ pub fn first<S: Float>(pair: S::Pair) -> S {
 #[inline(always)]
 pub fn second<S: Float>(pair: S::Pair) -> S {
     S::second(pair)
+}
+
+/// `(first, -second)` of a pair (`negate_second::<S>(p)`).
+#[inline(always)]
+pub fn negate_second<S: Float>(pair: S::Pair) -> S::Pair {
+    S::negate_second(pair)
 }
 
 /// `if lhs > rhs { then } else { otherwise }`, lane by lane for [`Lanes`]: generated lane functions
@@ -120,6 +128,10 @@ impl Float for f64 {
     fn second(pair: PairF64) -> f64 {
         pair.second()
     }
+    #[inline(always)]
+    fn negate_second(pair: PairF64) -> PairF64 {
+        pair.negate_second()
+    }
 }
 
 impl Float for f32 {
@@ -162,6 +174,10 @@ impl Float for f32 {
     #[inline(always)]
     fn second(pair: PairF32) -> f32 {
         pair.second()
+    }
+    #[inline(always)]
+    fn negate_second(pair: PairF32) -> PairF32 {
+        pair.negate_second()
     }
 }
 
@@ -212,6 +228,14 @@ impl<T: Copy> ArrayPair<T> {
     }
 }
 
+impl<T: Copy + core::ops::Neg<Output = T>> ArrayPair<T> {
+    /// `(first, -second)`.
+    #[inline(always)]
+    pub fn negate_second(self) -> Self {
+        ArrayPair([self.0[0], -self.0[1]])
+    }
+}
+
 /// Two `f64` in one SIMD register, for the isomorphic branches of a tree (a robot's left and right legs,
 /// or arms) that generated code computes side by side: one instruction does the same step of both
 /// branches. Each lane is the scalar's IEEE arithmetic (SSE2 `addpd`, `mulpd`, … are exact like `addsd`,
@@ -251,6 +275,11 @@ mod pair_sse2 {
         #[inline(always)]
         pub fn second(self) -> f64 {
             unsafe { _mm_cvtsd_f64(_mm_unpackhi_pd(self.0, self.0)) }
+        }
+        /// `(first, -second)`: the second lane's sign bit flipped.
+        #[inline(always)]
+        pub fn negate_second(self) -> Self {
+            PairF64(unsafe { _mm_xor_pd(self.0, _mm_set_pd(-0.0, 0.0)) })
         }
     }
     impl core::ops::Add for PairF64 {
@@ -305,6 +334,11 @@ mod pair_sse2 {
         #[inline(always)]
         pub fn second(self) -> f32 {
             unsafe { _mm_cvtss_f32(_mm_shuffle_ps::<0b01_01_01_01>(self.0, self.0)) }
+        }
+        /// `(first, -second)`: the second lane's sign bit flipped.
+        #[inline(always)]
+        pub fn negate_second(self) -> Self {
+            PairF32(unsafe { _mm_xor_ps(self.0, _mm_set_ps(0.0, 0.0, -0.0, 0.0)) })
         }
     }
     impl core::ops::Add for PairF32 {

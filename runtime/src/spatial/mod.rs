@@ -63,7 +63,7 @@ pub use articulated::ArticulatedInertia;
 pub use force::Force;
 pub use inertia::SpatialInertia;
 pub use motion::Motion;
-pub use transform::Transform;
+pub use transform::{quarter_turn, Transform, QUARTER_TURN_TOLERANCE};
 
 use crate::Real;
 use nalgebra::{Matrix3, Vector3};
@@ -79,8 +79,8 @@ pub fn skew<T: Real>(x: &Vector3<T>) -> Matrix3<T> {
 /// Computes the six distinct entries only and mirrors them (exactly symmetric output).
 #[inline(always)]
 pub(crate) fn rotate_tensor<T: Real>(r: &Matrix3<T>, a: &Matrix3<T>) -> Matrix3<T> {
-    if let Some(k) = fixed_axis(r) {
-        return rotate_tensor_about(k, r, a);
+    if let Some((k, flip)) = fixed_axis(r) {
+        return rotate_tensor_about(k, flip, r, a);
     }
     // B = R A (27 products), then (B Rᵀ)_ij = row_i(B) · row_j(R) for i ≤ j (18 products).
     let b = r * a;
@@ -90,16 +90,21 @@ pub(crate) fn rotate_tensor<T: Real>(r: &Matrix3<T>, a: &Matrix3<T>) -> Matrix3<
     Matrix3::new(xx, xy, xz, xy, yy, yz, xz, yz, zz)
 }
 
-/// The coordinate axis `k` that `r` keeps fixed, if its row and column `k` are known to be `e_k` (a joint
-/// rotating about a coordinate axis without a rotated origin, in generated code: the entries are
-/// constants there). Such a rotation is `[[c, −s], [s, c]]` in the other two axes.
+/// The coordinate axis `k` that `r` keeps fixed or reverses, if its row and column `k` are known to be
+/// `±e_k` (a joint rotating about a coordinate axis, its origin not rotated or turned by a half turn about
+/// another axis; in generated code the entries are constants there), and whether it reverses it. Such a
+/// rotation is `[[c, −s], [s, c]]` in the other two axes, or that with its second row negated.
 #[inline(always)]
-fn fixed_axis<T: Real>(r: &Matrix3<T>) -> Option<usize> {
-    (0..3).find(|&k| {
-        (0..3).all(|m| {
-            let unit = if m == k { 1.0 } else { 0.0 };
-            r[(k, m)].value() == Some(unit) && r[(m, k)].value() == Some(unit)
-        })
+fn fixed_axis<T: Real>(r: &Matrix3<T>) -> Option<(usize, bool)> {
+    (0..3).find_map(|k| {
+        let off_axis_zero = (0..3)
+            .filter(|&m| m != k)
+            .all(|m| r[(k, m)].value() == Some(0.0) && r[(m, k)].value() == Some(0.0));
+        match r[(k, k)].value() {
+            Some(d) if off_axis_zero && d == 1.0 => Some((k, false)),
+            Some(d) if off_axis_zero && d == -1.0 => Some((k, true)),
+            _ => None,
+        }
     })
 }
 
@@ -108,10 +113,24 @@ fn fixed_axis<T: Real>(r: &Matrix3<T>) -> Option<usize> {
 /// `d = (A_ii − A_jj)/2`, the plane block becomes `a ± (d cos 2θ − A_ij sin 2θ)` on the diagonal and
 /// `d sin 2θ + A_ij cos 2θ` off it, and the axis row `A_ki, A_kj` rotates like a vector. About 25
 /// operations where the general product takes 33 or more even after the zeros of `R` fold away.
+///
+/// Where `R` reverses axis `k` (`flip`) it is `D Q`, `D = diag` with −1 at `k` and `j`, `Q` a rotation
+/// about `k` read from `R` (`c = R_ii`, `s = −R_ji`), and `R A Rᵀ = D (Q A Qᵀ) D` negates the entries
+/// that join `i` to `k` or `j`. So a joint behind a half turn (TALOS's right gripper, turned by π about
+/// its wrist where the left one is not) is computed as its mirror partner is, up to signs.
 #[inline(always)]
-fn rotate_tensor_about<T: Real>(k: usize, r: &Matrix3<T>, a: &Matrix3<T>) -> Matrix3<T> {
+fn rotate_tensor_about<T: Real>(
+    k: usize,
+    flip: bool,
+    r: &Matrix3<T>,
+    a: &Matrix3<T>,
+) -> Matrix3<T> {
     let (i, j) = ((k + 1) % 3, (k + 2) % 3);
-    let (c, s) = (r[(i, i)], r[(j, i)]);
+    let (c, s) = if flip {
+        (r[(i, i)], -r[(j, i)])
+    } else {
+        (r[(i, i)], r[(j, i)])
+    };
     let cos2 = c * c - s * s;
     let sc = s * c;
     let sin2 = sc + sc;
@@ -133,6 +152,11 @@ fn rotate_tensor_about<T: Real>(k: usize, r: &Matrix3<T>, a: &Matrix3<T>) -> Mat
     out[(i, k)] = ki;
     out[(k, j)] = kj;
     out[(j, k)] = kj;
+    if flip {
+        for (m, n) in [(i, j), (j, i), (i, k), (k, i)] {
+            out[(m, n)] = -out[(m, n)];
+        }
+    }
     out
 }
 
@@ -165,14 +189,23 @@ mod tests {
                 let axis = nalgebra::Unit::new_normalize(Vector3::ith(k, 1.0));
                 let r = *nalgebra::Rotation3::from_axis_angle(&axis, angle).matrix();
                 // Rotation3 writes exact zeros and ones in row and column k.
-                assert_eq!(fixed_axis(&r), Some(k));
-                let fast = rotate_tensor(&r, &a);
-                let full = r * a * r.transpose();
-                assert!(
-                    (fast - full).abs().max() < 1e-15 * a.abs().max(),
-                    "axis {k}, angle {angle}"
-                );
-                assert_eq!(fast, fast.transpose());
+                assert_eq!(fixed_axis(&r), Some((k, false)));
+                // Behind a half turn about either other axis (exact: a quarter-turn reading), k reverses.
+                let half_turns = [(k + 1) % 3, (k + 2) % 3].map(|other| {
+                    let mut h = Matrix3::from_diagonal_element(-1.0);
+                    h[(other, other)] = 1.0;
+                    h * r
+                });
+                for (r, flip) in [(r, false), (half_turns[0], true), (half_turns[1], true)] {
+                    assert_eq!(fixed_axis(&r), Some((k, flip)));
+                    let fast = rotate_tensor(&r, &a);
+                    let full = r * a * r.transpose();
+                    assert!(
+                        (fast - full).abs().max() < 1e-15 * a.abs().max(),
+                        "axis {k}, angle {angle}, reversed {flip}"
+                    );
+                    assert_eq!(fast, fast.transpose());
+                }
             }
         }
         // A rotation that keeps no coordinate axis takes the general product.

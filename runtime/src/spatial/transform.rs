@@ -2,6 +2,36 @@ use crate::spatial::{Force, Motion};
 use crate::Real;
 use nalgebra::{Matrix3, Vector3};
 
+/// How far (rad) an URDF `rpy` angle may be from a multiple of π/2 and still be read as that exact
+/// quarter turn.
+pub const QUARTER_TURN_TOLERANCE: f64 = 1e-10;
+
+/// The exact sine and cosine (each 0 or ±1) of an angle within [`QUARTER_TURN_TOLERANCE`] of a multiple
+/// of π/2, or `None`.
+///
+/// Why: model files write quarter turns rounded (`1.57079632679`, `4.71238898038`: π/2 and 3π/2 to 11
+/// digits), and even π/2 to full f64 precision has a cosine of 6.1e-17. Taken literally, these leave
+/// residues of 1e-11 to 1e-17 in the rotations, which change no result that matters (5e-12 rad at most)
+/// but are numbers the generated code must multiply by where the exact turn has a zero, and they make
+/// mirrored branches differ (TALOS's right gripper is turned by π - 9.8e-12 about its wrist, its left
+/// by exactly 0), so that the branches' code no longer pairs. The tolerance is ten times the rounding of
+/// an 11-digit angle; an angle meant to be 1e-10 rad off a quarter turn is not a model anyone writes.
+pub fn quarter_turn(angle: f64) -> Option<(f64, f64)> {
+    if !angle.is_finite() || angle.abs() > 1e3 {
+        return None;
+    }
+    let turns = libm::round(angle / core::f64::consts::FRAC_PI_2);
+    if (angle - turns * core::f64::consts::FRAC_PI_2).abs() > QUARTER_TURN_TOLERANCE {
+        return None;
+    }
+    Some(match (turns as i64).rem_euclid(4) {
+        0 => (0.0, 1.0),
+        1 => (1.0, 0.0),
+        2 => (0.0, -1.0),
+        _ => (-1.0, 0.0),
+    })
+}
+
 /// A rigid transform: the pose of a child frame in a parent frame.
 ///
 /// `rotation` has the child's axes as columns, in parent coordinates; `translation` is the child origin in
@@ -33,10 +63,16 @@ impl<T: Real> Transform<T> {
     /// The URDF `<origin xyz rpy>` transform, computed in `T` from the file's numbers (so that a
     /// higher-precision scalar evaluates the trigonometry in its own precision).
     /// URDF's rpy are fixed-axis roll about x, then pitch about y, then yaw about z: `R = Rz Ry Rx`.
+    /// An angle within [`QUARTER_TURN_TOLERANCE`] of a multiple of π/2 is read as that exact quarter
+    /// turn (see [`quarter_turn`]).
     pub fn from_xyz_rpy(xyz: [f64; 3], rpy: [f64; 3]) -> Self {
-        let (sr, cr) = T::from_f64(rpy[0]).sin_cos();
-        let (sp, cp) = T::from_f64(rpy[1]).sin_cos();
-        let (sy, cy) = T::from_f64(rpy[2]).sin_cos();
+        let sin_cos = |angle: f64| match quarter_turn(angle) {
+            Some((s, c)) => (T::from_f64(s), T::from_f64(c)),
+            None => T::from_f64(angle).sin_cos(),
+        };
+        let (sr, cr) = sin_cos(rpy[0]);
+        let (sp, cp) = sin_cos(rpy[1]);
+        let (sy, cy) = sin_cos(rpy[2]);
         let rotation = Matrix3::new(
             cy * cp,
             cy * sp * sr - sy * cr,
