@@ -172,9 +172,7 @@ impl Pairing {
     /// unification that formed the pair chose them.
     pub(crate) fn operand_signs(&self, nodes: &[Op], a: u32) -> Vec<bool> {
         let arity = crate::emit::operands(&nodes[a as usize]).len();
-        self.signs
-            .get(&a)
-            .map_or_else(|| vec![false; arity], |s| s[..arity].to_vec())
+        self.signs[&a][..arity].to_vec()
     }
 
     /// The pair register that holds the operands `x` (first lane) and `y` (second lane, up to its
@@ -210,6 +208,13 @@ impl Pairing {
             }),
             _ => None,
         }
+    }
+
+    /// Whether an operand that needs its second lane's sign to be `sign` is read from the register `o`
+    /// (through `negate_second` where the signs differ) rather than packed again from the pair's scalars
+    /// (a packed pair read with the other sign). The statements' dependencies and their text both ask.
+    pub(crate) fn reads_register(nodes: &[Op], o: &PairOperand, sign: bool) -> bool {
+        o.sign == sign || !Pairing::is_packed(nodes, o.first)
     }
 
     /// Number of pairs computed by one operation.
@@ -343,14 +348,10 @@ fn pairable(op: &Op) -> bool {
     )
 }
 
-fn same_kind(a: &Op, b: &Op) -> bool {
-    core::mem::discriminant(a) == core::mem::discriminant(b)
-}
-
 /// Operations one pair instruction can compute: the same kind, or a sum against a difference (the
 /// lanes' signs make up for it, [`addend_signs`]).
 fn compatible(a: &Op, b: &Op) -> bool {
-    same_kind(a, b) || (is_sum(a) && is_sum(b))
+    core::mem::discriminant(a) == core::mem::discriminant(b) || (is_sum(a) && is_sum(b))
 }
 
 fn is_sum(op: &Op) -> bool {
@@ -557,7 +558,6 @@ pub(crate) fn statements(
             _ => items.push((Item::Scalar(n), at(n))),
         }
     }
-    // Packed pairs that some computed pair reads (the others would be dead code).
     // Operand positions of a computed pair: (first's operand, second's operand).
     let operand_pairs = |a: u32| -> Vec<(Sym, Sym)> {
         let b = pairing.second[&a];
@@ -570,6 +570,7 @@ pub(crate) fn statements(
         }
         xa.into_iter().zip(xb).collect()
     };
+    // Packed pairs that some computed pair reads (the others would be dead code).
     let mut read_as_pair: HashSet<u32> = HashSet::new();
     for &a in pairing.second.keys() {
         if computed(a) {
@@ -638,7 +639,7 @@ pub(crate) fn statements(
                 let signs = pairing.operand_signs(nodes, a);
                 for ((x, y), sign) in operand_pairs(a).into_iter().zip(signs) {
                     match pairing.operand(nodes, x, y) {
-                        Some(o) if o.sign == sign || !Pairing::is_packed(nodes, o.first) => {
+                        Some(o) if Pairing::reads_register(nodes, &o, sign) => {
                             deps[i].extend(pair_from(o.first));
                             reads[i].1.push(o.first);
                             continue;
@@ -694,15 +695,13 @@ pub(crate) fn statements(
     // lane holds `-y` where `negated`.
     let vector = |x: Sym, y: Sym, negated: bool| -> TokenStream {
         if let Some(o) = pairing.operand(nodes, x, y) {
-            let id = &pair_names[&o.first];
-            let register = if o.sign == negated {
-                quote!(#id)
-            } else if !Pairing::is_packed(nodes, o.first) {
-                quote!(#helpers::negate_second::<S>(#id))
-            } else {
-                TokenStream::new()
-            };
-            if !register.is_empty() {
+            if Pairing::reads_register(nodes, &o, negated) {
+                let id = &pair_names[&o.first];
+                let register = if o.sign == negated {
+                    quote!(#id)
+                } else {
+                    quote!(#helpers::negate_second::<S>(#id))
+                };
                 return if o.negate {
                     quote!((-#register))
                 } else {
@@ -810,11 +809,9 @@ pub(crate) fn statements(
                 for (m, lane) in [(a, quote!(first)), (b, quote!(second))] {
                     if needs_scalar.contains(&m) {
                         let mid = writer.operand(&Sym::Node(m));
-                        if m == b && negated {
-                            stmts.push(quote!(let #mid: S = -#helpers::#lane::<S>(#id);));
-                        } else {
-                            stmts.push(quote!(let #mid: S = #helpers::#lane::<S>(#id);));
-                        }
+                        // A negated second lane gives its member back negated (exact).
+                        let sign = (m == b && negated).then(|| quote!(-));
+                        stmts.push(quote!(let #mid: S = #sign #helpers::#lane::<S>(#id);));
                         defined.insert(m);
                         scalars.push(m);
                     }
