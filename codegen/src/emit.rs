@@ -404,10 +404,10 @@ pub fn function(
         .zip(&pair_name_text)
         .map(|(&a, name)| (a, format_ident!("{}", name)))
         .collect();
-    // The paired body, in the schedule's order; None where the pairs could not be ordered.
+    // The paired body, in trace order; None where the pairs could not be ordered.
     let paired = pairing.as_ref().and_then(|p| {
-        let order = schedule(nodes, order.clone(), true);
-        let (order, batch) = batch_angles(nodes, order, &sin_of, &cos_of);
+        // Trace order, not `schedule`'s: see there.
+        let (order, batch) = batch_angles(nodes, order.clone(), &sin_of, &cos_of);
         let angles = batch_args(nodes, &batch);
         let writer = Writer {
             nodes,
@@ -435,7 +435,6 @@ pub fn function(
                 doc,
                 args,
                 outputs,
-                &out_syms,
                 nodes,
                 order,
                 batch,
@@ -475,6 +474,7 @@ pub fn function(
             code: Code::Text(text),
         });
     }
+    let places = output_places(outputs, nodes);
     let (order, batch, mut paired_body) = match paired {
         Some((order, batch, statements)) => (
             order,
@@ -482,13 +482,18 @@ pub fn function(
             Some(
                 statements
                     .into_iter()
-                    .flat_map(|s| s.tokens)
+                    .flat_map(|st| {
+                        let mut tokens = st.tokens;
+                        for &m in &st.scalars {
+                            write_places(&places, &names, m, &mut tokens);
+                        }
+                        tokens
+                    })
                     .collect::<Vec<_>>(),
             ),
         ),
         None => {
-            let (order, batch) =
-                batch_angles(nodes, schedule(nodes, order, false), &sin_of, &cos_of);
+            let (order, batch) = batch_angles(nodes, schedule(nodes, order), &sin_of, &cos_of);
             (order, batch, None)
         }
     };
@@ -518,8 +523,9 @@ pub fn function(
                 }
             }
         }
-        for s in &out_syms {
-            if let Sym::Node(x) = s {
+        // The returned value (the other outputs are written by the chunk that computes them).
+        for o in outputs {
+            if let Output::Return(Sym::Node(x)) = o {
                 last_use.insert(*x, usize::MAX);
             }
         }
@@ -550,6 +556,13 @@ pub fn function(
     } else {
         quote!()
     };
+    // Outputs: the parameters, which the parts take too, and the writes of what no statement computes.
+    let (out_params, out_stmts, ret_type, ret_value) =
+        output_tokens(outputs, split, &slot, &operand, nodes, args);
+    let out_names: Vec<Ident> = outputs
+        .iter()
+        .filter_map(|o| o.name().map(|n| format_ident!("{}", n)))
+        .collect();
     let chunk_bodies: Vec<Vec<&str>> = chunks.iter().map(|ns| names.bodies(ns.iter())).collect();
     let chunk_names = part_names(name, &chunk_bodies, module.taken);
     let mut chunk_fns = Vec::new();
@@ -589,6 +602,7 @@ pub fn function(
             None => {
                 for &n in ns.iter() {
                     writer.scalar(n, &mut stmts, &mut defined);
+                    write_places(&places, &names, n, &mut stmts);
                 }
             }
         }
@@ -606,7 +620,7 @@ pub fn function(
                 #(#[doc = #part_lines])*
                 #[inline(never)]
                 #[allow(unused_variables, clippy::all)]
-                pub(super) fn #fname(#(#scalar_args,)* s: &mut [S; #nslots]) {
+                pub(super) fn #fname(#(#scalar_args,)* #(#out_params,)* s: &mut [S; #nslots]) {
                     #(#stmts)*
                 }
             });
@@ -614,9 +628,6 @@ pub fn function(
             bodies.push(stmts);
         }
     }
-    // Outputs.
-    let (out_params, out_stmts, ret_type, ret_value) =
-        output_tokens(outputs, split, &slot, &operand, nodes, args);
     let fname = format_ident!("{}", name);
     let zero = operand(&Sym::Const(0.0));
     let body = if split {
@@ -624,7 +635,7 @@ pub fn function(
             .iter()
             .map(|c| {
                 let f = format_ident!("{}", c);
-                quote!(#f(#(#arg_names,)* &mut s);)
+                quote!(#f(#(#arg_names,)* #(#out_names,)* &mut s);)
             })
             .collect();
         quote! {
@@ -670,8 +681,62 @@ pub fn function(
     })
 }
 
-/// The output parameters (`qdd: &mut [S; 18]`), the statements that write the outputs, and the return type
-/// and value of a generated function (values from the scratch array `s` when `split`).
+/// Where each computed value goes in the output arrays (`m[3][4]`, `qdd[2]`; a symmetric matrix's
+/// entry in two places). The statement that defines a value is followed by its writes, in whichever part
+/// computes it: a value then never crosses to the public function through the scratch arrays only to be
+/// stored (for the floating TALOS's `crba`, 674 of M's entries went through `s`, a store, a load and a
+/// store each), and it leaves the registers as soon as it is known instead of living to the end.
+fn output_places(outputs: &[Output], nodes: &[Op]) -> HashMap<u32, Vec<TokenStream>> {
+    let mut places: HashMap<u32, Vec<TokenStream>> = HashMap::new();
+    let computed = |v: &Sym| match v {
+        Sym::Node(n) if !matches!(nodes[*n as usize], Op::Input { .. }) => Some(*n),
+        _ => None,
+    };
+    for o in outputs {
+        match o {
+            Output::Vector { name, values } => {
+                let id = format_ident!("{}", name);
+                for (i, v) in values.iter().enumerate() {
+                    if let Some(n) = computed(v) {
+                        let i = num(i);
+                        places.entry(n).or_default().push(quote!(#id[#i]));
+                    }
+                }
+            }
+            Output::Matrix {
+                name, cols, values, ..
+            } => {
+                let id = format_ident!("{}", name);
+                for (k, v) in values.iter().enumerate() {
+                    if let Some(n) = computed(v) {
+                        let (r, c) = (num(k / cols), num(k % cols));
+                        places.entry(n).or_default().push(quote!(#id[#r][#c]));
+                    }
+                }
+            }
+            Output::Return(_) => {}
+        }
+    }
+    places
+}
+
+/// The writes of value `n` to its output places, after the statement that defines it.
+fn write_places(
+    places: &HashMap<u32, Vec<TokenStream>>,
+    names: &ValueNames,
+    n: u32,
+    stmts: &mut Vec<TokenStream>,
+) {
+    if let Some(places) = places.get(&n) {
+        let id = node_ident(names, n);
+        stmts.extend(places.iter().map(|place| quote!(#place = #id;)));
+    }
+}
+
+/// The output parameters (`qdd: &mut [S; 18]`), the statements that write the outputs no statement
+/// computes (constants, inputs passed through: computed values are written where they are defined,
+/// [`output_places`]), and the return type and value of a generated function (from the scratch array
+/// `s` when `split`).
 fn output_tokens(
     outputs: &[Output],
     split: bool,
@@ -680,6 +745,8 @@ fn output_tokens(
     nodes: &[Op],
     args: &[Arg],
 ) -> (Vec<TokenStream>, Vec<TokenStream>, TokenStream, TokenStream) {
+    let computed =
+        |v: &Sym| matches!(v, Sym::Node(n) if !matches!(nodes[*n as usize], Op::Input { .. }));
     let mut out_params = Vec::new();
     let mut out_stmts = Vec::new();
     let mut ret_type = quote!();
@@ -697,7 +764,7 @@ fn output_tokens(
                 let id = format_ident!("{}", oname);
                 let n = num(values.len());
                 out_params.push(quote!(#id: &mut [S; #n]));
-                for (i, v) in values.iter().enumerate() {
+                for (i, v) in values.iter().enumerate().filter(|(_, v)| !computed(v)) {
                     let i = num(i);
                     let val = value_tokens(v, split, slot, operand, nodes, args);
                     out_stmts.push(quote!(#id[#i] = #val;));
@@ -714,8 +781,11 @@ fn output_tokens(
                 out_params.push(quote!(#id: &mut [[S; #cols_lit]; #rows_lit]));
                 for r in 0..*rows {
                     for c in 0..*cols {
-                        let val =
-                            value_tokens(&values[r * cols + c], split, slot, operand, nodes, args);
+                        let v = &values[r * cols + c];
+                        if computed(v) {
+                            continue;
+                        }
+                        let val = value_tokens(v, split, slot, operand, nodes, args);
                         let (r, c) = (num(r), num(c));
                         out_stmts.push(quote!(#id[#r][#c] = #val;));
                     }
@@ -783,16 +853,22 @@ const LONG_PAIRED_PERCENT: usize = 65;
 /// Functions up to this many statements are reordered by [`schedule`]; longer ones keep the trace order.
 pub const SCHEDULE_LIMIT: usize = 2 * CHUNK;
 
-/// Orders the statements for an out-of-order core (a paired function's too, whose statements are fewer
-/// than its operations). The code is latency-bound, so the statements on the
-/// longest remaining dependency chain go first (list scheduling by height, ties in trace order) and
-/// independent branches (legs, arms) interleave instead of running one after the other. Measured on
-/// the 7–12-joint robots this takes 10–30% off `aba`, `rnea` and `crba`. Long functions keep the trace
-/// order: there the hardware window sees only a small part of the function anyway, and a global order
-/// would keep more values live across chunk boundaries and registers.
-fn schedule(nodes: &[Op], order: Vec<u32>, paired: bool) -> Vec<u32> {
+/// Orders the statements of an unpaired function for an out-of-order core. The code is latency-bound,
+/// so the statements on the longest remaining dependency chain go first (list scheduling by height, ties
+/// in trace order) and independent branches (legs, arms) interleave instead of running one after the
+/// other. Measured on the 7–12-joint robots this took 10–30% off `aba`, `rnea` and `crba`. Long
+/// functions keep the trace order: there the hardware window sees only a small part of the function
+/// anyway, and a global order would keep more values live across chunk boundaries and registers.
+///
+/// Paired functions keep the trace order too, whatever their length. A pair already computes two
+/// branches at once, and starting every long chain early keeps more pairs live than the 16 vector
+/// registers hold: the floating TALOS's paired `crba` spent a third of its instructions on spills.
+/// Measured in one binary (bit-identical results, medians of 9 interleaved rounds, 2026-12-03),
+/// trace order against this schedule: `aba` 0.85× the time on TALOS, 0.85× on G1, 0.77–0.85× on
+/// ANYmal B; `crba` 0.84×, 0.73×, 0.95–1.08×; `rnea` 0.93×, 0.93×, 1.01–1.07×.
+fn schedule(nodes: &[Op], order: Vec<u32>) -> Vec<u32> {
     let k = order.len();
-    if k > SCHEDULE_LIMIT && !paired {
+    if k > SCHEDULE_LIMIT {
         return order;
     }
     let pos: HashMap<u32, usize> = order.iter().enumerate().map(|(i, &n)| (n, i)).collect();
@@ -1176,7 +1252,6 @@ fn paired_parts(
     doc: &str,
     args: &[Arg],
     outputs: &[Output],
-    out_syms: &[Sym],
     nodes: &[Op],
     order: &[u32],
     batch: &[u32],
@@ -1235,8 +1310,9 @@ fn paired_parts(
             }
         }
     }
-    for v in out_syms {
-        if let Sym::Node(m) = v {
+    // The returned value (the other outputs are written by the part that computes them).
+    for o in outputs {
+        if let Output::Return(Sym::Node(m)) = o {
             scalar_last.insert(*m, usize::MAX);
         }
     }
@@ -1253,6 +1329,7 @@ fn paired_parts(
             .map(|(k, m)| (m, k))
             .collect::<HashMap<u32, usize>>()
     };
+    let places = output_places(outputs, nodes);
     let slot = slots(&scalar_chunk, &scalar_last);
     let pair_slot = slots(&pair_chunk, &pair_last);
     let (nslots, npair_slots) = (num(slot.len().max(1)), num(pair_slot.len().max(1)));
@@ -1282,6 +1359,13 @@ fn paired_parts(
         .map(|d| names.bodies(d.iter()))
         .collect();
     let chunk_names = part_names(name, &chunk_bodies, module.taken);
+    let operand = |v: &Sym| writer.operand(v);
+    let (out_params, out_stmts, ret_type, ret_value) =
+        output_tokens(outputs, true, &slot, &operand, nodes, args);
+    let out_names: Vec<Ident> = outputs
+        .iter()
+        .filter_map(|o| o.name().map(|n| format_ident!("{}", n)))
+        .collect();
     let mut chunk_fns = Vec::new();
     for (c, part) in chunks.iter().enumerate() {
         let mut stmts: Vec<TokenStream> = Vec::new();
@@ -1319,6 +1403,9 @@ fn paired_parts(
         }
         for st in part.iter() {
             stmts.extend(st.tokens.iter().cloned());
+            for &m in &st.scalars {
+                write_places(&places, names, m, &mut stmts);
+            }
         }
         for st in part.iter() {
             for m in &st.scalars {
@@ -1340,21 +1427,18 @@ fn paired_parts(
             #(#[doc = #part_lines])*
             #[inline(never)]
             #[allow(unused_variables, clippy::all)]
-            pub(super) fn #fname(#(#scalar_args,)* s: &mut [S; #nslots], sp: &mut [#pair_type; #npair_slots]) {
+            pub(super) fn #fname(#(#scalar_args,)* #(#out_params,)* s: &mut [S; #nslots], sp: &mut [#pair_type; #npair_slots]) {
                 type P = #pair_type;
                 #(#stmts)*
             }
         });
     }
-    let operand = |v: &Sym| writer.operand(v);
-    let (out_params, out_stmts, ret_type, ret_value) =
-        output_tokens(outputs, true, &slot, &operand, nodes, args);
     let zero = operand(&Sym::Const(0.0));
     let calls: Vec<TokenStream> = chunk_names
         .iter()
         .map(|c| {
             let f = format_ident!("{}", c);
-            quote!(#f(#(#arg_names,)* &mut s, &mut sp);)
+            quote!(#f(#(#arg_names,)* #(#out_names,)* &mut s, &mut sp);)
         })
         .collect();
     let fname = format_ident!("{}", name);

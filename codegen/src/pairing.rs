@@ -506,7 +506,7 @@ fn unify(
     false
 }
 
-/// Functions of up to this many operations are paired: scheduled as a whole, then emitted as one
+/// Functions of up to this many operations are paired: in trace order, emitted as one
 /// function or as parts of `CHUNK` statements (a pair counting once). Longer ones (the derivatives of
 /// large models) are written unpaired by `emit_large`, whose form rustc compiles in less memory and runs
 /// faster: paired, the floating ANYmal B's `aba_derivatives` (52k operations, 61 % as many statements)
@@ -528,7 +528,7 @@ enum Item {
     Packed(u32),
 }
 
-/// The statements of a paired function body, in `order` (the scheduled scalar order) as far as the
+/// The statements of a paired function body, in `order` (trace order) as far as the
 /// pairs allow: a pair comes when both its members would have, after everything it reads. A member of a
 /// computed pair that something reads as a scalar (a scalar operation, an output, an operand shared by
 /// both lanes) is taken out of its pair right after it. `None` where the pairing would need a value before

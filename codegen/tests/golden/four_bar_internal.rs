@@ -132,8 +132,12 @@ pub mod f64 {
         let t25: S = 0.8400996941839247 * coupler_joint_q_sin;
         let t26: S = 0.5424320269232599 * coupler_joint_q_cos;
         let crank_joint_x_r00: S = t7 + t9;
+        frames[0][0] = crank_joint_x_r00;
+        frames[0][8] = crank_joint_x_r00;
         let crank_joint_x_r20: S = t8 + t11;
+        frames[0][6] = crank_joint_x_r20;
         let crank_joint_x_r02: S = t13 + t14;
+        frames[0][2] = crank_joint_x_r02;
         let coupler_joint_x_r00: S = t19 + t21;
         let coupler_joint_x_r20: S = t20 + t23;
         let coupler_joint_x_r02: S = t25 + t26;
@@ -145,9 +149,13 @@ pub mod f64 {
         let t50: S = crank_joint_x_r20 * coupler_joint_x_r02;
         let t51: S = crank_joint_x_r02 * coupler_joint_x_r00;
         let coupler_pose_r00: S = t43 + t45;
+        frames[1][0] = coupler_pose_r00;
         let coupler_pose_r20: S = t44 + t47;
+        frames[1][6] = coupler_pose_r20;
         let coupler_pose_r02: S = t49 + t51;
+        frames[1][2] = coupler_pose_r02;
         let coupler_pose_r22: S = t43 + t50;
+        frames[1][8] = coupler_pose_r22;
         let tip_joint_x_r20: S = -tip_joint_q_sin;
         let t68: S = 0.16 * coupler_pose_r00;
         let t69: S = 0.16 * coupler_pose_r20;
@@ -160,7 +168,9 @@ pub mod f64 {
         let t40: S = 0.14121297913350594 * rocker_joint_q_sin;
         let t41: S = (-0.98997923944103) * rocker_joint_q_cos;
         let coupler_pose_px: S = 0.12 * crank_joint_x_r00;
+        frames[1][9] = coupler_pose_px;
         let coupler_pose_pz: S = 0.12 * crank_joint_x_r20;
+        frames[1][11] = coupler_pose_pz;
         let t56: S = tip_joint_q_cos * coupler_pose_r00;
         let t57: S = tip_joint_q_cos * coupler_pose_r20;
         let t58: S = tip_joint_x_r20 * coupler_pose_r02;
@@ -172,59 +182,49 @@ pub mod f64 {
         let t71: S = t68 + t70;
         let t73: S = t69 + t72;
         let rocker_joint_x_r00: S = t34 + t36;
+        frames[3][0] = rocker_joint_x_r00;
+        frames[3][8] = rocker_joint_x_r00;
         let rocker_joint_x_r20: S = t35 + t38;
+        frames[3][6] = rocker_joint_x_r20;
         let rocker_joint_x_r02: S = t40 + t41;
+        frames[3][2] = rocker_joint_x_r02;
         let tip_pose_r00: S = t56 + t58;
+        frames[2][0] = tip_pose_r00;
         let tip_pose_r20: S = t57 + t60;
+        frames[2][6] = tip_pose_r20;
         let tip_pose_r02: S = t62 + t64;
+        frames[2][2] = tip_pose_r02;
         let tip_pose_r22: S = t63 + t66;
+        frames[2][8] = tip_pose_r22;
         let tip_pose_px: S = coupler_pose_px + t71;
+        frames[2][9] = tip_pose_px;
         let tip_pose_pz: S = coupler_pose_pz + t73;
-        frames[0][0] = crank_joint_x_r00;
+        frames[2][11] = tip_pose_pz;
         frames[0][1] = 0.0;
-        frames[0][2] = crank_joint_x_r02;
         frames[0][3] = 0.0;
         frames[0][4] = 1.0;
         frames[0][5] = 0.0;
-        frames[0][6] = crank_joint_x_r20;
         frames[0][7] = 0.0;
-        frames[0][8] = crank_joint_x_r00;
         frames[0][9] = 0.0;
         frames[0][10] = 0.0;
         frames[0][11] = 0.0;
-        frames[1][0] = coupler_pose_r00;
         frames[1][1] = 0.0;
-        frames[1][2] = coupler_pose_r02;
         frames[1][3] = 0.0;
         frames[1][4] = 1.0;
         frames[1][5] = 0.0;
-        frames[1][6] = coupler_pose_r20;
         frames[1][7] = 0.0;
-        frames[1][8] = coupler_pose_r22;
-        frames[1][9] = coupler_pose_px;
         frames[1][10] = 0.0;
-        frames[1][11] = coupler_pose_pz;
-        frames[2][0] = tip_pose_r00;
         frames[2][1] = 0.0;
-        frames[2][2] = tip_pose_r02;
         frames[2][3] = 0.0;
         frames[2][4] = 1.0;
         frames[2][5] = 0.0;
-        frames[2][6] = tip_pose_r20;
         frames[2][7] = 0.0;
-        frames[2][8] = tip_pose_r22;
-        frames[2][9] = tip_pose_px;
         frames[2][10] = 0.0;
-        frames[2][11] = tip_pose_pz;
-        frames[3][0] = rocker_joint_x_r00;
         frames[3][1] = 0.0;
-        frames[3][2] = rocker_joint_x_r02;
         frames[3][3] = 0.0;
         frames[3][4] = 1.0;
         frames[3][5] = 0.0;
-        frames[3][6] = rocker_joint_x_r20;
         frames[3][7] = 0.0;
-        frames[3][8] = rocker_joint_x_r00;
         frames[3][9] = 0.3;
         frames[3][10] = 0.0;
         frames[3][11] = 0.05;
@@ -593,6 +593,7 @@ pub mod f64 {
         let t258: S = t246 * t249;
         let t271: S = t257 * t262;
         let t639: S = t636 * t638;
+        qdd[0] = t639;
         let t259: S = t245 - t258;
         let t272: S = t239 * t271;
         let t646: S = t504 * t639;
@@ -650,13 +651,12 @@ pub mod f64 {
             1000000000000000000000000000000.0
         };
         let tip_joint_qdd: S = 491.8839153959664 * t674;
-        let t653: S = t652 - t270;
-        let t657: S = t656 - t267;
-        let t677: S = if t298 > 1.0 { t298 } else { 1.0 };
-        qdd[0] = t639;
-        qdd[1] = t653;
         qdd[2] = tip_joint_qdd;
+        let t653: S = t652 - t270;
+        qdd[1] = t653;
+        let t657: S = t656 - t267;
         qdd[3] = t657;
+        let t677: S = if t298 > 1.0 { t298 } else { 1.0 };
         t677
     }
     /// Inverse dynamics: `τ = M(q) qdd + C(q, v) + g(q)` (recursive Newton–Euler, unrolled).
@@ -811,6 +811,7 @@ pub mod f64 {
         let t130: S = t121 + t126;
         let t163: S = t161 - t162;
         let tip_f_ang_y: S = t190 + t211;
+        tau[2] = tip_f_ang_y;
         let t269: S = t267 - t268;
         let rocker_a_lin_x: S = 9.81 * rocker_joint_x_r20;
         let rocker_a_lin_z: S = 9.81 * rocker_joint_x_r00;
@@ -825,16 +826,15 @@ pub mod f64 {
         let t289: S = (-0.12) * t281;
         let t83: S = t81 - t82;
         let coupler_f_ang_y: S = t168 + t270;
+        tau[1] = coupler_f_ang_y;
         let t225: S = 0.009709599999999999 * rocker_joint_qdd;
         let t84: S = t79 + t83;
         let t229: S = t227 - t228;
         let t290: S = coupler_f_ang_y + t289;
         let rocker_f_ang_y: S = t225 + t229;
+        tau[3] = rocker_f_ang_y;
         let crank_f_ang_y: S = t84 + t290;
         tau[0] = crank_f_ang_y;
-        tau[1] = coupler_f_ang_y;
-        tau[2] = tip_f_ang_y;
-        tau[3] = rocker_f_ang_y;
     }
     /// The joint-space mass matrix `M(q)` (composite-rigid-body algorithm, unrolled).
     ///
@@ -891,24 +891,24 @@ pub mod f64 {
         let t142: S = t138 + t141;
         let t159: S = t155 + t158;
         let coupler_ic_i11: S = 0.027392800000000002 + t74;
+        m[1][1] = coupler_ic_i11;
         let t152: S = t150 - t151;
         let t146: S = (-0.12) * t142;
         let t167: S = (-0.12) * t159;
         let t123: S = coupler_ic_i11 + t94;
         let t153: S = 0.0020330000000000005 + t152;
-        let crank_ic_i11: S = 0.0019336 + t123;
-        let t147: S = coupler_ic_i11 + t146;
-        let t168: S = t153 + t167;
-        m[0][0] = crank_ic_i11;
-        m[0][1] = t147;
-        m[0][2] = t168;
-        m[0][3] = 0.0;
-        m[1][0] = t147;
-        m[1][1] = coupler_ic_i11;
         m[1][2] = t153;
-        m[1][3] = 0.0;
-        m[2][0] = t168;
         m[2][1] = t153;
+        let crank_ic_i11: S = 0.0019336 + t123;
+        m[0][0] = crank_ic_i11;
+        let t147: S = coupler_ic_i11 + t146;
+        m[0][1] = t147;
+        m[1][0] = t147;
+        let t168: S = t153 + t167;
+        m[0][2] = t168;
+        m[2][0] = t168;
+        m[0][3] = 0.0;
+        m[1][3] = 0.0;
         m[2][2] = 0.0020330000000000005;
         m[2][3] = 0.0;
         m[3][0] = 0.0;
@@ -1070,12 +1070,12 @@ pub mod f64 {
         let t216: S = t202 * t213;
         let t218: S = if t147 > 0.0 { t147 } else { 0.0 };
         let t215: S = coupler_joint_q + t214;
+        q_out[1] = t215;
         let t217: S = rocker_joint_q + t216;
+        q_out[3] = t217;
         let t219: S = if t147 > (-1.0) { t218 } else { t147 };
         q_out[0] = q[0];
-        q_out[1] = t215;
         q_out[2] = q[2];
-        q_out[3] = t217;
         t219
     }
     /// Position completion: `q_out` is `q` with its dependent coordinates solved from the independent
@@ -1257,15 +1257,15 @@ pub mod f64 {
             1000000000000000000000000000000.0
         };
         let t197: S = -t168;
+        x[1][0] = t197;
         let t198: S = -t165;
+        x[3][0] = t198;
         let t199: S = if t196 > 1.0 { t196 } else { 1.0 };
         x[0][0] = 1.0;
         x[0][1] = 0.0;
-        x[1][0] = t197;
         x[1][1] = 0.0;
         x[2][0] = 0.0;
         x[2][1] = 1.0;
-        x[3][0] = t198;
         x[3][1] = 0.0;
         t199
     }
@@ -1481,11 +1481,11 @@ pub mod f64 {
         let t324: S = t309 + t323;
         let t333: S = t326 + t332;
         let t330: S = t324 + t329;
-        let t335: S = t333 + t334;
-        let t336: S = if t196 > 1.0 { t196 } else { 1.0 };
-        m[0][0] = t335;
         m[0][1] = t330;
         m[1][0] = t330;
+        let t335: S = t333 + t334;
+        m[0][0] = t335;
+        let t336: S = if t196 > 1.0 { t196 } else { 1.0 };
         m[1][1] = 0.0020330000000000005;
         t336
     }
