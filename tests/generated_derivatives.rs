@@ -10,8 +10,9 @@ use embedyn::constraints::constraint_condition;
 use embedyn::constraints::{complete_configuration, complete_velocity};
 use embedyn::nalgebra::DMatrix;
 use embedyn::{
-    aba_derivatives, aba_derivatives_independent, step_derivatives, AbaDerivatives,
-    DerivativeWorkspace, ManifoldDerivatives, Model, StepDerivatives, Workspace,
+    aba_derivatives, aba_derivatives_independent, rnea_derivatives, step_derivatives,
+    AbaDerivatives, DerivativeWorkspace, ManifoldDerivatives, Model, RneaDerivatives,
+    StepDerivatives, Workspace,
 };
 use serde_json::Value;
 
@@ -34,6 +35,17 @@ mod four_bar {
         "models/loops/four_bar_internal.urdf",
         f64_only,
         only(aba_derivatives, aba_derivatives_independent)
+    );
+}
+
+// A quadruped's derivatives are paired (its left and right legs side by side): `aba_derivatives`, 47k
+// operations, and `rnea_derivatives`, 21k, under the generator's pairing limit of 60k.
+mod solo12_free {
+    embedyn::robot!(
+        "tests/data/pinocchio/solo12.urdf",
+        floating,
+        f64_only,
+        only(aba_derivatives, rnea_derivatives)
     );
 }
 
@@ -231,6 +243,69 @@ fn generated_derivatives_match_the_interpreted_on_a_loop() {
         ];
         assert!(errors.iter().all(|&e| e < 1e-12), "manifold: {errors:?}");
         assert!((generated_condition - condition).abs() <= 1e-12 * condition);
+    }
+}
+
+/// The paired derivatives of a floating quadruped equal the interpreted ones (the unpaired dual-number
+/// passes): pairing changes no rounding.
+#[test]
+fn paired_derivatives_of_a_floating_quadruped_match_the_interpreted() {
+    const NQ: usize = solo12_free::NQ;
+    const NV: usize = solo12_free::NV;
+    let model: Model<f64> = load_model("tests/data/pinocchio/solo12.urdf", true);
+    let mut rng = Rng::new(12);
+    let mut dws = DerivativeWorkspace::new(&model);
+    let mut d = AbaDerivatives::new(&model);
+    let mut r = RneaDerivatives::new(&model);
+    for _ in 0..4 {
+        let q = rng.configuration(&model);
+        let (v, u) = (rng.vec(NV, -2.0, 2.0), rng.vec(NV, -5.0, 5.0));
+        let q_arr: [f64; NQ] = std::array::from_fn(|i| q[i]);
+        let arr = |x: &[f64]| -> [f64; NV] { std::array::from_fn(|i| x[i]) };
+        aba_derivatives(&model, &mut dws, &q, &v, &u, &[], &mut d).unwrap();
+        let mut qdd = [0.0; NV];
+        let (mut dq, mut dv, mut dt) = ([[0.0; NV]; NV], [[0.0; NV]; NV], [[0.0; NV]; NV]);
+        solo12_free::f64::aba_derivatives(
+            &q_arr,
+            &arr(&v),
+            &arr(&u),
+            &mut qdd,
+            &mut dq,
+            &mut dv,
+            &mut dt,
+        );
+        let errors = [
+            rel_vec(&qdd, d.qdd.as_slice()),
+            rel(&dq, &d.dqdd_dq),
+            rel(&dv, &d.dqdd_dv),
+            rel(&dt, &d.dqdd_dtau),
+        ];
+        assert!(
+            errors.iter().all(|&e| e < 1e-12),
+            "aba_derivatives: {errors:?}"
+        );
+        rnea_derivatives(&model, &mut dws, &q, &v, &u, &[], &mut r).unwrap();
+        let mut tau = [0.0; NV];
+        let (mut tq, mut tv, mut m) = ([[0.0; NV]; NV], [[0.0; NV]; NV], [[0.0; NV]; NV]);
+        solo12_free::f64::rnea_derivatives(
+            &q_arr,
+            &arr(&v),
+            &arr(&u),
+            &mut tau,
+            &mut tq,
+            &mut tv,
+            &mut m,
+        );
+        let errors = [
+            rel_vec(&tau, r.tau.as_slice()),
+            rel(&tq, &r.dtau_dq),
+            rel(&tv, &r.dtau_dv),
+            rel(&m, &r.dtau_dqdd),
+        ];
+        assert!(
+            errors.iter().all(|&e| e < 1e-12),
+            "rnea_derivatives: {errors:?}"
+        );
     }
 }
 

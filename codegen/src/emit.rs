@@ -378,7 +378,7 @@ pub fn function(
         .collect();
     // Isomorphic branches side by side, in scalar functions of up to PAIRING_LIMIT operations.
     let pairing = match module.pairs {
-        Some(pairs) if !module.lanes && order.len() <= std::env::var("EMBEDYN_PL").ok().and_then(|s| s.parse().ok()).unwrap_or(crate::pairing::PAIRING_LIMIT) => {
+        Some(pairs) if !module.lanes && order.len() <= crate::pairing::PAIRING_LIMIT => {
             let arg_lens: Vec<Option<usize>> = args
                 .iter()
                 .map(|a| (!a.scalar && a.columns.is_none()).then_some(a.len))

@@ -1314,6 +1314,35 @@ mod tests {
     }
 
     /// The generated source of `algorithm` alone, f64 only.
+    /// A floating quadruped's `aba_derivatives` (47k operations) is under the pairing limit and paired,
+    /// and every computed entry of its outputs is written by the part that computes it: the public
+    /// function reads no scratch slot into an output.
+    #[test]
+    fn a_quadrupeds_derivatives_are_paired_and_written_where_computed() {
+        let path = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../tests/data/pinocchio/solo12.urdf"
+        );
+        let options = GenerateOptions {
+            f32: false,
+            model: ModelOptions {
+                floating: true,
+                ..ModelOptions::default()
+            },
+            ..GenerateOptions::default()
+        }
+        .with_requested(Some(vec![Algorithm::AbaDerivatives]), &[]);
+        let text = generate_source(&crate::load(path.as_ref()).unwrap(), &options).unwrap();
+        assert!(text.contains("type P = "), "not paired");
+        assert!(text.contains("mod aba_derivatives_parts_0"), "not in parts");
+        let public = &text[text.find("pub fn aba_derivatives(").unwrap()..];
+        assert!(
+            !public.contains("= s["),
+            "an output read from the scratch array"
+        );
+        assert!(text.contains("dqdd_dq[0][0] = "));
+    }
+
     fn f64_source(loaded: &Loaded, algorithm: Algorithm) -> String {
         let options = GenerateOptions {
             f32: false,

@@ -506,13 +506,16 @@ fn unify(
     false
 }
 
-/// Functions of up to this many operations are paired: in trace order, emitted as one
-/// function or as parts of `CHUNK` statements (a pair counting once). Longer ones (the derivatives of
-/// large models) are written unpaired by `emit_large`, whose form rustc compiles in less memory and runs
-/// faster: paired, the floating ANYmal B's `aba_derivatives` (52k operations, 61 % as many statements)
-/// took 2.1× the time of the unpaired form and 3.5× its compile time (2026-12-02, one binary, bit-identical
-/// results): its parts' scratch traffic outweighs the two lanes.
-pub(crate) const PAIRING_LIMIT: usize = 20_000;
+/// Functions of up to this many operations are paired: in trace order, emitted as one function or as
+/// parts of `CHUNK` statements (a pair counting once). Longer ones (the derivatives of humanoids) are written
+/// unpaired by `emit_large`, whose form rustc compiles in less memory, and whose pairing search would take
+/// long (TALOS's `aba_derivatives`, 249k operations: a minute, and it then failed the statement rule of
+/// `LONG_PAIRED_PERCENT`). A quadruped's derivatives are under the limit: the floating ANYmal B's
+/// `aba_derivatives` (52k operations, 61 % as many statements) paired takes 0.77× the time of the unpaired
+/// form and compiles in 5.9 s instead of 5.0 (2026-12-03, one binary, identical results). It used to take
+/// 2.1× the time, when paired functions were scheduled by height and their outputs crossed the scratch
+/// arrays to the public function (docs/generated-code.md).
+pub(crate) const PAIRING_LIMIT: usize = 60_000;
 
 /// Fewer computed pairs than this are not worth the packing: the function stays scalar.
 pub(crate) const MIN_PAIRS: usize = 8;
