@@ -42,6 +42,30 @@ def main():
                 f"{statistics.median(pin):,.0f} | {spread(pin)} | {statistics.median(ratios):.2f} | "
                 f"{min(ratios):.2f}–{max(ratios):.2f} | ≤ {target} |"
             )
+    # Pinocchio's crba fills the upper triangle of M only; ours writes all of M (both triangles and the
+    # zeros between branches). The same output from Pinocchio costs its crba and the copy of the lower
+    # triangle (`crba_full`, timed by pinocchio_bench since 2026-12-03).
+    full = [(model, runs) for model, runs in rows.items() if all("crba_full" in r["pinocchio"] for r in runs)]
+    if full:
+        lines += [
+            "",
+            "Pinocchio's `crba` fills the upper triangle of M only (its documentation says so; the entries of joints on "
+            "different branches are not written either); the generated `crba` writes the whole symmetric M: for TALOS "
+            "1,444 entries (762 of them zeros) where Pinocchio writes about 360. The same output from Pinocchio is "
+            "its `crba` followed by the copy of the lower triangle (`M.triangularView<StrictlyLower>() = "
+            "M.transpose()…`), timed in the same runs:",
+            "",
+            "| model | embedyn `crba` (ns) | Pinocchio `crba` + lower triangle (ns) | range | ratio | rounds' ratios |",
+            "|---|---:|---:|---:|---:|---:|",
+        ]
+        for model, runs in full:
+            ours = [r["embedyn"]["crba"]["generated_f64"] for r in runs]
+            pin = [r["pinocchio"]["crba_full"] for r in runs]
+            ratios = [o / p for o, p in zip(ours, pin)]
+            lines.append(
+                f"| {model} | {statistics.median(ours):,.0f} | {statistics.median(pin):,.0f} | {spread(pin)} | "
+                f"{statistics.median(ratios):.2f} | {min(ratios):.2f}–{max(ratios):.2f} |"
+            )
     lines += [
         "",
         "Side by side in one binary (generated crates of each variant linked together, bit-identical results, 9 interleaved "

@@ -284,6 +284,13 @@ int run_one(const Options& opt, const std::string& path) {
     pinocchio::crba(model, data, s.q[i], Convention::WORLD);
     g_checksum += data.M(0, k % nv);
   });
+  // crba fills the upper triangle of data.M only (the entries of joints on different branches are never
+  // written); embedyn's crba writes all of M. The same output as ours: crba, then the lower triangle.
+  const Stats crba_full = time_it(opt, [&](int i, int k) {
+    pinocchio::crba(model, data, s.q[i], Convention::LOCAL);
+    data.M.triangularView<Eigen::StrictlyLower>() = data.M.transpose().triangularView<Eigen::StrictlyLower>();
+    g_checksum += data.M(k % nv, 0);
+  });
   const Stats minv = time_it(opt, [&](int i, int k) {
     pinocchio::computeMinverse(model, data, s.q[i]);
     g_checksum += data.Minv(0, k % nv);
@@ -294,6 +301,7 @@ int run_one(const Options& opt, const std::string& path) {
   report_stats(stem, "rnea", rnea);
   report_stats(stem, "crba/LOCAL", crba);
   report_stats(stem, "crba/WORLD", crba_world);
+  report_stats(stem, "crba+lower", crba_full);
   report_stats(stem, "minv", minv);
   double cpu_wall = 1.0;
   for (const Stats* st : {&aba, &aba_local, &rnea, &crba, &crba_world, &minv})
@@ -385,10 +393,11 @@ int run_one(const Options& opt, const std::string& path) {
   std::printf(
       "{\"model\": \"%s\", \"floating\": %s, \"nq\": %d, \"nv\": %d, \"aba\": %.1f, \"rnea\": %.1f, "
       "\"crba\": %.1f, \"minv\": %.1f, \"aba_convention\": \"WORLD\", \"aba_local\": %.1f, "
-      "\"crba_world\": %.1f, \"cpu_wall_min\": %.2f, \"repeats\": %d, \"batch_aba\": %d, "
-      "\"pinocchio\": \"%s\"%s}\n",
+      "\"crba_world\": %.1f, \"crba_full\": %.1f, \"cpu_wall_min\": %.2f, \"repeats\": %d, "
+      "\"batch_aba\": %d, \"pinocchio\": \"%s\"%s}\n",
       stem.c_str(), opt.floating ? "true" : "false", model.nq, nv, aba.median, rnea.median,
-      crba.median, minv.median, aba_local.median, crba_world.median, cpu_wall, opt.repeats, aba.batch,
+      crba.median, minv.median, aba_local.median, crba_world.median, crba_full.median, cpu_wall,
+      opt.repeats, aba.batch,
       kPinocchioVersion, extra.c_str());
   std::fflush(stdout);
   return 0;
