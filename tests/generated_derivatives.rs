@@ -30,6 +30,17 @@ mod ur5_step {
         wrenches(tool0, wrist_2_link)
     );
 }
+// A floating base: the step's derivatives of the base configuration go through the logarithm of the
+// step's rotation against itself (the identity), where a square root's derivative was 0 · ∞ = NaN in
+// generated code (attacker's trial).
+mod pendulum_free_step {
+    embedyn::robot!(
+        "tests/data/pinocchio/double_pendulum.urdf",
+        floating,
+        f64_only,
+        only(step_derivatives)
+    );
+}
 mod four_bar {
     embedyn::robot!(
         "models/loops/four_bar_internal.urdf",
@@ -59,15 +70,18 @@ fn numbers(v: &Value) -> Vec<f64> {
         .collect()
 }
 
-/// `max|a − b| / max(1, max|b|)` over a generated matrix and a reference one.
+/// `max|a − b| / max(1, max|b|)` over a generated matrix and a reference one ([`rel_vec`]'s rule: a NaN
+/// on one side only is an infinite error).
 fn rel<const R: usize, const C: usize>(a: &[[f64; C]; R], b: &DMatrix<f64>) -> f64 {
-    let mut diff = 0.0f64;
-    for r in 0..R {
-        for c in 0..C {
-            diff = diff.max((a[r][c] - b[(r, c)]).abs());
-        }
-    }
-    diff / b.abs().max().max(1.0)
+    let flat: Vec<f64> = (0..R)
+        .flat_map(|r| (0..C).map(move |c| (r, c)))
+        .map(|(r, c)| a[r][c])
+        .collect();
+    let reference: Vec<f64> = (0..R)
+        .flat_map(|r| (0..C).map(move |c| (r, c)))
+        .map(|(r, c)| b[(r, c)])
+        .collect();
+    rel_vec(&flat, &reference)
 }
 
 fn rel_vec(a: &[f64], b: &[f64]) -> f64 {
@@ -358,5 +372,56 @@ fn generated_step_matches_the_interpreted() {
         let (mut q2, mut v2) = ([0.0; N], [0.0; N]);
         ur5_step::f64::step(&arr(&q), &arr(&v), &arr(&tau), dt, &mut q2, &mut v2);
         assert!(rel_vec(&q2, &q1) < 1e-15 && rel_vec(&v2, &v1) < 1e-15);
+    }
+}
+
+/// The generated `step_derivatives` of a floating base equals the interpreted one, base rows included
+/// (they were NaN: the square root's derivative at zero, 0 · ∞ in traced code, `Dual::sqrt`).
+#[test]
+fn generated_step_of_a_floating_base_matches_the_interpreted() {
+    const NQ: usize = pendulum_free_step::NQ;
+    const NV: usize = pendulum_free_step::NV;
+    let model: Model<f64> = load_model("tests/data/pinocchio/double_pendulum.urdf", true);
+    let mut rng = Rng::new(9);
+    let mut dws = DerivativeWorkspace::new(&model);
+    let mut d = StepDerivatives::new(&model);
+    let dt = 0.005;
+    for _ in 0..4 {
+        let q = rng.configuration(&model);
+        let (v, tau) = (rng.vec(NV, -2.0, 2.0), rng.vec(NV, -5.0, 5.0));
+        step_derivatives(&model, &mut dws, &q, &v, &tau, dt, &[], &mut d).unwrap();
+        let arr = |x: &[f64]| -> [f64; NV] { std::array::from_fn(|i| x[i]) };
+        let q_arr: [f64; NQ] = std::array::from_fn(|i| q[i]);
+        let (mut q1, mut v1) = ([f64::NAN; NQ], [f64::NAN; NV]);
+        let mut blocks = [[[f64::NAN; NV]; NV]; 6];
+        let [a, b, c, e, f, g] = &mut blocks;
+        pendulum_free_step::f64::step_derivatives(
+            &q_arr,
+            &arr(&v),
+            &arr(&tau),
+            dt,
+            &mut q1,
+            &mut v1,
+            a,
+            b,
+            c,
+            e,
+            f,
+            g,
+        );
+        let expected = [
+            &d.dq_next_dq,
+            &d.dq_next_dv,
+            &d.dq_next_dtau,
+            &d.dv_next_dq,
+            &d.dv_next_dv,
+            &d.dv_next_dtau,
+        ];
+        assert!(expected.iter().all(|m| m.iter().all(|x| x.is_finite())));
+        let mut worst = rel_vec(&q1, d.q_next.as_slice()).max(rel_vec(&v1, d.v_next.as_slice()));
+        for (generated, interpreted) in blocks.iter().zip(expected) {
+            worst = worst.max(rel(generated, interpreted));
+        }
+        assert!(worst < 1e-12, "{worst:e}");
     }
 }

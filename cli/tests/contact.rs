@@ -14,7 +14,17 @@ pub fn relative_error(a: &[f64], b: &[f64]) -> f64 {
     let scale = b.iter().fold(1.0f64, |m, x| m.max(x.abs()));
     a.iter()
         .zip(b)
-        .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()))
+        // A NaN on one side only is an infinite difference (`f64::max` would skip it).
+        .fold(0.0f64, |m, (x, y)| {
+            let d = (x - y).abs();
+            m.max(if d.is_nan() && !(x.is_nan() && y.is_nan()) {
+                f64::INFINITY
+            } else if d.is_nan() {
+                0.0
+            } else {
+                d
+            })
+        })
         / scale
 }
 

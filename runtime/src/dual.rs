@@ -179,9 +179,13 @@ impl<T: Real, const N: usize> Real for Dual<T, N> {
 
     fn sqrt(self) -> Self {
         let root = self.re.sqrt();
-        // d√x = dx / (2√x); at x = 0 the derivative is infinite unless the tangent is zero, and a zero
-        // tangent stays zero (no 0 · ∞).
-        let half_inverse = T::from_f64(0.5) / root;
+        // d√x = dx / (2√x). At x = 0 a zero tangent stays zero (no 0 · ∞): the norm of a vector that
+        // passes through zero (a rotation angle at the identity) has a zero tangent there. A select, not
+        // a test of the tangent, decides it: in traced code a tangent like 2 w · dw is a computed value,
+        // zero only at run time, and 0 · ∞ there was NaN (generated `step_derivatives` of a floating
+        // base: the step's rotation against itself is the identity). A non-zero tangent at x = 0, whose
+        // derivative does not exist, gets 0 too instead of ±∞.
+        let half_inverse = root.select_gt(T::zero(), T::from_f64(0.5) / root, T::zero());
         let mut eps = self.eps;
         for e in &mut eps {
             if !e.is_zero() {

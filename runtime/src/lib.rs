@@ -81,7 +81,17 @@ pub use spatial::{ArticulatedInertia, Force, Motion, SpatialInertia, Transform};
 /// Re-exported so that users of the model API need not depend on nalgebra themselves.
 pub use nalgebra;
 
-/// "Relative error" as docs/conventions.md defines it: `max|a − b| / max(1, max|b|)`.
+/// "Relative error" as docs/conventions.md defines it: `max|a − b| / max(1, max|b|)`. A NaN on one side
+/// only is an infinite error (`f64::max` would skip it: a NaN the other engine does not give must fail a
+/// comparison, not pass it); equal entries, a NaN on both sides included, differ by 0.
+///
+/// ```
+/// # use embedyn_runtime as embedyn; // the facade `embedyn` re-exports this crate
+/// use embedyn::relative_error;
+/// assert_eq!(relative_error(&[3.0, 1.0], &[2.0, 1.0]), 0.5); // |3 − 2| / max(1, 2)
+/// assert_eq!(relative_error(&[f64::NAN, 1.0], &[2.0, 1.0]), f64::INFINITY);
+/// assert_eq!(relative_error(&[f64::NAN], &[f64::NAN]), 0.0);
+/// ```
 pub fn relative_error<T: Real>(a: &[T], b: &[T]) -> f64 {
     assert_eq!(
         a.len(),
@@ -91,8 +101,19 @@ pub fn relative_error<T: Real>(a: &[T], b: &[T]) -> f64 {
     let mut diff = 0.0f64;
     let mut scale = 1.0f64;
     for (x, y) in a.iter().zip(b) {
-        diff = diff.max((x.to_f64() - y.to_f64()).abs());
-        scale = scale.max(y.to_f64().abs());
+        let (x, y) = (x.to_f64(), y.to_f64());
+        let d = if x == y || (x.is_nan() && y.is_nan()) {
+            0.0
+        } else {
+            let d = (x - y).abs();
+            if d.is_nan() {
+                f64::INFINITY
+            } else {
+                d
+            }
+        };
+        diff = diff.max(d);
+        scale = scale.max(y.abs());
     }
     diff / scale
 }
