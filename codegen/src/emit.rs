@@ -559,10 +559,7 @@ pub fn function(
     // Outputs: the parameters, which the parts take too, and the writes of what no statement computes.
     let (out_params, out_stmts, ret_type, ret_value) =
         output_tokens(outputs, split, &slot, &operand, nodes, args);
-    let out_names: Vec<Ident> = outputs
-        .iter()
-        .filter_map(|o| o.name().map(|n| format_ident!("{}", n)))
-        .collect();
+    let out_names = output_names(outputs);
     let chunk_bodies: Vec<Vec<&str>> = chunks.iter().map(|ns| names.bodies(ns.iter())).collect();
     let chunk_names = part_names(name, &chunk_bodies, module.taken);
     let mut chunk_fns = Vec::new();
@@ -718,6 +715,14 @@ fn output_places(outputs: &[Output], nodes: &[Op]) -> HashMap<u32, Vec<TokenStre
         }
     }
     places
+}
+
+/// The output parameters' names, which the public function passes on to its parts.
+fn output_names(outputs: &[Output]) -> Vec<Ident> {
+    outputs
+        .iter()
+        .filter_map(|o| o.name().map(|n| format_ident!("{}", n)))
+        .collect()
 }
 
 /// The writes of value `n` to its output places, after the statement that defines it.
@@ -1362,10 +1367,7 @@ fn paired_parts(
     let operand = |v: &Sym| writer.operand(v);
     let (out_params, out_stmts, ret_type, ret_value) =
         output_tokens(outputs, true, &slot, &operand, nodes, args);
-    let out_names: Vec<Ident> = outputs
-        .iter()
-        .filter_map(|o| o.name().map(|n| format_ident!("{}", n)))
-        .collect();
+    let out_names = output_names(outputs);
     let mut chunk_fns = Vec::new();
     for (c, part) in chunks.iter().enumerate() {
         let mut stmts: Vec<TokenStream> = Vec::new();
