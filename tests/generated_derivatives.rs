@@ -88,6 +88,64 @@ fn rel_vec(a: &[f64], b: &[f64]) -> f64 {
     embedyn::relative_error(a, b)
 }
 
+/// A generated `step_derivatives`: (q, v, τ, dt) → q_next, v_next and the six Jacobian blocks.
+type GeneratedStep<const NQ: usize, const NV: usize> = fn(
+    &[f64; NQ],
+    &[f64; NV],
+    &[f64; NV],
+    f64,
+    &mut [f64; NQ],
+    &mut [f64; NV],
+    &mut [[f64; NV]; NV],
+    &mut [[f64; NV]; NV],
+    &mut [[f64; NV]; NV],
+    &mut [[f64; NV]; NV],
+    &mut [[f64; NV]; NV],
+    &mut [[f64; NV]; NV],
+);
+
+/// Runs a generated `step_derivatives` at (q, v, τ, dt), its outputs pre-filled with NaN (an entry it does
+/// not write fails), and returns its next state and the worst relative error against the interpreted
+/// `d` at the same inputs.
+fn step_error<const NQ: usize, const NV: usize>(
+    generated: GeneratedStep<NQ, NV>,
+    (q, v, tau, dt): (&[f64], &[f64], &[f64], f64),
+    d: &StepDerivatives<f64>,
+) -> ([f64; NQ], [f64; NV], f64) {
+    let (mut q1, mut v1) = ([f64::NAN; NQ], [f64::NAN; NV]);
+    let mut blocks = [[[f64::NAN; NV]; NV]; 6];
+    let [a, b, c, e, f, g] = &mut blocks;
+    let q_arr: [f64; NQ] = std::array::from_fn(|i| q[i]);
+    let arr = |x: &[f64]| -> [f64; NV] { std::array::from_fn(|i| x[i]) };
+    generated(
+        &q_arr,
+        &arr(v),
+        &arr(tau),
+        dt,
+        &mut q1,
+        &mut v1,
+        a,
+        b,
+        c,
+        e,
+        f,
+        g,
+    );
+    let expected = [
+        &d.dq_next_dq,
+        &d.dq_next_dv,
+        &d.dq_next_dtau,
+        &d.dv_next_dq,
+        &d.dv_next_dv,
+        &d.dv_next_dtau,
+    ];
+    let mut worst = rel_vec(&q1, d.q_next.as_slice()).max(rel_vec(&v1, d.v_next.as_slice()));
+    for (generated, interpreted) in blocks.iter().zip(expected) {
+        worst = worst.max(rel(generated, interpreted));
+    }
+    (q1, v1, worst)
+}
+
 /// The worst relative error of a generated vector and matrices against the interpreted ones.
 fn worst_of<const N: usize>(
     vector: &[f64],
@@ -322,39 +380,11 @@ fn generated_step_matches_the_interpreted() {
         let v = rng.vec(N, -2.0, 2.0);
         let tau = rng.vec(N, -5.0, 5.0);
         step_derivatives(&model, &mut dws, &q, &v, &tau, dt, &[], &mut d).unwrap();
-        let arr = |x: &[f64]| -> [f64; N] { std::array::from_fn(|i| x[i]) };
-        let (mut q1, mut v1) = ([0.0; N], [0.0; N]);
-        let mut blocks = [[[0.0; N]; N]; 6];
-        let [a, b, c, e, f, g] = &mut blocks;
-        ur5_step::f64::step_derivatives(
-            &arr(&q),
-            &arr(&v),
-            &arr(&tau),
-            dt,
-            &mut q1,
-            &mut v1,
-            a,
-            b,
-            c,
-            e,
-            f,
-            g,
-        );
-        let expected = [
-            &d.dq_next_dq,
-            &d.dq_next_dv,
-            &d.dq_next_dtau,
-            &d.dv_next_dq,
-            &d.dv_next_dv,
-            &d.dv_next_dtau,
-        ];
-        let mut worst = rel_vec(&q1, d.q_next.as_slice()).max(rel_vec(&v1, d.v_next.as_slice()));
-        for (generated, interpreted) in blocks.iter().zip(expected) {
-            worst = worst.max(rel(generated, interpreted));
-        }
+        let (q1, v1, worst) = step_error(ur5_step::f64::step_derivatives, (&q, &v, &tau, dt), &d);
         assert!(worst < 1e-12, "{worst:e}");
         // The plain step is the same next state.
         let (mut q2, mut v2) = ([0.0; N], [0.0; N]);
+        let arr = |x: &[f64]| -> [f64; N] { std::array::from_fn(|i| x[i]) };
         ur5_step::f64::step(&arr(&q), &arr(&v), &arr(&tau), dt, &mut q2, &mut v2);
         assert!(rel_vec(&q2, &q1) < 1e-15 && rel_vec(&v2, &v1) < 1e-15);
     }
@@ -375,38 +405,10 @@ fn generated_step_of_a_floating_base_matches_the_interpreted() {
         let q = rng.configuration(&model);
         let (v, tau) = (rng.vec(NV, -2.0, 2.0), rng.vec(NV, -5.0, 5.0));
         step_derivatives(&model, &mut dws, &q, &v, &tau, dt, &[], &mut d).unwrap();
-        let arr = |x: &[f64]| -> [f64; NV] { std::array::from_fn(|i| x[i]) };
-        let q_arr: [f64; NQ] = std::array::from_fn(|i| q[i]);
-        let (mut q1, mut v1) = ([f64::NAN; NQ], [f64::NAN; NV]);
-        let mut blocks = [[[f64::NAN; NV]; NV]; 6];
-        let [a, b, c, e, f, g] = &mut blocks;
-        pendulum_free_step::f64::step_derivatives(
-            &q_arr,
-            &arr(&v),
-            &arr(&tau),
-            dt,
-            &mut q1,
-            &mut v1,
-            a,
-            b,
-            c,
-            e,
-            f,
-            g,
-        );
-        let expected = [
-            &d.dq_next_dq,
-            &d.dq_next_dv,
-            &d.dq_next_dtau,
-            &d.dv_next_dq,
-            &d.dv_next_dv,
-            &d.dv_next_dtau,
-        ];
-        assert!(expected.iter().all(|m| m.iter().all(|x| x.is_finite())));
-        let mut worst = rel_vec(&q1, d.q_next.as_slice()).max(rel_vec(&v1, d.v_next.as_slice()));
-        for (generated, interpreted) in blocks.iter().zip(expected) {
-            worst = worst.max(rel(generated, interpreted));
-        }
+        let interpreted = [&d.dq_next_dq, &d.dq_next_dv, &d.dq_next_dtau];
+        assert!(interpreted.iter().all(|m| m.iter().all(|x| x.is_finite())));
+        let generated: GeneratedStep<NQ, NV> = pendulum_free_step::f64::step_derivatives;
+        let (_, _, worst) = step_error(generated, (&q, &v, &tau, dt), &d);
         assert!(worst < 1e-12, "{worst:e}");
     }
 }
