@@ -73,15 +73,9 @@ fn numbers(v: &Value) -> Vec<f64> {
 /// `max|a − b| / max(1, max|b|)` over a generated matrix and a reference one ([`rel_vec`]'s rule: a NaN
 /// on one side only is an infinite error).
 fn rel<const R: usize, const C: usize>(a: &[[f64; C]; R], b: &DMatrix<f64>) -> f64 {
-    let flat: Vec<f64> = (0..R)
-        .flat_map(|r| (0..C).map(move |c| (r, c)))
-        .map(|(r, c)| a[r][c])
-        .collect();
-    let reference: Vec<f64> = (0..R)
-        .flat_map(|r| (0..C).map(move |c| (r, c)))
-        .map(|(r, c)| b[(r, c)])
-        .collect();
-    rel_vec(&flat, &reference)
+    assert_eq!(b.shape(), (R, C));
+    // `a` row by row; the transpose's column-major storage is `b` row by row.
+    rel_vec(a.as_flattened(), b.transpose().as_slice())
 }
 
 fn rel_vec(a: &[f64], b: &[f64]) -> f64 {

@@ -620,19 +620,10 @@ pub(crate) fn flat(v: &Value) -> Vec<f64> {
     }
 }
 
-/// Largest difference between two answers, relative to the reference's largest magnitude (at least 1).
+/// Largest difference between two answers, relative to the reference's largest magnitude (at least 1):
+/// the runtime's `relative_error` (a NaN on one side only is an infinite difference).
 fn scaled_difference(a: &[f64], reference: &[f64]) -> f64 {
-    let scale = reference.iter().fold(1.0f64, |m, x| m.max(x.abs()));
-    // A NaN on one side only is an infinite difference (`f64::max` would skip it).
-    a.iter()
-        .zip(reference)
-        .map(|(x, y)| match (x - y).abs() {
-            d if d.is_nan() && !(x.is_nan() && y.is_nan()) => f64::INFINITY,
-            d if d.is_nan() => 0.0,
-            d => d,
-        })
-        .fold(0.0, f64::max)
-        / scale
+    embedyn_runtime::relative_error(a, reference)
 }
 
 /// `--engine generated` compiles the model's generated code (cached) and agrees with the interpreted

@@ -10,22 +10,7 @@ const TOL: f64 = 1e-9;
 
 /// CONTRACT §2: max|a − b| / max(1, max|b|).
 pub fn relative_error(a: &[f64], b: &[f64]) -> f64 {
-    assert_eq!(a.len(), b.len());
-    let scale = b.iter().fold(1.0f64, |m, x| m.max(x.abs()));
-    a.iter()
-        .zip(b)
-        // A NaN on one side only is an infinite difference (`f64::max` would skip it).
-        .fold(0.0f64, |m, (x, y)| {
-            let d = (x - y).abs();
-            m.max(if d.is_nan() && !(x.is_nan() && y.is_nan()) {
-                f64::INFINITY
-            } else if d.is_nan() {
-                0.0
-            } else {
-                d
-            })
-        })
-        / scale
+    embedyn_runtime::relative_error(a, b)
 }
 
 pub fn vecf(v: &Value) -> Vec<f64> {

@@ -685,10 +685,7 @@ pub fn function(
 /// store each), and it leaves the registers as soon as it is known instead of living to the end.
 fn output_places(outputs: &[Output], nodes: &[Op]) -> HashMap<u32, Vec<TokenStream>> {
     let mut places: HashMap<u32, Vec<TokenStream>> = HashMap::new();
-    let computed = |v: &Sym| match v {
-        Sym::Node(n) if !matches!(nodes[*n as usize], Op::Input { .. }) => Some(*n),
-        _ => None,
-    };
+    let computed = |v: &Sym| computed_value(v, nodes);
     for o in outputs {
         match o {
             Output::Vector { name, values } => {
@@ -715,6 +712,15 @@ fn output_places(outputs: &[Output], nodes: &[Op]) -> HashMap<u32, Vec<TokenStre
         }
     }
     places
+}
+
+/// The value an output entry `v` takes from a statement: a computed node, not a constant or an input passed
+/// through (those the public function writes itself, [`output_tokens`]).
+fn computed_value(v: &Sym, nodes: &[Op]) -> Option<u32> {
+    match v {
+        Sym::Node(n) if !matches!(nodes[*n as usize], Op::Input { .. }) => Some(*n),
+        _ => None,
+    }
 }
 
 /// The output parameters' names, which the public function passes on to its parts.
@@ -750,8 +756,7 @@ fn output_tokens(
     nodes: &[Op],
     args: &[Arg],
 ) -> (Vec<TokenStream>, Vec<TokenStream>, TokenStream, TokenStream) {
-    let computed =
-        |v: &Sym| matches!(v, Sym::Node(n) if !matches!(nodes[*n as usize], Op::Input { .. }));
+    let computed = |v: &Sym| computed_value(v, nodes).is_some();
     let mut out_params = Vec::new();
     let mut out_stmts = Vec::new();
     let mut ret_type = quote!();
@@ -868,9 +873,10 @@ pub const SCHEDULE_LIMIT: usize = 2 * CHUNK;
 /// Paired functions keep the trace order too, whatever their length. A pair already computes two
 /// branches at once, and starting every long chain early keeps more pairs live than the 16 vector
 /// registers hold: the floating TALOS's paired `crba` spent a third of its instructions on spills.
-/// Measured in one binary (bit-identical results, medians of 9 interleaved rounds, 2026-12-03),
-/// trace order against this schedule: `aba` 0.85× the time on TALOS, 0.85× on G1, 0.77–0.85× on
-/// ANYmal B; `crba` 0.84×, 0.73×, 0.95–1.08×; `rnea` 0.93×, 0.93×, 1.01–1.07×.
+/// Measured in one binary (bit-identical results, medians of 9 interleaved rounds, 3–4 runs each,
+/// 2026-12-03), trace order against this schedule: `aba` 0.81–0.84× the time on TALOS, 0.85× on G1,
+/// 0.78–0.83× on ANYmal B; `crba` 0.84×, 0.73×, 0.92–1.00×; `rnea` 0.93–0.96×, 0.93×, 0.95–1.03×
+/// (BENCHMARKS.md, "Floating bases").
 fn schedule(nodes: &[Op], order: Vec<u32>) -> Vec<u32> {
     let k = order.len();
     if k > SCHEDULE_LIMIT {
