@@ -201,7 +201,7 @@ fn jacobian_and_bias_match_finite_differences_of_the_position_constraint() {
         for row in 0..jac.nrows() {
             let fd = (r_plus[row] - r_minus[row]) / (2.0 * h);
             let an: f64 = (0..model.nv()).map(|c| jac[(row, c)] * dir[c]).sum();
-            worst_j = worst_j.max((fd - an).abs());
+            worst_j = common::worse(worst_j, (fd - an).abs());
         }
         // J̇ v: the derivative of J along v (1-DoF joints moving; a floating base held still).
         let mut vv = v.clone();
@@ -229,7 +229,7 @@ fn jacobian_and_bias_match_finite_differences_of_the_position_constraint() {
             let fd: f64 = (0..model.nv())
                 .map(|c| (j_plus[(row, c)] - j_minus[(row, c)]) / (2.0 * h) * vv[c])
                 .sum();
-            worst_b = worst_b.max((fd - bias_vv[row]).abs());
+            worst_b = common::worse(worst_b, (fd - bias_vv[row]).abs());
         }
         let _ = bias;
         eprintln!("{path}: |J − FD| {worst_j:.1e}, |J̇v − FD| {worst_b:.1e}");

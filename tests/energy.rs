@@ -55,7 +55,7 @@ fn drift(model: &Model<f64>, q0: &[f64], v0: &[f64], h: f64, duration: f64) -> f
     let mut worst = 0.0f64;
     for _ in 0..steps {
         rk4_step(model, &mut ws, &mut q, &mut v, &tau, h);
-        worst = worst.max((energy(model, &mut ws, &q, &v) - e0).abs());
+        worst = common::worse(worst, (energy(model, &mut ws, &q, &v) - e0).abs());
     }
     worst
 }

@@ -283,7 +283,7 @@ fn rk4_energy_change<T: Real>(path: &str, h: f64, duration: f64) -> f64 {
         }
         m.normalize_configuration(&mut q);
         project(&mut ws, &mut q, &mut v);
-        worst = worst.max((energy(&q, &v) - e0).abs());
+        worst = common::worse(worst, (energy(&q, &v) - e0).abs());
     }
     worst
 }

@@ -49,8 +49,8 @@ fn simulate(model: &Model<f64>, q0: &[f64], v0: &[f64], h: f64, steps: usize) ->
         complete_configuration(model, &mut ws, &mut q).unwrap();
         complete_velocity(model, &mut ws, &q, &mut v).unwrap();
         let (pos, vel) = constraint_violation(model, &mut ws, &q, &v).unwrap();
-        residual = residual.max(pos.max(vel));
-        drift = drift.max((energy(model, &mut ws, &q, &v) - e0).abs());
+        residual = common::worse(residual, common::worse(pos, vel));
+        drift = common::worse(drift, (energy(model, &mut ws, &q, &v) - e0).abs());
     }
     (drift, residual)
 }

@@ -230,7 +230,7 @@ fn link_frames_match_pinocchio() {
                     .iter()
                     .zip(&theirs)
                     .map(|(a, b)| (a - b).abs())
-                    .fold(0.0, f64::max);
+                    .fold(0.0, common::worse);
                 worst = worst.max(e);
                 if name == "ur5" {
                     assert_eq!(ur5_generated::FRAMES[k], link);
@@ -238,7 +238,7 @@ fn link_frames_match_pinocchio() {
                         .iter()
                         .zip(&theirs)
                         .map(|(a, b)| (a - b).abs())
-                        .fold(0.0, f64::max);
+                        .fold(0.0, common::worse);
                     worst = worst.max(g);
                 }
                 compared += 1;

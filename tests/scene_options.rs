@@ -472,7 +472,7 @@ fn reflected_drops_exactly_the_documented_terms() {
                 assert!(d <= 1e-12 * scale, "{path}: diagonal {i} differs by {d:e}");
                 for j in 0..n {
                     worst_offdiag =
-                        worst_offdiag.max((m_exact[(i, j)] - m_reflected[(i, j)]).abs());
+                        common::worse(worst_offdiag, (m_exact[(i, j)] - m_reflected[(i, j)]).abs());
                 }
             }
             if path.ends_with("mit_humanoid_leg.urdf") {
