@@ -736,7 +736,14 @@ fn check_size_before_tracing(
         })
         .collect();
     let limit = options.max_compile_memory_mb;
-    size::check(loaded, &predicted, &predicted, scalars, limit, 2.0)?;
+    size::check(
+        loaded,
+        &predicted,
+        &predicted,
+        scalars,
+        limit,
+        size::PREDICTION_SLACK,
+    )?;
     Ok(predicted)
 }
 
