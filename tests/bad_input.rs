@@ -425,6 +425,33 @@ fn deeply_nested_elements_are_refused_before_parsing() {
     );
 }
 
+/// 200,000 attributes on one element (a 2.3 MB file) took the XML parser a minute (its duplicate check
+/// is quadratic in an element's attributes; attacker's trial): more than 1,000 are refused before
+/// parsing, with the element's line.
+#[test]
+fn an_element_with_too_many_attributes_is_refused_before_parsing() {
+    let attributes: String = (0..200_000).map(|k| format!(" a{k}=\"1\"")).collect();
+    let text = format!(
+        "<robot name=\"r\">\n  <link name=\"base\"/>\n  <link name=\"arm\"/>\n  <joint name=\"j\" type=\"revolute\">\n    <parent link=\"base\"/><child link=\"arm\"/>\n    <axis xyz=\"0 0 1\"{attributes}/>\n  </joint>\n</robot>\n"
+    );
+    let err = embedyn::codegen::parse_urdf(&text, "many.urdf".as_ref())
+        .map(|_| ())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.starts_with("many.urdf:6: XML: an element has more than 1000 attributes"),
+        "{err}"
+    );
+    // Up to the limit, a model loads (the extra attributes are ignored, as unknown ones are).
+    let attributes: String = (0..998).map(|k| format!(" a{k}=\"1\"")).collect();
+    let text = text.replace(
+        &text[text.find(" a0=").unwrap()..text.find("/>\n  </joint>").unwrap()],
+        &attributes,
+    );
+    let loaded = embedyn::codegen::parse_urdf(&text, "many.urdf".as_ref());
+    assert!(loaded.is_ok(), "{:?}", loaded.err().map(|e| e.to_string()));
+}
+
 /// Line numbers come from an index built once: a 20,000-link chain (15 MB) loads in time linear in its
 /// size (before, every element's line rescanned the file: 61 s here), and the line of an element near the
 /// end is exact.

@@ -302,6 +302,12 @@ pub enum LoadErrorKind {
         /// The deepest nesting read.
         limit: usize,
     },
+    /// An element with more than `limit` attributes, refused before parsing.
+    #[error("an element has more than {limit} attributes here; a URDF element has a handful, so this is not a model file (refused before parsing, whose duplicate check is quadratic in an element's attributes)")]
+    TooManyAttributes {
+        /// The most attributes an element may have.
+        limit: usize,
+    },
     /// The text is not well-formed XML.
     #[error("malformed XML: {error}")]
     MalformedXml {

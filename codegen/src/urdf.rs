@@ -12,7 +12,7 @@ use crate::ir::{
     Coupling, Inertial, Joint, JointKind, Limits, Link, Loop, LoopFrame, LoopKind, Mimic, Origin,
     Robot,
 };
-use crate::xml_text::{nesting_too_deep, LineIndex, MAX_NESTING};
+use crate::xml_text::{beyond_limits, Beyond, LineIndex, MAX_ATTRIBUTES, MAX_NESTING};
 use embedyn_runtime::nalgebra::Matrix3;
 use roxmltree::{Document, Node};
 use std::cell::{Cell, RefCell};
@@ -73,11 +73,22 @@ pub fn load_urdf(path: &Path) -> Result<Loaded, LoadError> {
 /// joint was read without a problem.
 pub fn parse_urdf(text: &str, path: &Path) -> Result<Loaded, LoadError> {
     let lines = LineIndex::new(text);
-    if let Some(deep) = nesting_too_deep(text, MAX_NESTING) {
-        return Err(LoadError::at(
-            Location::new(path, Some(lines.line(deep.offset)), "XML"),
-            LoadErrorKind::NestedTooDeep { limit: MAX_NESTING },
-        ));
+    match beyond_limits(text, MAX_NESTING, MAX_ATTRIBUTES) {
+        None => {}
+        Some(Beyond::Nesting { offset, .. }) => {
+            return Err(LoadError::at(
+                Location::new(path, Some(lines.line(offset)), "XML"),
+                LoadErrorKind::NestedTooDeep { limit: MAX_NESTING },
+            ))
+        }
+        Some(Beyond::Attributes { offset, .. }) => {
+            return Err(LoadError::at(
+                Location::new(path, Some(lines.line(offset)), "XML"),
+                LoadErrorKind::TooManyAttributes {
+                    limit: MAX_ATTRIBUTES,
+                },
+            ))
+        }
     }
     // Namespace prefixes used without a declaration (`<drake:rotor_inertia>` in a `<robot>` that never
     // declares `xmlns:drake`, as files Pinocchio reads do) are declared on the root and reported; the

@@ -4,7 +4,9 @@
 //! `roxmltree` computes a line by rescanning the text from its start, which made loading quadratic in
 //! the file size when every element's line was kept; [`LineIndex`] answers in O(log lines). Its parser
 //! descends recursively into nested elements, so a file nesting elements tens of thousands deep
-//! overflows the stack (an abort, not an error); [`nesting_too_deep`] finds such a file first.
+//! overflows the stack (an abort, not an error), and it compares each attribute's name with those before
+//! it on its element, so an element with 200,000 attributes took a minute to parse (quadratic);
+//! [`beyond_limits`] finds such a file first.
 
 /// Byte offset → 1-based line, from the offsets where lines start (built once per file).
 pub(crate) struct LineIndex {
@@ -37,21 +39,31 @@ impl LineIndex {
 /// thread's 2 MiB stack.
 pub(crate) const MAX_NESTING: usize = 256;
 
-/// An element opened deeper than [`MAX_NESTING`]: the byte offset of its `<` and its depth.
+/// The most attributes one element may have. URDF elements have up to about six; the limit leaves
+/// ample room for any real file while the parser's duplicate check, quadratic in the attributes of one
+/// element, stays under a millisecond.
+pub(crate) const MAX_ATTRIBUTES: usize = 1000;
+
+/// Markup beyond what a model file needs, found before parsing.
 #[derive(Debug, PartialEq, Eq)]
-pub(crate) struct TooDeep {
-    pub offset: usize,
-    pub depth: usize,
+pub(crate) enum Beyond {
+    /// An element opened deeper than the nesting limit: the byte offset of its `<` and its depth.
+    Nesting { offset: usize, depth: usize },
+    /// An element with more attributes than the limit: the byte offset of its `<` and how many it has
+    /// (counted up to one past the limit).
+    Attributes { offset: usize, count: usize },
 }
 
-/// Finds the first element nested deeper than `limit` (the root element has depth 1).
+/// Finds the first element nested deeper than `nesting` (the root element has depth 1) or with more
+/// than `attributes` attributes.
 ///
 /// A linear scan of the markup that skips what can hold a `<` or `>` without opening an element:
 /// comments, CDATA sections, processing instructions, a `<!DOCTYPE …>` (with its internal subset) and
-/// quoted attribute values; a self-closing tag opens nothing. It only counts: on malformed text it
-/// stops or miscounts harmlessly and the XML parser then reports the error. Entities cannot add
-/// nesting, because the parser is run without DTD support and so no entity can expand to markup.
-pub(crate) fn nesting_too_deep(text: &str, limit: usize) -> Option<TooDeep> {
+/// quoted attribute values; a self-closing tag opens nothing; an attribute is an `=` outside quotes. It
+/// only counts: on malformed text it stops or miscounts harmlessly and the XML parser then reports the
+/// error. Entities cannot add nesting, because the parser is run without DTD support and so no entity
+/// can expand to markup.
+pub(crate) fn beyond_limits(text: &str, nesting: usize, attributes: usize) -> Option<Beyond> {
     let bytes = text.as_bytes();
     let find = |from: usize, pattern: &[u8]| -> Option<usize> {
         bytes
@@ -76,29 +88,53 @@ pub(crate) fn nesting_too_deep(text: &str, limit: usize) -> Option<TooDeep> {
             depth = depth.saturating_sub(1);
             find(p + 2, b">")? + 1
         } else {
-            let (end, self_closing) = end_of_start_tag(bytes, p + 1)?;
-            if !self_closing {
+            let tag = end_of_start_tag(bytes, p + 1)?;
+            if tag.attributes > attributes {
+                return Some(Beyond::Attributes {
+                    offset: p,
+                    count: tag.attributes,
+                });
+            }
+            if !tag.self_closing {
                 depth += 1;
-                if depth > limit {
-                    return Some(TooDeep { offset: p, depth });
+                if depth > nesting {
+                    return Some(Beyond::Nesting { offset: p, depth });
                 }
             }
-            end
+            tag.end
         };
     }
     None
 }
 
-/// One past the `>` closing a start tag whose name begins at `from`, and whether it is `/>`.
-/// Attribute values are quoted with `"` or `'` and may contain `>` and `/`.
-fn end_of_start_tag(bytes: &[u8], from: usize) -> Option<(usize, bool)> {
+/// A start tag as [`end_of_start_tag`] reads it.
+struct StartTag {
+    /// One past its `>`.
+    end: usize,
+    /// Whether it ends with `/>`.
+    self_closing: bool,
+    /// Its `=` outside quoted values: its attributes, on well-formed text.
+    attributes: usize,
+}
+
+/// The start tag whose name begins at `from`. Attribute values are quoted with `"` or `'` and may
+/// contain `>`, `/` and `=`.
+fn end_of_start_tag(bytes: &[u8], from: usize) -> Option<StartTag> {
     let mut i = from;
+    let mut attributes = 0usize;
     while i < bytes.len() {
         match bytes[i] {
             q @ (b'"' | b'\'') => {
                 i += 1 + bytes[i + 1..].iter().position(|&b| b == q)?;
             }
-            b'>' => return Some((i + 1, i > from && bytes[i - 1] == b'/')),
+            b'=' => attributes += 1,
+            b'>' => {
+                return Some(StartTag {
+                    end: i + 1,
+                    self_closing: i > from && bytes[i - 1] == b'/',
+                    attributes,
+                })
+            }
             _ => {}
         }
         i += 1;
@@ -150,6 +186,14 @@ mod tests {
         }
     }
 
+    /// The depth of the first element nested deeper than `limit`, with no limit on attributes.
+    fn too_deep(text: &str, limit: usize) -> Option<usize> {
+        match beyond_limits(text, limit, usize::MAX) {
+            Some(Beyond::Nesting { depth, .. }) => Some(depth),
+            _ => None,
+        }
+    }
+
     fn nested(depth: usize, inner: &str) -> String {
         format!(
             "<robot>{}{inner}{}</robot>",
@@ -160,11 +204,15 @@ mod tests {
 
     #[test]
     fn nesting_at_the_limit_passes_and_one_more_is_found() {
-        assert_eq!(nesting_too_deep(&nested(10, ""), 10), None);
+        assert_eq!(too_deep(&nested(10, ""), 10), None);
         let text = nested(11, "");
-        let found = nesting_too_deep(&text, 10).unwrap();
-        assert_eq!(found.depth, 11);
-        assert_eq!(found.offset, "<robot>".len() + 9 * "<a>".len());
+        assert_eq!(
+            beyond_limits(&text, 10, MAX_ATTRIBUTES),
+            Some(Beyond::Nesting {
+                offset: "<robot>".len() + 9 * "<a>".len(),
+                depth: 11
+            })
+        );
     }
 
     #[test]
@@ -178,15 +226,15 @@ mod tests {
             "<b/><b /><b\n/>",
         ] {
             let text = format!("<robot><a>{inner}</a></robot>");
-            assert_eq!(nesting_too_deep(&text, 2), None, "{inner}");
+            assert_eq!(too_deep(&text, 2), None, "{inner}");
         }
         let doctype = "<!DOCTYPE robot [ <!ENTITY e \"<x>\"> <!-- ] > --> ]><robot><a/></robot>";
-        assert_eq!(nesting_too_deep(doctype, 1), None);
+        assert_eq!(too_deep(doctype, 1), None);
         // A quoted `>` does not end a start tag early, nor does a quoted `/` make it self-closing.
         let text = "<robot><a v=\">\"><b></b></a></robot>";
-        assert_eq!(nesting_too_deep(text, 2).map(|t| t.depth), Some(3));
+        assert_eq!(too_deep(text, 2), Some(3));
         let text = "<robot><a><b v=\"/\"></b></a></robot>";
-        assert_eq!(nesting_too_deep(text, 2).map(|t| t.depth), Some(3));
+        assert_eq!(too_deep(text, 2), Some(3));
     }
 
     #[test]
@@ -203,7 +251,31 @@ mod tests {
             "<!D [",
             "<!D \"",
         ] {
-            assert_eq!(nesting_too_deep(text, 0), None, "{text}");
+            assert_eq!(beyond_limits(text, 0, 0), None, "{text}");
         }
+    }
+
+    #[test]
+    fn attributes_beyond_the_limit_are_found_and_quoted_equals_are_not_counted() {
+        let element = |n: usize| {
+            let attributes: String = (0..n).map(|k| format!(" a{k}=\"x=y\"")).collect();
+            format!("<robot><link{attributes}/></robot>")
+        };
+        assert_eq!(beyond_limits(&element(3), 256, 3), None);
+        assert_eq!(
+            beyond_limits(&element(4), 256, 3),
+            Some(Beyond::Attributes {
+                offset: "<robot>".len(),
+                count: 4
+            })
+        );
+        // The attacker's file: 200,000 attributes on one element took roxmltree a minute to parse.
+        let text = element(200_000);
+        let started = std::time::Instant::now();
+        assert!(matches!(
+            beyond_limits(&text, MAX_NESTING, MAX_ATTRIBUTES),
+            Some(Beyond::Attributes { count: 200_000, .. })
+        ));
+        eprintln!("scan of {} bytes: {:?}", text.len(), started.elapsed());
     }
 }
