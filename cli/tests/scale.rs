@@ -243,3 +243,72 @@ fn estimated_mb(refusal: &str) -> f64 {
         unit => panic!("unit {unit} in {refusal}"),
     }
 }
+
+/// A planar closed chain of `n` links (one loop back to the base), general inertias: its loop group's
+/// embedding traces to about 2.7 n³ operations of `aba`, where the prediction from the model counts 440
+/// per degree of freedom.
+fn closed_chain_urdf(n: usize) -> String {
+    let turn = std::f64::consts::TAU / (n + 1) as f64;
+    let inertial = |k: usize| {
+        let c = 0.01 * (k % 7) as f64;
+        format!(
+            "<inertial><origin xyz=\"{c} 0.02 {}\" rpy=\"0.1 0.2 0.3\"/><mass value=\"{}\"/>\
+             <inertia ixx=\"0.1\" ixy=\"0.001\" ixz=\"-0.002\" iyy=\"0.11\" iyz=\"0.0005\" izz=\"0.12\"/></inertial>",
+            -c,
+            0.5 + 0.1 * (k % 5) as f64
+        )
+    };
+    let mut text = format!(
+        "<robot name=\"closed{n}\"><link name=\"base\">{}</link>",
+        inertial(n)
+    );
+    for k in 0..n {
+        let (parent, xyz, pitch) = if k == 0 {
+            ("base".to_string(), "0 0 0", 0.0)
+        } else {
+            (format!("l{}", k - 1), "0.1 0 0", turn)
+        };
+        text += &format!(
+            "<link name=\"l{k}\">{}</link><joint name=\"j{k}\" type=\"revolute\"><origin xyz=\"{xyz}\" \
+             rpy=\"0 {pitch} 0\"/><parent link=\"{parent}\"/><child link=\"l{k}\"/><axis xyz=\"0 1 0\"/></joint>",
+            inertial(k)
+        );
+    }
+    text += &format!(
+        "<loop name=\"close\" type=\"revolute\"><predecessor link=\"l{}\"><origin xyz=\"0.1 0 0\"/>\
+         </predecessor><successor link=\"base\"/><axis xyz=\"0 1 0\"/></loop></robot>",
+        n - 1
+    );
+    text
+}
+
+/// The attacker's closed chain: its `aba` was predicted well within the limit, and tracing it in full
+/// took tens of seconds and gigabytes (a 200-link chain aborted at 5 GB). Tracing now stops at the
+/// tape's budget (`size::tape_budget`, a few times what the limit allows) and refuses with what it
+/// counted; a chain that fits is traced and generated as before.
+#[test]
+fn a_loop_group_beyond_the_limit_stops_tracing_at_the_budget() {
+    let loaded = parse_urdf(&closed_chain_urdf(60), Path::new("closed60.urdf")).unwrap();
+    let options = GenerateOptions {
+        max_compile_memory_mb: Some(300),
+        f32: false,
+        ..only(&[Algorithm::Aba])
+    };
+    let started = std::time::Instant::now();
+    let error = generate_source(&loaded, &options).unwrap_err().to_string();
+    eprintln!(
+        "closed 60-link chain, limit 300 MB: refused in {:.2} s",
+        started.elapsed().as_secs_f64()
+    );
+    for expected in [
+        "`aba` more than ",
+        "(tracing stopped there)",
+        "counted while tracing",
+        "Raise the limit where the memory is available (at least `--max-compile-memory 1024`",
+    ] {
+        assert!(error.contains(expected), "missing {expected:?} in: {error}");
+    }
+    // A short closed chain is far within any budget: generated as before.
+    let short = parse_urdf(&closed_chain_urdf(8), Path::new("closed8.urdf")).unwrap();
+    assert!(generate_source(&short, &options).is_ok());
+}

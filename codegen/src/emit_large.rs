@@ -41,7 +41,7 @@ const MAX_EXPRESSION: u32 = 12;
 /// block of its own in MIR) fitted by least squares to 14 measured compiles of generated chains'
 /// `aba`, `rnea`, `kinematics`, `crba`, `minv` with one and two scalar modules, within 11 %
 /// (BENCHMARKS.md, "Scale of generation").
-const PER_OPERATION: f64 = 1300.0;
+pub(crate) const PER_OPERATION: f64 = 1300.0;
 const PER_LET: f64 = 1300.0;
 const PER_INDEXING: f64 = 4150.0;
 const PER_FIELD: f64 = 800.0;

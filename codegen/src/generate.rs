@@ -10,7 +10,7 @@ use crate::emit::{function, Arg, Code, Emitted, Output};
 use crate::error::{DescriptorMismatch, Shared};
 use crate::names::{code_span, shown};
 use crate::size;
-use crate::trace::{input, record, snap, Sym};
+use crate::trace::{input, record_within, snap, Sym};
 use crate::value_names::Owners;
 use crate::{build_model, LoadError, LoadErrorKind, Loaded, Location, ModelOptions};
 use embedyn_runtime::constraints::{singularity_threshold, COMPLETION_MAX_STEPS};
@@ -549,7 +549,9 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
                 frame: instance.frame,
                 reference: options.links.reference,
             };
-            let (function, lane_function) = generate_algorithm(
+            let limit = options.max_compile_memory_mb;
+            let budget = size::tape_budget(limit, scalars.len());
+            let (function, lane_function) = match generate_algorithm(
                 loaded,
                 &model,
                 instance,
@@ -558,7 +560,22 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
                 &options.helpers,
                 &mut taken,
                 options.lanes,
-            )?;
+                budget,
+            )? {
+                TracedFunction::Emitted(function, lane_function) => (function, lane_function),
+                // Refused on what was counted: no function that long fits the limit.
+                TracedFunction::Stopped(full) => {
+                    sizes[k] = size::FunctionSize {
+                        algorithm: algo,
+                        operations: full.nodes,
+                        compile_bytes: full.nodes as f64 * crate::emit_large::PER_OPERATION
+                            / size::TAPE_SLACK,
+                        traced: true,
+                        tracing_stopped: true,
+                    };
+                    return Err(size::refuse(loaded, &sizes, &scalars, limit.unwrap_or(0)));
+                }
+            };
             // Constants are folded in f64; the f32 module writes them as f32 literals.
             if options.f32 && function.largest_constant > f64::from(f32::MAX) {
                 return Err(located_at_robot(
@@ -578,9 +595,9 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
                         .as_ref()
                         .map_or(0.0, |f| size::LANE_MEMORY_FACTOR * f.compile_bytes),
                 traced: true,
+                tracing_stopped: false,
             };
             // Exact for what is traced: refused as soon as that alone is too large.
-            let limit = options.max_compile_memory_mb;
             size::check(loaded, &sizes[..=k], &sizes, &scalars, limit, 1.0)?;
             functions.push(function);
             lane_functions.extend(lane_function);
@@ -991,6 +1008,12 @@ const COORDINATE: [&str; 7] = ["0", "1", "2", "3", "4", "5", "6"];
 const WRENCH_COMPONENT: [&str; 6] = ["fx", "fy", "fz", "tx", "ty", "tz"];
 
 #[allow(clippy::too_many_arguments)]
+/// What tracing one function gave: its code (and its lane module's), or the stop at the tape's budget.
+enum TracedFunction {
+    Emitted(Emitted, Option<Emitted>),
+    Stopped(crate::trace::TapeFull),
+}
+
 fn generate_algorithm(
     loaded: &Loaded,
     model: &Model<Sym>,
@@ -1000,7 +1023,8 @@ fn generate_algorithm(
     helpers: &TokenStream,
     taken: &mut std::collections::HashSet<String>,
     lanes: usize,
-) -> Result<(Emitted, Option<Emitted>), LoadError> {
+    budget: Option<usize>,
+) -> Result<TracedFunction, LoadError> {
     let algo = instance.algorithm;
     let spec = algo.spec();
     let dims = Dims {
@@ -1052,7 +1076,7 @@ fn generate_algorithm(
             },
         )
     };
-    let (traced, tape) = record(|| {
+    let recorded = record_within(budget, || {
         let mut ws = Workspace::new(model);
         let inputs: Vec<Vec<Sym>> = (0u8..)
             .zip(spec.inputs)
@@ -1064,6 +1088,10 @@ fn generate_algorithm(
             .collect();
         (spec.trace)(model, &mut ws, &inputs, links)
     });
+    let (traced, tape) = match recorded {
+        Ok(recorded) => recorded,
+        Err(full) => return Ok(TracedFunction::Stopped(full)),
+    };
     let traced = traced.map_err(fail)?;
     let bodies: Vec<&str> = model.bodies.iter().map(|b| b.name.as_str()).collect();
     let owners = Owners::new(
@@ -1191,7 +1219,7 @@ fn generate_algorithm(
         emitted.code = followed_by(emitted.code, &wrapper())
             .map_err(|e| located_at_robot(loaded, e.into()))?;
     }
-    Ok((emitted, lane_function))
+    Ok(TracedFunction::Emitted(emitted, lane_function))
 }
 
 /// `code` with `items` after it (a wrapper, a batch form), in `code`'s form: tokens appended, or the

@@ -61,6 +61,9 @@ pub struct FunctionSize {
     pub compile_bytes: f64,
     /// Whether it was traced (else predicted).
     pub traced: bool,
+    /// Whether tracing stopped at the tape's budget ([`tape_budget`]): `operations` is then a lower
+    /// bound, the nodes recorded when it stopped.
+    pub tracing_stopped: bool,
 }
 
 /// A lane module's copy of a function takes about this many times the scalar copy's compile memory
@@ -92,7 +95,27 @@ pub fn predicted(model: &Model<f64>, algorithm: Algorithm) -> FunctionSize {
         operations: operations.ceil() as usize,
         compile_bytes: operations * PREDICTED_BYTES_PER_OPERATION,
         traced: false,
+        tracing_stopped: false,
     }
+}
+
+/// Nodes a tape may hold for each operation the memory limit allows one function ([`tape_budget`]): a
+/// tape also holds what folding leaves dead (and common subexpressions are merged as they are added),
+/// so it runs longer than the emitted function.
+pub(crate) const TAPE_SLACK: f64 = 3.0;
+
+/// The nodes a function's tape may reach before tracing stops ([`crate::trace::record_within`]): with
+/// at least 1,300 bytes of rustc's memory per emitted operation (`emit_large`'s cheapest form), a
+/// function with more operations than `limit_mb` allows in `modules` scalar modules is refused whatever
+/// else it holds; the tape may run [`TAPE_SLACK`] times that. `None` without a limit. The predictions
+/// before tracing are upper bounds for trees, not for loop groups, whose embedding traces to a cube of
+/// the group's size (a 120-link closed chain's `aba`: 52,800 operations predicted, 4.6 million traced in
+/// 16 s and 1.6 GB before the budget; a 200-link chain exhausted 5 GB and aborted).
+pub fn tape_budget(limit_mb: Option<u64>, modules: usize) -> Option<usize> {
+    let limit = limit_mb? as f64;
+    let per_module = (limit - COMPILER_BASE_MB).max(0.0) * 1024.0 * 1024.0
+        / (CARGO_OVERHEAD * modules.max(1) as f64);
+    Some((TAPE_SLACK * per_module / crate::emit_large::PER_OPERATION) as usize)
 }
 
 /// `cargo build` over a bare `rustc` compile of the same crate (it also writes metadata and
@@ -122,8 +145,18 @@ pub fn check(
     if compile_memory_mb(decisive, scalars.len()) <= limit as f64 * slack {
         return Ok(());
     }
+    Err(refuse(loaded, all, scalars, limit))
+}
+
+/// The refusal of `all` the requested functions under `limit_mb`.
+pub fn refuse(
+    loaded: &Loaded,
+    all: &[FunctionSize],
+    scalars: &[&'static str],
+    limit: u64,
+) -> LoadError {
     let memory = compile_memory_mb(all, scalars.len());
-    Err(LoadError::at(
+    LoadError::at(
         Location::new(
             &loaded.robot.source,
             None,
@@ -135,7 +168,7 @@ pub fn check(
             memory_mb: memory,
             limit_mb: limit,
         })),
-    ))
+    )
 }
 
 /// `1,234,567`.
@@ -182,15 +215,25 @@ fn refusal(functions: &[FunctionSize], scalars: &[&str], memory: f64, limit: u64
     let list: Vec<String> = sorted
         .iter()
         .map(|f| {
-            format!(
-                "`{}` {}{}",
-                f.algorithm.name(),
-                grouped(f.operations),
-                if f.traced { "" } else { " predicted" }
-            )
+            if f.tracing_stopped {
+                format!(
+                    "`{}` more than {} (tracing stopped there)",
+                    f.algorithm.name(),
+                    grouped(f.operations)
+                )
+            } else {
+                format!(
+                    "`{}` {}{}",
+                    f.algorithm.name(),
+                    grouped(f.operations),
+                    if f.traced { "" } else { " predicted" }
+                )
+            }
         })
         .collect();
-    let how = if functions.iter().all(|f| f.traced) {
+    let how = if functions.iter().any(|f| f.tracing_stopped) {
+        "counted while tracing, which stopped once the code could no longer fit the limit"
+    } else if functions.iter().all(|f| f.traced) {
         "counted in the traced code"
     } else if functions.iter().any(|f| f.traced) {
         "counted in the traced code, and predicted from the model for what is not traced yet"
@@ -242,12 +285,34 @@ fn refusal(functions: &[FunctionSize], scalars: &[&str], memory: f64, limit: u64
     } else {
         ""
     };
-    let needed = ((memory / 1024.0).ceil() as u64) * 1024;
+    let stopped = functions.iter().any(|f| f.tracing_stopped);
+    // Stopped tracing leaves the size unknown beyond the limit: at least twice it, then.
+    let needed = if stopped {
+        ((2.0 * limit as f64 / 1024.0).ceil() as u64).max(1) * 1024
+    } else {
+        ((memory / 1024.0).ceil() as u64) * 1024
+    };
+    // With one function in one scalar module there is nothing to leave out.
+    let remedy = if fewer.is_empty() && one_scalar.is_empty() {
+        "Raise the limit".to_string()
+    } else {
+        format!("To shrink it, {fewer}{one_scalar}or raise the limit")
+    };
+    let (more, about, estimated, at_least) = if stopped {
+        (
+            "more than ",
+            "more than",
+            "more than an estimated",
+            "at least ",
+        )
+    } else {
+        ("", "about", "an estimated", "")
+    };
     format!(
-        "the generated code is too large to compile within the memory limit: {} operations in {} \
-         (each: {}; {}), about {} MB of Rust, for which rustc needs an estimated {} of memory \
-         (limit {}). To shrink it, {fewer}{one_scalar}or raise the limit where the memory is \
-         available (`--max-compile-memory {needed}`, `max_compile_memory = {needed}` in `robot!`, \
+        "the generated code is too large to compile within the memory limit: {more}{} operations \
+         in {} (each: {}; {}), {about} {} MB of Rust, for which rustc needs {estimated} {} of memory \
+         (limit {}). {remedy} where the memory is available ({at_least}`--max-compile-memory \
+         {needed}`, `max_compile_memory = {needed}` in `robot!`, \
          `GenerateOptions::max_compile_memory_mb`)",
         grouped(total),
         if scalars.len() > 1 {

@@ -105,6 +105,50 @@ thread_local! {
     static TAPE: RefCell<Tape> = RefCell::new(Tape::default());
 }
 
+/// A tape reached its budget of nodes ([`record_within`]): tracing stopped there.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct TapeFull {
+    /// The nodes recorded when it stopped (the budget).
+    pub nodes: usize,
+}
+
+thread_local! {
+    /// The nodes the current tape may hold ([`record_within`]).
+    static BUDGET: std::cell::Cell<usize> = const { std::cell::Cell::new(usize::MAX) };
+}
+
+/// [`record`] with at most `budget` nodes on the tape (`None`: no bound). Past the budget the trace
+/// stops at once, by unwinding out of the algorithm (with [`std::panic::resume_unwind`], which prints
+/// nothing), and its tape is dropped: a model whose functions trace far beyond what any limit allows (a
+/// loop group's cubic growth, which no prediction from the model's size foresees) costs the budget's time
+/// and memory, not the full trace's. A build with `panic = "abort"` cannot unwind and traces in full.
+pub fn record_within<R>(
+    budget: Option<usize>,
+    f: impl FnOnce() -> R,
+) -> Result<(R, Tape), TapeFull> {
+    #[cfg(panic = "unwind")]
+    {
+        BUDGET.with(|b| b.set(budget.unwrap_or(usize::MAX)));
+        let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| record(f)));
+        BUDGET.with(|b| b.set(usize::MAX));
+        match result {
+            Ok(recorded) => Ok(recorded),
+            Err(payload) => match payload.downcast::<TapeFull>() {
+                Ok(full) => {
+                    TAPE.with(|t| *t.borrow_mut() = Tape::default());
+                    Err(*full)
+                }
+                Err(other) => std::panic::resume_unwind(other),
+            },
+        }
+    }
+    #[cfg(not(panic = "unwind"))]
+    {
+        let _ = budget;
+        Ok(record(f))
+    }
+}
+
 /// Runs `f` on a fresh tape and returns its result with the tape.
 pub fn record<R>(f: impl FnOnce() -> R) -> (R, Tape) {
     TAPE.with(|t| *t.borrow_mut() = Tape::default());
@@ -143,6 +187,13 @@ fn push(op: Op) -> Sym {
             return Sym::Node(n);
         }
         let n = t.nodes.len() as u32;
+        if t.nodes.len() >= BUDGET.with(std::cell::Cell::get) {
+            let full = TapeFull {
+                nodes: t.nodes.len(),
+            };
+            drop(t);
+            std::panic::resume_unwind(Box::new(full));
+        }
         t.nodes.push(op);
         t.map.insert(key, n);
         Sym::Node(n)
@@ -476,6 +527,32 @@ mod tests {
             assert!(matches!(x.max(two), Sym::Node(_)));
         });
         assert!(tape.nodes.iter().any(|op| matches!(op, Op::Select { .. })));
+    }
+
+    /// A trace past its budget stops there and reports it; within it, it records as `record` does;
+    /// other panics pass through.
+    #[test]
+    fn a_trace_stops_at_its_budget() {
+        let chain = || {
+            let mut x = input(0, 0);
+            for _ in 0..1000 {
+                x = x * x + Sym::Const(1.0);
+            }
+            x
+        };
+        assert_eq!(
+            record_within(Some(100), chain).err(),
+            Some(TapeFull { nodes: 100 })
+        );
+        let (_, tape) = record_within(Some(5000), chain).unwrap();
+        assert_eq!(tape.nodes.len(), 2001);
+        let (_, tape) = record_within(None, chain).unwrap();
+        assert_eq!(tape.nodes.len(), 2001);
+        // The budget ends with its trace.
+        let (_, tape) = record(chain);
+        assert_eq!(tape.nodes.len(), 2001);
+        let other = std::panic::catch_unwind(|| record_within(Some(10), || panic!("other")));
+        assert!(other.is_err());
     }
 
     /// A name is kept beside the tape: it adds no node, returns the value unchanged, and the first
