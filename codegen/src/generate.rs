@@ -557,10 +557,12 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
                 instance,
                 &links,
                 &wrench_names,
-                &options.helpers,
                 &mut taken,
-                options.lanes,
-                budget,
+                Emission {
+                    helpers: &options.helpers,
+                    lanes: options.lanes,
+                    budget,
+                },
             )? {
                 TracedFunction::Emitted(function, lane_function) => (function, lane_function),
                 // Refused on what was counted: no function that long fits the limit.
@@ -1008,6 +1010,15 @@ const COORDINATE: [&str; 7] = ["0", "1", "2", "3", "4", "5", "6"];
 const WRENCH_COMPONENT: [&str; 6] = ["fx", "fy", "fz", "tx", "ty", "tz"];
 
 #[allow(clippy::too_many_arguments)]
+/// How one function is traced and written: the helpers' path, the lanes of its lane module (0: none)
+/// and the tape's budget ([`size::tape_budget`]).
+#[derive(Clone, Copy)]
+struct Emission<'a> {
+    helpers: &'a TokenStream,
+    lanes: usize,
+    budget: Option<usize>,
+}
+
 /// What tracing one function gave: its code (and its lane module's), or the stop at the tape's budget.
 enum TracedFunction {
     Emitted(Emitted, Option<Emitted>),
@@ -1020,11 +1031,14 @@ fn generate_algorithm(
     instance: &Instance,
     links: &Links,
     wrench_names: &[&str],
-    helpers: &TokenStream,
     taken: &mut std::collections::HashSet<String>,
-    lanes: usize,
-    budget: Option<usize>,
+    emission: Emission,
 ) -> Result<TracedFunction, LoadError> {
+    let Emission {
+        helpers,
+        lanes,
+        budget,
+    } = emission;
     let algo = instance.algorithm;
     let spec = algo.spec();
     let dims = Dims {
