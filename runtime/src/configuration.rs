@@ -127,6 +127,22 @@ pub const DEFAULT_DISPLACEMENT_BOUND: f64 = 1.0;
 /// A model with loops, couplings or mimic joints gets random spanning coordinates: complete them
 /// (`constraints::complete`) to a consistent configuration.
 ///
+/// ```
+/// # use embedyn_runtime as embedyn; // the facade `embedyn` re-exports this crate
+/// use embedyn::nalgebra::{Matrix3, Vector3};
+/// use embedyn::{random_configuration, JointType, Model, SpatialInertia, SplitMix64, Transform};
+/// let mut b = Model::<f64>::builder("pendulum");
+/// let inertia = SpatialInertia::from_com(1.0, Vector3::new(0.0, 0.0, -0.5), Matrix3::identity() * 1e-3);
+/// b.add_body(None, "pivot", JointType::Revolute, Vector3::x(), Transform::identity(), "bob", inertia)
+///     .unwrap();
+/// let model = b.build().unwrap();
+/// let (mut q1, mut q2) = ([0.0], [0.0]);
+/// random_configuration(&model, &mut SplitMix64::new(7), &[-1.0], &[1.0], &mut q1).unwrap();
+/// random_configuration(&model, &mut SplitMix64::new(7), &[-1.0], &[1.0], &mut q2).unwrap();
+/// assert_eq!(q1, q2);
+/// assert!((-1.0..1.0).contains(&q1[0]));
+/// ```
+///
 /// # Errors
 /// [`DynamicsError::WrongLength`] if `lower`, `upper` or `q_out` is not [`Model::nq`] long.
 pub fn random_configuration<T: Real>(

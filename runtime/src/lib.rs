@@ -73,6 +73,8 @@ pub use configuration::{
 pub use model::{
     Body, FrameId, Joint, JointLimits, JointType, Model, ModelBuilder, ModelElement, ModelError,
 };
+/// The generator `random_configuration` draws from (also `random::SplitMix64`).
+pub use random::SplitMix64;
 #[cfg(feature = "std")]
 pub use scalar::DoubleDouble;
 pub use scalar::Real;
