@@ -596,6 +596,15 @@ bad!(
     ]
 );
 bad!(
+    inertia_overflow_far,
+    "inertia_overflow_far.urdf",
+    [
+        ":6:",
+        "link \"link2\" <inertial>",
+        "centre of mass 1e200 m from the frame"
+    ]
+);
+bad!(
     inertia_overflow_merged,
     "inertia_overflow_merged.urdf",
     [

@@ -193,9 +193,9 @@ fn build_model_f64(robot: &Robot, options: &ModelOptions) -> Result<Model<f64>, 
                         at,
                         LoadErrorKind::InertiaOverflow {
                             mass: inertial.mass,
-                            com_distance: pose
-                                .act_point(&Vector3::from(inertial.origin.xyz))
-                                .norm(),
+                            com_distance: scaled_norm(
+                                &pose.act_point(&Vector3::from(inertial.origin.xyz)),
+                            ),
                             largest_moment: inertial
                                 .inertia
                                 .iter()
@@ -565,5 +565,15 @@ mod kind_tests {
         assert!(e.to_string().ends_with(
             "`complete` exists only for a model with loops, couplings or mimic joints; this one is a tree"
         ));
+    }
+}
+
+/// `|v|` without overflow in its squares (a centre of mass 1e200 m away is 1e200 m, not infinite).
+fn scaled_norm(v: &Vector3<f64>) -> f64 {
+    let scale = v.amax();
+    if scale > 0.0 && scale.is_finite() {
+        scale * (v / scale).norm()
+    } else {
+        scale
     }
 }
