@@ -505,6 +505,16 @@ fn joint_location(robot: &Robot, joint: Option<usize>) -> Location {
     }
 }
 
+/// `|v|` without overflow in its squares (a centre of mass 1e200 m away is 1e200 m, not infinite).
+fn scaled_norm(v: &Vector3<f64>) -> f64 {
+    let scale = v.amax();
+    if scale > 0.0 && scale.is_finite() {
+        scale * (v / scale).norm()
+    } else {
+        scale
+    }
+}
+
 #[cfg(test)]
 mod kind_tests {
     use super::*;
@@ -565,15 +575,5 @@ mod kind_tests {
         assert!(e.to_string().ends_with(
             "`complete` exists only for a model with loops, couplings or mimic joints; this one is a tree"
         ));
-    }
-}
-
-/// `|v|` without overflow in its squares (a centre of mass 1e200 m away is 1e200 m, not infinite).
-fn scaled_norm(v: &Vector3<f64>) -> f64 {
-    let scale = v.amax();
-    if scale > 0.0 && scale.is_finite() {
-        scale * (v / scale).norm()
-    } else {
-        scale
     }
 }
