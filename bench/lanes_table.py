@@ -66,7 +66,15 @@ def main():
               "`generated_f64_batch`. `embedyn eval --engine generated` does not go through the lanes: on 20,000 floating "
               "ANYmal B samples of `aba` it took 0.73 s (2026-12-02), of which the generated `aba` itself is about 20 ms; "
               "the rest is reading and writing JSON and the text exchanged with the runner process (the interpreted "
-              "engine, in one process, took 0.21 s), so lanes would save under 3 %."]
+              "engine, in one process, took 0.21 s), so lanes would save under 3 %.",
+              "",
+              "Since these measurements the scalar functions of robots with mirrored branches compute both sides "
+              "in one SSE2 register (pairs), and on the baseline target their four f64 lanes became slower per "
+              "state than the scalar call (a floating Go2's `aba`, `embedyn bench`, 2026-12-03: 324 ns per call, "
+              "728 per state through the lanes). The `_batch` form of a paired function now runs the scalar "
+              "function state by state there (four f64 lanes without AVX; the same bits): Go2 `aba_batch` 340 ns "
+              "per state, `rnea_batch` 173 (413), `crba_batch` 122 (166); the Z1, unpaired, keeps the lanes (119 "
+              "ns per state against 197 per call). The table above predates both changes."]
     lines += ["", f"### Threads over a batch", "",
               f"{BATCH} states per call of `aba`, ns per state. Pinocchio: a loop of `aba` over the states, and its "
               "OpenMP `abaInParallel` (one state per thread, a `ModelPool` of one `Data` per thread) with 1 and 2 "

@@ -246,6 +246,8 @@ pub struct Emitted {
     /// rustc's estimated memory for this function in one scalar module, in bytes
     /// ([`TOKEN_BYTES_PER_OPERATION`], [`crate::emit_large::compile_bytes`]).
     pub compile_bytes: f64,
+    /// Whether the code computes mirrored branches side by side as pairs (docs/generated-code.md).
+    pub paired: bool,
     pub code: Code,
 }
 
@@ -471,10 +473,12 @@ pub fn function(
             operations,
             largest_constant,
             compile_bytes: crate::emit_large::compile_bytes(operations, &text),
+            paired: false,
             code: Code::Text(text),
         });
     }
     let places = output_places(outputs, nodes);
+    let is_paired = paired.is_some();
     let (order, batch, mut paired_body) = match paired {
         Some((order, batch, statements)) => (
             order,
@@ -666,6 +670,7 @@ pub fn function(
         operations,
         largest_constant,
         compile_bytes: TOKEN_BYTES_PER_OPERATION * operations as f64,
+        paired: is_paired,
         code: Code::Tokens(quote! {
             #chunk_modules
             #(#[doc = #doc_lines])*
@@ -998,7 +1003,15 @@ fn batch_angles(
 /// padding) and only the real states are written. A returned measure is written per state into `measure`.
 /// Returns `false`, computing nothing, where the slices' lengths differ. (A loop over states, not over
 /// bodies: the lane function it calls is straight-line.)
-pub(crate) fn batch_wrapper(name: &str, args: &[Arg], outputs: &[Output]) -> TokenStream {
+///
+/// For a function whose scalar form is `paired`, the batch form calls the scalar module's function state by
+/// state where the lane module's `PAIRED_BATCH_PER_STATE` says so (four f64 lanes without AVX: see there).
+pub(crate) fn batch_wrapper(
+    name: &str,
+    args: &[Arg],
+    outputs: &[Output],
+    paired: bool,
+) -> TokenStream {
     // Called as `self::name`: an output may share the function's name (`com`'s output `com`).
     let fname = format_ident!("{}", name);
     let batch = format_ident!("{}_batch", name);
@@ -1097,6 +1110,42 @@ pub(crate) fn batch_wrapper(name: &str, args: &[Arg], outputs: &[Output]) -> Tok
     };
     let first = lengths.first().cloned().unwrap_or_else(|| quote!(0));
     let must_use = "false where the slices' lengths differ (nothing is computed then)";
+    // State by state through the scalar module's paired function: the same bits (lanes never change the
+    // arithmetic), in the form that is faster there.
+    let per_state = if paired {
+        let scalar_args: Vec<TokenStream> = args
+            .iter()
+            .map(|a| {
+                let id = format_ident!("{}", a.name);
+                if a.scalar {
+                    quote!(#id)
+                } else {
+                    quote!(&#id[s])
+                }
+            })
+            .chain(outputs.iter().filter_map(|o| {
+                o.name().map(|n| {
+                    let id = format_ident!("{}", n);
+                    quote!(&mut #id[s])
+                })
+            }))
+            .collect();
+        let call = if returns {
+            quote!(measure[s] = scalar_module::#fname(#(#scalar_args),*);)
+        } else {
+            quote!(scalar_module::#fname(#(#scalar_args),*);)
+        };
+        quote! {
+            if PAIRED_BATCH_PER_STATE {
+                for s in 0..n {
+                    #call
+                }
+                return true;
+            }
+        }
+    } else {
+        quote!()
+    };
     quote! {
         #[doc = #doc]
         #[must_use = #must_use]
@@ -1106,6 +1155,7 @@ pub(crate) fn batch_wrapper(name: &str, args: &[Arg], outputs: &[Output]) -> Tok
             if #(#lengths != n)||* {
                 return false;
             }
+            #per_state
             let mut start = 0;
             while start < n {
                 let at = |k: usize| if start + k < n { start + k } else { start };
@@ -1466,6 +1516,7 @@ fn paired_parts(
         operations,
         largest_constant,
         compile_bytes: TOKEN_BYTES_PER_OPERATION * operations as f64,
+        paired: true,
         code: Code::Tokens(quote! {
             #chunk_modules
             #(#[doc = #doc_lines])*

@@ -859,6 +859,15 @@ fn lane_module(
             pub type E = #scalar_ident;
             /// States per lane call.
             pub const LANES: usize = #n;
+            /// Whether the `_batch` form of a function whose scalar form computes mirrored branches as
+            /// pairs calls that scalar function state by state instead of the lane function: with four f64
+            /// lanes on a target without AVX an `F64x4` is two SSE2 registers, and the paired scalar code
+            /// already fills one (a floating Go2's `aba`: 323 ns per call, 690 per state through the
+            /// lanes, 2026-12-03). The results are the same bits either way.
+            const PAIRED_BATCH_PER_STATE: bool = cfg!(not(target_feature = "avx"))
+                && LANES == 4
+                && ::core::mem::size_of::<E>() == 8;
+            use super::#scalar_ident as scalar_module;
             #thresholds
             #(#functions)*
         }
@@ -1223,7 +1232,7 @@ fn generate_algorithm(
                 },
             )
             .map_err(|e| located_at_robot(loaded, e.into()))?;
-            let batch = crate::emit::batch_wrapper(&instance.name, &args, &outputs);
+            let batch = crate::emit::batch_wrapper(&instance.name, &args, &outputs, emitted.paired);
             lane.code =
                 followed_by(lane.code, &batch).map_err(|e| located_at_robot(loaded, e.into()))?;
             Some(lane)
@@ -1390,6 +1399,42 @@ mod tests {
             "an output read from the scratch array"
         );
         assert!(text.contains("dqdd_dq[0][0] = "));
+    }
+
+    /// A paired function's `_batch` form goes state by state through the scalar function where the lane
+    /// module says so (four f64 lanes without AVX); an unpaired one's always through the lanes.
+    #[test]
+    fn batch_forms_of_paired_functions_can_go_state_by_state() {
+        let source = |file: &str, floating: bool| {
+            let options = GenerateOptions {
+                f32: false,
+                lanes: 4,
+                model: ModelOptions {
+                    floating,
+                    ..ModelOptions::default()
+                },
+                ..GenerateOptions::default()
+            }
+            .with_requested(Some(vec![Algorithm::Aba]), &[]);
+            let path = format!("{}/../{file}", env!("CARGO_MANIFEST_DIR"));
+            generate_source(&crate::load(path.as_ref()).unwrap(), &options).unwrap()
+        };
+        let batch = |text: &str| -> String {
+            let at = text.find("pub fn aba_batch(").expect("a batch form");
+            text[at..at + text[at..].find("\n    }\n").unwrap()].to_string()
+        };
+        let paired = source("tests/data/pinocchio/solo12.urdf", true);
+        assert!(paired.contains("type P = "), "not paired");
+        let b = batch(&paired);
+        assert!(b.contains("if PAIRED_BATCH_PER_STATE"), "{b}");
+        assert!(
+            b.contains("scalar_module::aba(&q[s], &v[s], &tau[s], &mut qdd[s]);"),
+            "{b}"
+        );
+        assert!(paired.contains("const PAIRED_BATCH_PER_STATE: bool"));
+        let unpaired = source("models/peers/z1.urdf", false);
+        assert!(!unpaired.contains("type P = "), "paired");
+        assert!(!batch(&unpaired).contains("PAIRED_BATCH_PER_STATE"));
     }
 
     fn f64_source(loaded: &Loaded, algorithm: Algorithm) -> String {
