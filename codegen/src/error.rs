@@ -912,6 +912,14 @@ pub enum WarningKind {
     /// Zero mass with rotational inertia.
     #[error("zero mass with a non-zero rotational inertia (a massless rotor); loaded as given")]
     MasslessRotor,
+    /// An element URDF has once given several times: the first is read.
+    #[error("<{element}> is given {count} times; the first is read (as urdfdom, and so Pinocchio, reads it), the others are ignored")]
+    RepeatedElement {
+        /// The element's tag.
+        element: String,
+        /// How many times it is given.
+        count: usize,
+    },
     /// A `<mimic>` on a fixed joint, ignored.
     #[error("<mimic> on a fixed joint has nothing to drive; ignored")]
     MimicOnFixedJoint,
@@ -958,7 +966,8 @@ impl WarningKind {
         match self {
             WarningKind::JointDynamicsIgnored { .. }
             | WarningKind::UndeclaredNamespace { .. }
-            | WarningKind::RotorOnFixedJoint { .. } => WarningFoldKey::Message(self.to_string()),
+            | WarningKind::RotorOnFixedJoint { .. }
+            | WarningKind::RepeatedElement { .. } => WarningFoldKey::Message(self.to_string()),
             _ => WarningFoldKey::Kind(std::mem::discriminant(self)),
         }
     }

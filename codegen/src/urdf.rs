@@ -378,6 +378,7 @@ impl<'a, 'input> Parser<'a, 'input> {
         self.transmissions(root, &mut joints, &written_joints);
         self.finish()?;
         self.warn_ignored_joint_dynamics(root);
+        self.warn_repeated_elements(root);
         fold_repeated_warnings(&mut self.warnings);
         Ok(Robot {
             name,
@@ -826,6 +827,48 @@ impl<'a, 'input> Parser<'a, 'input> {
         );
     }
 
+    /// Elements that URDF has once per parent (a joint's `<axis>`, `<origin>`, `<limit>`, …, a link's
+    /// `<inertial>` and its `<mass>`, `<inertia>`, `<origin>`) given more than once: the reader takes the
+    /// first, as urdfdom (and so Pinocchio) does, and says so, since which one a file meant is a guess.
+    /// `<mimic>` may repeat (several drivers add up: docs/model-format.md), `<visual>` and `<collision>`
+    /// too.
+    fn warn_repeated_elements(&mut self, root: Node) {
+        const JOINT_ONCE: [&str; 8] = [
+            "origin",
+            "parent",
+            "child",
+            "axis",
+            "calibration",
+            "dynamics",
+            "limit",
+            "safety_controller",
+        ];
+        let mut found = Vec::new();
+        let mut check =
+            |parent, what: &str, tags: &[&str]| repeated(parent, what, tags, &mut found);
+        for node in root.children().filter(|n| n.is_element()) {
+            let name = node.attribute("name").unwrap_or("?");
+            match node.tag_name().name() {
+                "joint" => check(node, &format!("joint \"{name}\""), &JOINT_ONCE),
+                "link" => {
+                    let what = format!("link \"{name}\"");
+                    check(node, &what, &["inertial"]);
+                    if let Some(inertial) = node.children().find(|n| n.has_tag_name("inertial")) {
+                        check(
+                            inertial,
+                            &format!("{what} <inertial>"),
+                            &["origin", "mass", "inertia"],
+                        );
+                    }
+                }
+                _ => {}
+            }
+        }
+        for (node, what, element, count) in found {
+            self.warn(node, what, WarningKind::RepeatedElement { element, count });
+        }
+    }
+
     /// ROS `<transmission>` blocks: each `<actuator>` with a rotor inertia I (Drake's
     /// `<drake:rotor_inertia value>`) adds r² · I to the armature of the transmission's joint, with r its
     /// `<drake:gear_ratio value>`, else its `<mechanicalReduction>` (in the actuator or, in the older
@@ -1195,6 +1238,24 @@ fn min_eigenvalue(m: &Matrix3<f64>) -> f64 {
     m.symmetric_eigenvalues().min()
 }
 
+/// `parent`'s children named in `tags` that are given more than once: (the second, where, tag, count).
+fn repeated<'a, 'i>(
+    parent: Node<'a, 'i>,
+    what: &str,
+    tags: &[&str],
+    found: &mut Vec<(Node<'a, 'i>, String, String, usize)>,
+) {
+    for &tag in tags {
+        let mut same = parent
+            .children()
+            .filter(|n| n.is_element() && n.tag_name().name() == tag);
+        if let (Some(_), Some(second)) = (same.next(), same.next()) {
+            let count = 2 + same.count();
+            found.push((second, format!("{what} <{tag}>"), tag.to_string(), count));
+        }
+    }
+}
+
 #[cfg(test)]
 mod kind_tests {
     use super::*;
@@ -1401,6 +1462,38 @@ mod kind_tests {
         assert_eq!(
             w.to_string(),
             "warning: m.urdf:4: joint \"g0\": <mimic> on a fixed joint has nothing to drive; ignored (the same for joint \"g1\", joint \"g2\")"
+        );
+    }
+
+    /// An element URDF has once, given twice (the attacker's joint with two `<axis>`): the first is read,
+    /// as urdfdom reads it, and a warning at the second says so; several `<mimic>` are no repetition.
+    #[test]
+    fn an_element_given_twice_is_read_once_with_a_warning() {
+        let text = robot_of(
+            r#"<link name="a"/><link name="c"><inertial><mass value="1"/><mass value="2"/><inertia ixx="1" ixy="0" ixz="0" iyy="1" iyz="0" izz="1"/></inertial></link>
+<joint name="j" type="revolute"><parent link="a"/><child link="c"/><axis xyz="0 0 1"/>
+<axis xyz="1 0 0"/><axis xyz="0 1 0"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint>"#,
+        );
+        let loaded = parse_urdf(&text, Path::new("m.urdf")).unwrap();
+        let model = loaded.model::<f64>(&Default::default()).unwrap();
+        assert_eq!(
+            model.joints[0].axis,
+            embedyn_runtime::nalgebra::Vector3::z()
+        );
+        assert_eq!(model.bodies[0].inertia.mass, 1.0);
+        let shown: Vec<String> = loaded.warnings.iter().map(|w| w.to_string()).collect();
+        assert_eq!(shown.len(), 2, "{shown:?}");
+        assert!(
+            shown.iter().any(|w| w.starts_with(
+                "warning: m.urdf:4: joint \"j\" <axis>: <axis> is given 3 times; the first is read"
+            )),
+            "{shown:?}"
+        );
+        assert!(
+            shown
+                .iter()
+                .any(|w| w.contains("link \"c\" <inertial> <mass>: <mass> is given 2 times")),
+            "{shown:?}"
         );
     }
 

@@ -58,6 +58,9 @@ def solo12_with_armature():
 
     text = re.sub(r'<joint name="[^"]*" type="revolute">', add, text)
     assert count[0] == 12, count[0]
+    # The joints' own <dynamics damping="0.0" friction="0.0"/> (zeros): one <dynamics> per joint, as URDF has.
+    text, dropped = re.subn(r'\n\s*<dynamics damping="0.0" friction="0.0"/>', "", text)
+    assert dropped >= 12, dropped
     path = f"{HERE}/solo12_armature_floating.urdf"
     open(path, "w").write(text)
     return path
