@@ -312,3 +312,18 @@ fn a_loop_group_beyond_the_limit_stops_tracing_at_the_budget() {
     let short = parse_urdf(&closed_chain_urdf(8), Path::new("closed8.urdf")).unwrap();
     assert!(generate_source(&short, &options).is_ok());
 }
+
+/// A limit at or below rustc's own base (130 MB) allows no operation: the tape's budget has a floor, so
+/// such a request is refused on the traced count, not as "more than 0 operations" (attacker's trial).
+#[test]
+fn a_limit_below_rustcs_base_is_refused_on_the_traced_count() {
+    let options = GenerateOptions {
+        max_compile_memory_mb: Some(100),
+        ..only(&[Algorithm::Aba])
+    };
+    let error = generate_source(&chain(10), &options)
+        .unwrap_err()
+        .to_string();
+    assert!(error.contains("counted in the traced code"), "{error}");
+    assert!(!error.contains("more than 0"), "{error}");
+}

@@ -1015,12 +1015,24 @@ pub(crate) fn batch_wrapper(
     // Called as `self::name`: an output may share the function's name (`com`'s output `com`).
     let fname = format_ident!("{}", name);
     let batch = format_ident!("{}_batch", name);
+    let how = if paired {
+        format!(
+            "Where `PAIRED_BATCH_PER_STATE` is true (four f64 lanes without AVX) it calls the scalar module's \
+             `{name}` state by state, which computes mirrored branches side by side and is faster there; else \
+             it runs chunks of `LANES` states through the lane function `{name}` (a last partial chunk padded \
+             with its first state, whose results are dropped)"
+        )
+    } else {
+        format!(
+            "Runs chunks of `LANES` states through the lane function `{name}` (a last partial chunk padded with \
+             its first state, whose results are dropped)"
+        )
+    };
     let doc = format!(
-        " `{name}` over any number of states: entry `s` of every slice is state `s` (`q[s]` its `q`). Runs \
-         chunks of `LANES` states through the lane function `{name}` (a last partial chunk padded with its first \
-         state, whose results are dropped); every state's results are bit-identical to the scalar function's. \
-         Returns `false`, computing nothing, when the slices' lengths differ. Split a large batch across threads \
-         with `embedyn::parallel::par_batch` (or `rayon`'s `par_chunks`), each thread calling this on its piece."
+        " `{name}` over any number of states: entry `s` of every slice is state `s` (`q[s]` its `q`). {how}; \
+         every state's results are bit-identical to the scalar function's. Returns `false`, computing nothing, \
+         when the slices' lengths differ. Split a large batch across threads with `embedyn::parallel::par_batch` \
+         (or `rayon`'s `par_chunks`), each thread calling this on its piece."
     );
     let mut params = Vec::new();
     let mut lane_args = Vec::new();

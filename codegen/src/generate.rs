@@ -863,7 +863,7 @@ fn lane_module(
             /// pairs calls that scalar function state by state instead of the lane function: with four f64
             /// lanes on a target without AVX an `F64x4` is two SSE2 registers, and the paired scalar code
             /// already fills one (a floating Go2's `aba`: 323 ns per call, 690 per state through the
-            /// lanes, 2026-12-03). The results are the same bits either way.
+            /// lanes, 2026-12-03). The results are the same bits either way (but for the sign of a NaN).
             const PAIRED_BATCH_PER_STATE: bool = cfg!(not(target_feature = "avx"))
                 && LANES == 4
                 && ::core::mem::size_of::<E>() == 8;

@@ -115,8 +115,16 @@ pub fn tape_budget(limit_mb: Option<u64>, modules: usize) -> Option<usize> {
     let limit = limit_mb? as f64;
     let per_module = (limit - COMPILER_BASE_MB).max(0.0) * 1024.0 * 1024.0
         / (CARGO_OVERHEAD * modules.max(1) as f64);
-    Some((TAPE_SLACK * per_module / crate::emit_large::PER_OPERATION) as usize)
+    Some(
+        ((TAPE_SLACK * per_module / crate::emit_large::PER_OPERATION) as usize)
+            .max(MIN_TAPE_BUDGET),
+    )
 }
+
+/// The smallest tape budget: below it tracing costs little (about 30 MB), and a limit at or under
+/// rustc's base (130 MB), which allows no operation at all, is then refused on the traced count rather
+/// than as "more than 0 operations" (attacker's trial).
+const MIN_TAPE_BUDGET: usize = 100_000;
 
 /// `cargo build` over a bare `rustc` compile of the same crate (it also writes metadata and
 /// dependency information): measured 1.81 GB against 1.65 GB for the 1000-body chain's `aba`.
