@@ -225,7 +225,7 @@ fn refusal(functions: &[FunctionSize], scalars: &[&str], memory: f64, limit: u64
         .map(|f| {
             if f.tracing_stopped {
                 format!(
-                    "`{}` more than {} (tracing stopped there)",
+                    "`{}` more than {} traced operations (tracing stopped there)",
                     f.algorithm.name(),
                     grouped(f.operations)
                 )
@@ -306,23 +306,31 @@ fn refusal(functions: &[FunctionSize], scalars: &[&str], memory: f64, limit: u64
     } else {
         format!("To shrink it, {fewer}{one_scalar}or raise the limit")
     };
-    let (more, about, estimated, at_least) = if stopped {
+    // Stopped tracing counted the tape's values, not the operations that would reach the code: an amount
+    // of source is not known then.
+    let (operations, rust, estimated, at_least) = if stopped {
         (
-            "more than ",
-            "more than",
+            format!("more than {} traced operations", grouped(total)),
+            ",".to_string(),
             "more than an estimated",
             "at least ",
         )
     } else {
-        ("", "about", "an estimated", "")
+        (
+            format!("{} operations", grouped(total)),
+            format!(
+                ", about {} MB of Rust,",
+                grouped((total as f64 * SOURCE_BYTES_PER_OPERATION / 1e6).ceil() as usize)
+            ),
+            "an estimated",
+            "",
+        )
     };
     format!(
-        "the generated code is too large to compile within the memory limit: {more}{} operations \
-         in {} (each: {}; {}), {about} {} MB of Rust, for which rustc needs {estimated} {} of memory \
-         (limit {}). {remedy} where the memory is available ({at_least}`--max-compile-memory \
-         {needed}`, `max_compile_memory = {needed}` in `robot!`, \
-         `GenerateOptions::max_compile_memory_mb`)",
-        grouped(total),
+        "the generated code is too large to compile within the memory limit: {operations} in {} \
+         (each: {}; {}){rust} for which rustc needs {estimated} {} of memory (limit {}). {remedy} \
+         where the memory is available ({at_least}`--max-compile-memory {needed}`, \
+         `max_compile_memory = {needed}` in `robot!`, `GenerateOptions::max_compile_memory_mb`)",
         if scalars.len() > 1 {
             format!("the {} modules", scalars.join(" and "))
         } else {
@@ -330,7 +338,6 @@ fn refusal(functions: &[FunctionSize], scalars: &[&str], memory: f64, limit: u64
         },
         list.join(", "),
         how,
-        grouped((total as f64 * SOURCE_BYTES_PER_OPERATION / 1e6).ceil() as usize),
         memory_text(memory),
         memory_text(limit as f64),
     )
