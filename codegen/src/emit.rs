@@ -1135,12 +1135,11 @@ pub(crate) fn batch_wrapper(
                     quote!(&#id[s])
                 }
             })
-            .chain(outputs.iter().filter_map(|o| {
-                o.name().map(|n| {
-                    let id = format_ident!("{}", n);
-                    quote!(&mut #id[s])
-                })
-            }))
+            .chain(
+                output_names(outputs)
+                    .into_iter()
+                    .map(|id| quote!(&mut #id[s])),
+            )
             .collect();
         let call = if returns {
             quote!(measure[s] = scalar_module::#fname(#(#scalar_args),*);)

@@ -567,14 +567,7 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
                 TracedFunction::Emitted(function, lane_function) => (function, lane_function),
                 // Refused on what was counted: no function that long fits the limit.
                 TracedFunction::Stopped(full) => {
-                    sizes[k] = size::FunctionSize {
-                        algorithm: algo,
-                        operations: full.nodes,
-                        compile_bytes: full.nodes as f64 * crate::emit_large::PER_OPERATION
-                            / size::TAPE_SLACK,
-                        traced: true,
-                        tracing_stopped: true,
-                    };
+                    sizes[k] = size::FunctionSize::stopped(algo, full);
                     return Err(size::refuse(loaded, &sizes, &scalars, limit.unwrap_or(0)));
                 }
             };
@@ -1018,7 +1011,6 @@ const COORDINATE: [&str; 7] = ["0", "1", "2", "3", "4", "5", "6"];
 /// Names of the entries of a wrench row, for the names of `f_ext`'s values (`lf_foot_f_ext_fx`).
 const WRENCH_COMPONENT: [&str; 6] = ["fx", "fy", "fz", "tx", "ty", "tz"];
 
-#[allow(clippy::too_many_arguments)]
 /// How one function is traced and written: the helpers' path, the lanes of its lane module (0: none)
 /// and the tape's budget ([`size::tape_budget`]).
 #[derive(Clone, Copy)]
@@ -1371,7 +1363,6 @@ mod tests {
         assert!(lets > 1000 && lets <= 2_400, "{lets} lets in `{function}`");
     }
 
-    /// The generated source of `algorithm` alone, f64 only.
     /// A floating quadruped's `aba_derivatives` (47k operations) is under the pairing limit and paired,
     /// and every computed entry of its outputs is written by the part that computes it: the public
     /// function reads no scratch slot into an output.
@@ -1437,6 +1428,7 @@ mod tests {
         assert!(!batch(&unpaired).contains("PAIRED_BATCH_PER_STATE"));
     }
 
+    /// The generated source of `algorithm` alone, f64 only.
     fn f64_source(loaded: &Loaded, algorithm: Algorithm) -> String {
         let options = GenerateOptions {
             f32: false,

@@ -66,6 +66,20 @@ pub struct FunctionSize {
     pub tracing_stopped: bool,
 }
 
+impl FunctionSize {
+    /// A function whose tracing stopped at the tape's budget ([`tape_budget`]): the nodes recorded, and
+    /// the memory that many emitted operations would take at the budget's own rate (at least the limit).
+    pub(crate) fn stopped(algorithm: Algorithm, full: crate::trace::TapeFull) -> FunctionSize {
+        FunctionSize {
+            algorithm,
+            operations: full.nodes,
+            compile_bytes: full.nodes as f64 * crate::emit_large::PER_OPERATION / TAPE_SLACK,
+            traced: true,
+            tracing_stopped: true,
+        }
+    }
+}
+
 /// A lane module's copy of a function takes about this many times the scalar copy's compile memory
 /// (measured 2026-12-02, release, rustc peak: arm7's `aba_derivatives` + `rnea_derivatives` 196 MB without
 /// lanes, 956 MB with `lanes = 4`; the quadruped's `aba_derivatives` 1.31 GB with lanes): SIMD values and
@@ -102,7 +116,7 @@ pub fn predicted(model: &Model<f64>, algorithm: Algorithm) -> FunctionSize {
 /// Nodes a tape may hold for each operation the memory limit allows one function ([`tape_budget`]): a
 /// tape also holds what folding leaves dead (and common subexpressions are merged as they are added),
 /// so it runs longer than the emitted function.
-pub(crate) const TAPE_SLACK: f64 = 3.0;
+const TAPE_SLACK: f64 = 3.0;
 
 /// The nodes a function's tape may reach before tracing stops ([`crate::trace::record_within`]): with
 /// at least 1,300 bytes of rustc's memory per emitted operation (`emit_large`'s cheapest form), a

@@ -316,12 +316,9 @@ pub fn write_crate(
     }
     // A crate embedyn wrote before its README and lib.rs had markers (2026-12-03) is known by its
     // Cargo.toml, which always had one.
-    let cargo_ours = |d: &Path| {
-        let cargo = d.join(MARKERS[0].0);
-        std::fs::symlink_metadata(&cargo).is_ok_and(|m| m.is_file())
-            && starts_with_marker(&cargo, MARKERS[0].1)
-    };
-    let ours_before = cargo_ours(dir);
+    let cargo = dir.join(MARKERS[0].0);
+    let ours_before = std::fs::symlink_metadata(&cargo).is_ok_and(|m| m.is_file())
+        && starts_with_marker(&cargo, MARKERS[0].1);
     for (rel, _) in &files {
         let path = dir.join(rel);
         let marker = MARKERS

@@ -73,22 +73,22 @@ pub fn load_urdf(path: &Path) -> Result<Loaded, LoadError> {
 /// joint was read without a problem.
 pub fn parse_urdf(text: &str, path: &Path) -> Result<Loaded, LoadError> {
     let lines = LineIndex::new(text);
-    match beyond_limits(text, MAX_NESTING, MAX_ATTRIBUTES) {
-        None => {}
-        Some(Beyond::Nesting { offset, .. }) => {
-            return Err(LoadError::at(
-                Location::new(path, Some(lines.line(offset)), "XML"),
-                LoadErrorKind::NestedTooDeep { limit: MAX_NESTING },
-            ))
-        }
-        Some(Beyond::Attributes { offset, .. }) => {
-            return Err(LoadError::at(
-                Location::new(path, Some(lines.line(offset)), "XML"),
+    if let Some(beyond) = beyond_limits(text, MAX_NESTING, MAX_ATTRIBUTES) {
+        let (offset, kind) = match beyond {
+            Beyond::Nesting { offset, .. } => {
+                (offset, LoadErrorKind::NestedTooDeep { limit: MAX_NESTING })
+            }
+            Beyond::Attributes { offset, .. } => (
+                offset,
                 LoadErrorKind::TooManyAttributes {
                     limit: MAX_ATTRIBUTES,
                 },
-            ))
-        }
+            ),
+        };
+        return Err(LoadError::at(
+            Location::new(path, Some(lines.line(offset)), "XML"),
+            kind,
+        ));
     }
     // Namespace prefixes used without a declaration (`<drake:rotor_inertia>` in a `<robot>` that never
     // declares `xmlns:drake`, as files Pinocchio reads do) are declared on the root and reported; the
