@@ -17,24 +17,44 @@ use embedyn::{
     Workspace,
 };
 use std::alloc::{GlobalAlloc, Layout, System};
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::cell::Cell;
 
+/// Counts the allocations of the thread that makes them: the test harness runs other tests (those of
+/// `common`) on other threads at the same time, and their allocations are not the algorithms'.
 struct Counting;
-static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
-static BYTES: AtomicUsize = AtomicUsize::new(0);
+
+thread_local! {
+    // `const` initialisation: reading these never allocates, so the allocator may use them.
+    static ALLOCATIONS: Cell<usize> = const { Cell::new(0) };
+    static BYTES: Cell<usize> = const { Cell::new(0) };
+}
+
+fn count(bytes: usize) {
+    // `try_with`: a thread being torn down has no counters left, and its allocations are not ours.
+    let _ = ALLOCATIONS.try_with(|n| n.set(n.get() + 1));
+    let _ = BYTES.try_with(|b| b.set(b.get() + bytes));
+}
+
+/// Allocations made by this thread so far.
+fn allocations() -> usize {
+    ALLOCATIONS.with(Cell::get)
+}
+
+/// Bytes this thread has asked for so far.
+fn bytes() -> usize {
+    BYTES.with(Cell::get)
+}
 
 unsafe impl GlobalAlloc for Counting {
     unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
-        BYTES.fetch_add(layout.size(), Ordering::SeqCst);
+        count(layout.size());
         System.alloc(layout)
     }
     unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
         System.dealloc(ptr, layout)
     }
     unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
-        BYTES.fetch_add(new_size, Ordering::SeqCst);
+        count(new_size);
         System.realloc(ptr, layout, new_size)
     }
 }
@@ -42,7 +62,6 @@ unsafe impl GlobalAlloc for Counting {
 #[global_allocator]
 static GLOBAL: Counting = Counting;
 
-// One test in this binary, so no other test thread allocates while we count.
 #[test]
 fn algorithm_calls_do_not_allocate() {
     for (path, floating) in [
@@ -73,7 +92,7 @@ fn algorithm_calls_do_not_allocate() {
         let mut inverse = RneaDerivatives::new(&model);
         let mut stepped = StepDerivatives::new(&model);
         let (mut q_next, mut v_next) = (vec![0.0; model.nq()], vec![0.0; model.nv()]);
-        let before = ALLOCATIONS.load(Ordering::SeqCst);
+        let before = allocations();
         for _ in 0..3 {
             step(
                 &model,
@@ -142,7 +161,7 @@ fn algorithm_calls_do_not_allocate() {
                 Err(DynamicsError::KinematicsNotComputed { .. })
             ));
         }
-        let after = ALLOCATIONS.load(Ordering::SeqCst);
+        let after = allocations();
         assert_eq!(
             after - before,
             0,
@@ -178,7 +197,7 @@ fn algorithm_calls_do_not_allocate() {
         let mut dws = DerivativeWorkspace::new(&model);
         let mut forward = AbaDerivatives::new(&model);
         let mut manifold = ManifoldDerivatives::new(&model);
-        let before = ALLOCATIONS.load(Ordering::SeqCst);
+        let before = allocations();
         for _ in 0..3 {
             aba_derivatives(&model, &mut dws, &q, &v, &tau, &wrenches, &mut forward).unwrap();
             aba_derivatives_independent(&model, &mut dws, &q, &v, &tau, &wrenches, &mut manifold)
@@ -200,7 +219,7 @@ fn algorithm_calls_do_not_allocate() {
             assert!(r <= 1e-12);
             complete_velocity(&model, &mut ws, &q, &mut v).unwrap();
         }
-        let after = ALLOCATIONS.load(Ordering::SeqCst);
+        let after = allocations();
         assert_eq!(
             after - before,
             0,
@@ -211,13 +230,13 @@ fn algorithm_calls_do_not_allocate() {
     // Memory in proportion to what is called: a 20,000-body chain's workspace is O(N) (an nv × nv mass
     // matrix alone would be 3.2 GB), and `aba` on it allocates nothing more.
     let chain = long_chain(20_000);
-    let before = BYTES.load(Ordering::SeqCst);
+    let before = bytes();
     let mut ws = Workspace::new(&chain);
     let q = vec![0.1; chain.nq()];
     let zeros = vec![0.0; chain.nv()];
     let qdd = aba(&chain, &mut ws, &q, &zeros, &zeros).unwrap();
     assert!(qdd.iter().all(|x| x.is_finite()));
-    let per_body = (BYTES.load(Ordering::SeqCst) - before) / chain.nbodies();
+    let per_body = (bytes() - before) / chain.nbodies();
     assert!(
         per_body < 2_000,
         "Workspace::new + aba allocated {per_body} bytes per body"
