@@ -14,7 +14,7 @@ use embedyn_runtime::{
     embedding_map_in, forward_kinematics, forward_kinematics_acceleration,
     frame_classical_acceleration, frame_jacobian, frame_placement, gravity, integrate, link_poses,
     mass_matrix_inverse, nle, nle_ext, reduced_mass_matrix_in, rnea, rnea_derivatives, rnea_ext,
-    step, step_derivatives, AbaDerivatives, DerivativeWorkspace, DynamicsError, FrameId,
+    step, step_derivatives, AbaDerivatives, DerivativeMethod, DerivativeWorkspace, DynamicsError, FrameId,
     LinkWrench, ManifoldDerivatives, Model, Real, Reference, RneaDerivatives, StepDerivatives,
     Workspace,
 };
@@ -1204,10 +1204,7 @@ pub const ALGORITHMS: &[AlgorithmSpec] = &[
         growth: Growth::Quadratic,
         predicted_operations: |c| 600.0 * c.nv * c.nv,
         trace: |model, _, inputs, _| {
-            let mut dws = DerivativeWorkspace::new(model);
-            let mut d = AbaDerivatives::new(model);
-            aba_derivatives(model, &mut dws, &inputs[0], &inputs[1], &inputs[2], &[], &mut d)?;
-            Ok(aba_derivatives_traced(model, &dws, &d))
+            traced_aba_derivatives(model, inputs, &[])
         },
         interpreted: |model, _, inputs, _| {
             let mut dws = DerivativeWorkspace::new(model);
@@ -1235,10 +1232,7 @@ pub const ALGORITHMS: &[AlgorithmSpec] = &[
         growth: Growth::Quadratic,
         predicted_operations: |c| 300.0 * c.nv * c.nv,
         trace: |model, _, inputs, _| {
-            let mut dws = DerivativeWorkspace::new(model);
-            let mut d = RneaDerivatives::new(model);
-            rnea_derivatives(model, &mut dws, &inputs[0], &inputs[1], &inputs[2], &[], &mut d)?;
-            Ok(rnea_derivatives_traced(&d))
+            traced_rnea_derivatives(model, inputs, &[])
         },
         interpreted: |model, _, inputs, _| {
             let mut dws = DerivativeWorkspace::new(model);
@@ -1459,10 +1453,7 @@ pub const ALGORITHMS: &[AlgorithmSpec] = &[
         predicted_operations: |c| 650.0 * c.nv * c.nv,
         trace: |model, _, inputs, links| {
             let f_ext = link_wrenches(links.wrenches, &inputs[3]);
-            let mut dws = DerivativeWorkspace::new(model);
-            let mut d = AbaDerivatives::new(model);
-            aba_derivatives(model, &mut dws, &inputs[0], &inputs[1], &inputs[2], &f_ext, &mut d)?;
-            Ok(aba_derivatives_traced(model, &dws, &d))
+            traced_aba_derivatives(model, inputs, &f_ext)
         },
         interpreted: |model, _, inputs, links| {
             let f_ext = link_wrenches(links.wrenches, inputs[3]);
@@ -1492,10 +1483,7 @@ pub const ALGORITHMS: &[AlgorithmSpec] = &[
         predicted_operations: |c| 320.0 * c.nv * c.nv,
         trace: |model, _, inputs, links| {
             let f_ext = link_wrenches(links.wrenches, &inputs[3]);
-            let mut dws = DerivativeWorkspace::new(model);
-            let mut d = RneaDerivatives::new(model);
-            rnea_derivatives(model, &mut dws, &inputs[0], &inputs[1], &inputs[2], &f_ext, &mut d)?;
-            Ok(rnea_derivatives_traced(&d))
+            traced_rnea_derivatives(model, inputs, &f_ext)
         },
         interpreted: |model, _, inputs, links| {
             let f_ext = link_wrenches(links.wrenches, inputs[3]);
@@ -1553,6 +1541,51 @@ const RNEA_DERIVATIVE_OUTPUTS: &[OutputSpec] = &[
         unit: MASS_UNIT,
     },
 ];
+
+std::thread_local! {
+    /// The method the traces of derivatives take ([`with_derivative_method`]).
+    static DERIVATIVE_METHOD: std::cell::Cell<DerivativeMethod> =
+        const { std::cell::Cell::new(DerivativeMethod::Analytical) };
+}
+
+/// Runs `f` (a trace) with the derivatives differentiated by `method`: the generator traces
+/// [`Algorithm::has_derivative_methods`] functions by each method and keeps the shorter code.
+pub(crate) fn with_derivative_method<R>(method: DerivativeMethod, f: impl FnOnce() -> R) -> R {
+    let before = DERIVATIVE_METHOD.with(|m| m.replace(method));
+    let r = f();
+    DERIVATIVE_METHOD.with(|m| m.set(before));
+    r
+}
+
+fn derivative_workspace(model: &Model<Sym>) -> DerivativeWorkspace<Sym> {
+    let mut dws = DerivativeWorkspace::new(model);
+    dws.set_method(DERIVATIVE_METHOD.with(std::cell::Cell::get));
+    dws
+}
+
+/// The traced `aba_derivatives` (and `_ext` with `f_ext`), by the method of [`with_derivative_method`].
+fn traced_aba_derivatives(
+    model: &Model<Sym>,
+    inputs: &[Vec<Sym>],
+    f_ext: &[LinkWrench<Sym>],
+) -> Result<Traced, DynamicsError> {
+    let mut dws = derivative_workspace(model);
+    let mut d = AbaDerivatives::new(model);
+    aba_derivatives(model, &mut dws, &inputs[0], &inputs[1], &inputs[2], f_ext, &mut d)?;
+    Ok(aba_derivatives_traced(model, &dws, &d))
+}
+
+/// The traced `rnea_derivatives` (and `_ext` with `f_ext`), by the method of [`with_derivative_method`].
+fn traced_rnea_derivatives(
+    model: &Model<Sym>,
+    inputs: &[Vec<Sym>],
+    f_ext: &[LinkWrench<Sym>],
+) -> Result<Traced, DynamicsError> {
+    let mut dws = derivative_workspace(model);
+    let mut d = RneaDerivatives::new(model);
+    rnea_derivatives(model, &mut dws, &inputs[0], &inputs[1], &inputs[2], f_ext, &mut d)?;
+    Ok(rnea_derivatives_traced(&d))
+}
 
 /// The traced outputs of `aba_derivatives` (and `_ext`), with the singularity measure of its value pass
 /// on a model with constraints.
@@ -1642,6 +1675,18 @@ const _: () = {
 };
 
 impl Algorithm {
+    /// Whether the function is derivatives that two methods compute on a tree (analytical recursion,
+    /// dual numbers; [`with_derivative_method`]).
+    pub(crate) fn has_derivative_methods(self) -> bool {
+        matches!(
+            self,
+            Algorithm::AbaDerivatives
+                | Algorithm::RneaDerivatives
+                | Algorithm::AbaDerivativesExt
+                | Algorithm::RneaDerivativesExt
+        )
+    }
+
     /// Every algorithm, in the order generated code lists them.
     pub const ALL: [Algorithm; ALGORITHMS.len()] = {
         let mut all = [Algorithm::Kinematics; ALGORITHMS.len()];

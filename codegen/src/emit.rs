@@ -248,6 +248,9 @@ pub struct Emitted {
     pub compile_bytes: f64,
     /// Whether the code computes mirrored branches side by side as pairs (docs/generated-code.md).
     pub paired: bool,
+    /// Arithmetic statements of the code, a pair's operation counting once: what runs, for choosing
+    /// between two traces of the same function.
+    pub statements: usize,
     pub code: Code,
 }
 
@@ -474,11 +477,15 @@ pub fn function(
             largest_constant,
             compile_bytes: crate::emit_large::compile_bytes(operations, &text),
             paired: false,
+            statements: operations,
             code: Code::Text(text),
         });
     }
     let places = output_places(outputs, nodes);
     let is_paired = paired.is_some();
+    let statement_count = paired
+        .as_ref()
+        .map_or(order.len(), |(_, _, statements)| statements.len());
     let (order, batch, mut paired_body) = match paired {
         Some((order, batch, statements)) => (
             order,
@@ -671,6 +678,7 @@ pub fn function(
         largest_constant,
         compile_bytes: TOKEN_BYTES_PER_OPERATION * operations as f64,
         paired: is_paired,
+        statements: statement_count,
         code: Code::Tokens(quote! {
             #chunk_modules
             #(#[doc = #doc_lines])*
@@ -1528,6 +1536,7 @@ fn paired_parts(
         largest_constant,
         compile_bytes: TOKEN_BYTES_PER_OPERATION * operations as f64,
         paired: true,
+        statements: statements.len(),
         code: Code::Tokens(quote! {
             #chunk_modules
             #(#[doc = #doc_lines])*

@@ -62,7 +62,7 @@ pub use algorithms::{
     frame_jacobian, frame_placement, frame_velocity, gravity, kinetic_energy, kkt_forward_dynamics,
     link_poses, mass_matrix_inverse, nle, nle_ext, potential_energy, reduced_mass_matrix,
     reduced_mass_matrix_in, rnea, rnea_derivatives, rnea_ext, rnea_with_gravity, step,
-    step_derivatives, AbaDerivatives, CenterOfMass, DerivativeWorkspace, DynamicsError, Kinematics,
+    step_derivatives, AbaDerivatives, CenterOfMass, DerivativeMethod, DerivativeWorkspace, DynamicsError, Kinematics,
     LinkWrench, ManifoldDerivatives, Reference, RneaDerivatives, StepDerivatives, Sweep, Workspace,
 };
 #[cfg(feature = "alloc")]

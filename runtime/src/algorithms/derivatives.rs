@@ -1,5 +1,7 @@
-//! Derivatives of forward and inverse dynamics (CONTRACT §3 `aba_derivatives`, `rnea_derivatives`), by
-//! forward-mode dual numbers through the algorithms themselves.
+//! Derivatives of forward and inverse dynamics (CONTRACT §3 `aba_derivatives`, `rnea_derivatives`): on a
+//! tree by the analytical recursion of [`super::analytical_derivatives`] (the default), and by
+//! forward-mode dual numbers through the algorithms themselves on models with loops, couplings or mimic
+//! joints (and on trees when asked for, [`DerivativeMethod::DualNumbers`], as a second opinion).
 //!
 //! A pass runs [`aba_ext`](super::aba_ext) or [`rnea_ext`](super::rnea_ext) on [`Dual`] numbers whose
 //! tangents are seeded with up to [`DIRECTIONS`] input directions, and reads the outputs' tangents: the
@@ -19,6 +21,9 @@
 //! an inconsistent state) is that of [`crate::aba`] or [`crate::rnea`]; the dual passes then repeat the
 //! arithmetic with the tangents.
 
+use super::analytical_derivatives::{
+    forward_partials, rnea_partials, AnalyticalScratch, InverseDynamicsPartials,
+};
 use super::{check_len, DynamicsError, LinkWrench, Workspace};
 #[allow(unused_imports)]
 use crate::alloc_prelude::*;
@@ -32,6 +37,19 @@ use nalgebra::{DMatrix, DVector};
 pub const DIRECTIONS: usize = 8;
 
 type D<T> = Dual<T, DIRECTIONS>;
+
+/// How [`aba_derivatives`] and [`rnea_derivatives`] differentiate a model without loops, couplings or
+/// mimic joints (a model with them always takes dual numbers).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum DerivativeMethod {
+    /// The world-frame recursion over related pairs of coordinates (`O(nv · depth)`), and
+    /// `∂q̈ = −M⁻¹ ∂τ` for forward dynamics.
+    #[default]
+    Analytical,
+    /// Forward-mode dual numbers through `aba` and `rnea` (`O(nv²)` tangent work): the other method,
+    /// exact to rounding as well, for cross-checks.
+    DualNumbers,
+}
 
 /// What the derivatives need besides the model: the model and a workspace on dual numbers, the dual
 /// inputs and a workspace on `T` for the value pass. Made once per model ([`DerivativeWorkspace::new`]);
@@ -51,6 +69,11 @@ pub struct DerivativeWorkspace<T: Real> {
     next0: Vec<D<T>>,
     next: Vec<D<T>>,
     out: Vec<D<T>>,
+    method: DerivativeMethod,
+    /// The analytical recursion's world-frame quantities, and `∂τ` on the way to `∂q̈`.
+    analytical: AnalyticalScratch<T>,
+    dtau_dq: DMatrix<T>,
+    dtau_dv: DMatrix<T>,
 }
 
 impl<T: Real> DerivativeWorkspace<T> {
@@ -101,6 +124,17 @@ impl<T: Real> DerivativeWorkspace<T> {
         &self.plain
     }
 
+    /// The method of the calls that follow on a model without constraints (default
+    /// [`DerivativeMethod::Analytical`]).
+    pub fn set_method(&mut self, method: DerivativeMethod) {
+        self.method = method;
+    }
+
+    /// Whether the calls on `model` take the analytical recursion.
+    fn analytical(&self, model: &Model<T>) -> bool {
+        self.method == DerivativeMethod::Analytical && !model.has_constraints()
+    }
+
     /// A workspace for `model`'s derivatives.
     pub fn new(model: &Model<T>) -> Self {
         let dual: Model<D<T>> = model.cast();
@@ -123,6 +157,10 @@ impl<T: Real> DerivativeWorkspace<T> {
             next0: vec![zero; model.nq()],
             next: vec![zero; model.nq()],
             out: vec![zero; 2 * model.nv()],
+            method: DerivativeMethod::default(),
+            analytical: AnalyticalScratch::new(model),
+            dtau_dq: DMatrix::zeros(model.nv(), model.nv()),
+            dtau_dv: DMatrix::zeros(model.nv(), model.nv()),
             model: dual,
         }
     }
@@ -278,6 +316,21 @@ pub fn aba_derivatives<T: Real>(
     let qdd = super::aba_ext(model, &mut dws.plain, q, v, tau, f_ext)?;
     out.qdd.copy_from_slice(qdd);
     check_derivative_condition(model, &dws.plain)?;
+    if dws.analytical(model) {
+        // ∂τ at (q, v, q̈), then ∂q̈ = −M⁻¹ ∂τ and ∂q̈/∂τ = M⁻¹.
+        let partials = InverseDynamicsPartials {
+            dtau_dq: &mut dws.dtau_dq,
+            dtau_dv: &mut dws.dtau_dv,
+            mass_matrix: None,
+        };
+        let inputs = (q, v, out.qdd.as_slice());
+        rnea_partials(model, &mut dws.plain, &mut dws.analytical, inputs, f_ext, partials)?;
+        let minv = super::mass_matrix_inverse(model, &mut dws.plain, q)?;
+        out.dqdd_dtau.copy_from(minv);
+        forward_partials(model, &out.dqdd_dtau, &dws.dtau_dq, &mut out.dqdd_dq);
+        forward_partials(model, &out.dqdd_dtau, &dws.dtau_dv, &mut out.dqdd_dv);
+        return Ok(());
+    }
     let outputs = [&mut out.dqdd_dq, &mut out.dqdd_dv, &mut out.dqdd_dtau];
     spanning_passes(
         model,
@@ -310,6 +363,16 @@ pub fn rnea_derivatives<T: Real>(
         &[&out.dtau_dq, &out.dtau_dv, &out.dtau_dqdd],
         "RneaDerivatives",
     )?;
+    if dws.analytical(model) {
+        let partials = InverseDynamicsPartials {
+            dtau_dq: &mut out.dtau_dq,
+            dtau_dv: &mut out.dtau_dv,
+            mass_matrix: Some(&mut out.dtau_dqdd),
+        };
+        rnea_partials(model, &mut dws.plain, &mut dws.analytical, (q, v, qdd), f_ext, partials)?;
+        out.tau.copy_from_slice(&dws.plain.tau);
+        return Ok(());
+    }
     let tau = super::rnea_ext(model, &mut dws.plain, q, v, qdd, f_ext)?;
     out.tau.copy_from_slice(tau);
     let outputs = [&mut out.dtau_dq, &mut out.dtau_dv, &mut out.dtau_dqdd];

@@ -4,6 +4,7 @@
 #[allow(unused_imports)]
 use crate::alloc_prelude::*;
 pub(crate) mod aba;
+mod analytical_derivatives;
 mod centroidal;
 mod crba;
 mod derivatives;
@@ -23,7 +24,7 @@ pub use centroidal::{
 pub use crba::crba;
 pub use derivatives::{
     aba_derivatives, aba_derivatives_independent, derivative_singularity_threshold,
-    rnea_derivatives, step, step_derivatives, AbaDerivatives, DerivativeWorkspace,
+    rnea_derivatives, step, step_derivatives, AbaDerivatives, DerivativeMethod, DerivativeWorkspace,
     ManifoldDerivatives, RneaDerivatives, StepDerivatives,
 };
 pub(crate) use embedded::position_kinematics;
