@@ -9,8 +9,8 @@ use embedyn::constraints::{complete_configuration, complete_velocity};
 use embedyn::nalgebra::{DMatrix, DVector, Vector3};
 use embedyn::{
     aba, aba_derivatives, aba_derivatives_independent, aba_ext, crba, integrate, rnea_derivatives,
-    rnea_ext, step, step_derivatives, AbaDerivatives, DerivativeMethod, DerivativeWorkspace, FrameId, LinkWrench,
-    ManifoldDerivatives, Model, RneaDerivatives, StepDerivatives, Workspace,
+    rnea_ext, step, step_derivatives, AbaDerivatives, DerivativeMethod, DerivativeWorkspace,
+    FrameId, LinkWrench, ManifoldDerivatives, Model, RneaDerivatives, StepDerivatives, Workspace,
 };
 
 /// A model with a state: (name, model, q, v, and τ or q̈).

@@ -49,14 +49,16 @@ mod four_bar {
     );
 }
 
-// A quadruped's derivatives are paired (its left and right legs side by side): `aba_derivatives`, 47k
-// operations, and `rnea_derivatives`, 21k, under the generator's pairing limit of 60k.
+// A quadruped's derivatives are paired (its left and right legs side by side), under the generator's
+// pairing limit of 60k operations; `aba_derivatives` is traced as factors with the product `−M⁻¹ ∂τ` in
+// a loop after them. Two lanes: the lane module's loop product as well.
 mod solo12_free {
     embedyn::robot!(
         "tests/data/pinocchio/solo12.urdf",
         floating,
         f64_only,
-        only(aba_derivatives, rnea_derivatives)
+        only(aba_derivatives, rnea_derivatives),
+        lanes = 2
     );
 }
 
@@ -357,6 +359,46 @@ fn paired_derivatives_of_a_floating_quadruped_match_the_interpreted() {
         let expected = [&r.dtau_dq, &r.dtau_dv, &r.dtau_dqdd];
         let worst = worst_of(&x, r.tau.as_slice(), &blocks, expected);
         assert!(worst < 1e-12, "rnea_derivatives: {worst:e}");
+    }
+}
+
+/// The lane module's `aba_derivatives` (factors unrolled, the product `−M⁻¹ ∂τ` in a loop on lanes) gives
+/// each state the scalar function's bits, over a batch of three states (a chunk and a partial one).
+#[test]
+fn lane_derivatives_of_a_floating_quadruped_are_the_scalar_ones() {
+    const NQ: usize = solo12_free::NQ;
+    const NV: usize = solo12_free::NV;
+    let model: Model<f64> = load_model("tests/data/pinocchio/solo12.urdf", true);
+    let mut rng = Rng::new(13);
+    let mut q = [[0.0; NQ]; 3];
+    let (mut v, mut u) = ([[0.0; NV]; 3], [[0.0; NV]; 3]);
+    for k in 0..3 {
+        q[k].copy_from_slice(&rng.configuration(&model));
+        v[k].copy_from_slice(&rng.vec(NV, -2.0, 2.0));
+        u[k].copy_from_slice(&rng.vec(NV, -5.0, 5.0));
+    }
+    let mut qdd = [[f64::NAN; NV]; 3];
+    let mut blocks = [[[[f64::NAN; NV]; NV]; 3]; 3];
+    let [b0, b1, b2] = &mut blocks;
+    assert!(solo12_free::f64x2::aba_derivatives_batch(
+        &q, &v, &u, &mut qdd, b0, b1, b2
+    ));
+    for k in 0..3 {
+        let mut x = [f64::NAN; NV];
+        let mut single = [[[f64::NAN; NV]; NV]; 3];
+        let [s0, s1, s2] = &mut single;
+        solo12_free::f64::aba_derivatives(&q[k], &v[k], &u[k], &mut x, s0, s1, s2);
+        assert_eq!(qdd[k].map(f64::to_bits), x.map(f64::to_bits), "state {k}");
+        for (m, block) in single.iter().enumerate() {
+            let lanes = blocks[m][k];
+            for r in 0..NV {
+                assert_eq!(
+                    lanes[r].map(f64::to_bits),
+                    block[r].map(f64::to_bits),
+                    "state {k}, matrix {m}, row {r}"
+                );
+            }
+        }
     }
 }
 

@@ -9,14 +9,14 @@ use crate::trace::Sym;
 use embedyn_runtime::constraints::{completion_step, constraint_condition};
 use embedyn_runtime::nalgebra::{Matrix3xX, Matrix6xX, Vector3};
 use embedyn_runtime::{
-    aba, aba_derivatives, aba_derivatives_independent, aba_ext, center_of_mass,
-    centroidal_momentum_matrix, centroidal_momentum_rate, com_jacobian, crba, difference,
-    embedding_map_in, forward_kinematics, forward_kinematics_acceleration,
+    aba, aba_derivative_factors, aba_derivatives, aba_derivatives_independent, aba_ext,
+    center_of_mass, centroidal_momentum_matrix, centroidal_momentum_rate, com_jacobian, crba,
+    difference, embedding_map_in, forward_kinematics, forward_kinematics_acceleration,
     frame_classical_acceleration, frame_jacobian, frame_placement, gravity, integrate, link_poses,
     mass_matrix_inverse, nle, nle_ext, reduced_mass_matrix_in, rnea, rnea_derivatives, rnea_ext,
-    step, step_derivatives, AbaDerivatives, DerivativeMethod, DerivativeWorkspace, DynamicsError, FrameId,
-    LinkWrench, ManifoldDerivatives, Model, Real, Reference, RneaDerivatives, StepDerivatives,
-    Workspace,
+    step, step_derivatives, AbaDerivativeFactors, AbaDerivatives, DerivativeMethod,
+    DerivativeWorkspace, DynamicsError, FrameId, LinkWrench, ManifoldDerivatives, Model, Real,
+    Reference, RneaDerivatives, StepDerivatives, Workspace,
 };
 
 /// The algorithms code can be generated for; [`Algorithm::spec`] describes each.
@@ -1542,36 +1542,62 @@ const RNEA_DERIVATIVE_OUTPUTS: &[OutputSpec] = &[
     },
 ];
 
-std::thread_local! {
-    /// The method the traces of derivatives take ([`with_derivative_method`]).
-    static DERIVATIVE_METHOD: std::cell::Cell<DerivativeMethod> =
-        const { std::cell::Cell::new(DerivativeMethod::Analytical) };
+/// How a traced function differentiates, for the functions of [`Algorithm::has_derivative_methods`] on a
+/// tree; the generator traces each way and keeps the shortest code (`generate_algorithm`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum DerivativeTrace {
+    /// The runtime's method, unrolled whole (for forward dynamics, `−M⁻¹ ∂τ` too).
+    Method(DerivativeMethod),
+    /// Forward dynamics' factors unrolled (`q̈`, `∂τ/∂q`, `∂τ/∂v`, `M⁻¹` in the places of `q̈`,
+    /// `∂q̈/∂q`, `∂q̈/∂v`, `∂q̈/∂τ`), the product `−M⁻¹ ∂τ` left to a loop after them.
+    Factors,
 }
 
-/// Runs `f` (a trace) with the derivatives differentiated by `method`: the generator traces
-/// [`Algorithm::has_derivative_methods`] functions by each method and keeps the shorter code.
-pub(crate) fn with_derivative_method<R>(method: DerivativeMethod, f: impl FnOnce() -> R) -> R {
-    let before = DERIVATIVE_METHOD.with(|m| m.replace(method));
+std::thread_local! {
+    /// The way the traces of derivatives take ([`with_derivative_trace`]).
+    static DERIVATIVE_TRACE: std::cell::Cell<DerivativeTrace> =
+        const { std::cell::Cell::new(DerivativeTrace::Method(DerivativeMethod::Analytical)) };
+}
+
+/// Runs `f` (a trace) with the derivatives traced `way`.
+pub(crate) fn with_derivative_trace<R>(way: DerivativeTrace, f: impl FnOnce() -> R) -> R {
+    let before = DERIVATIVE_TRACE.with(|m| m.replace(way));
     let r = f();
-    DERIVATIVE_METHOD.with(|m| m.set(before));
+    DERIVATIVE_TRACE.with(|m| m.set(before));
     r
 }
 
 fn derivative_workspace(model: &Model<Sym>) -> DerivativeWorkspace<Sym> {
     let mut dws = DerivativeWorkspace::new(model);
-    dws.set_method(DERIVATIVE_METHOD.with(std::cell::Cell::get));
+    if let DerivativeTrace::Method(method) = DERIVATIVE_TRACE.with(std::cell::Cell::get) {
+        dws.set_method(method);
+    }
     dws
 }
 
-/// The traced `aba_derivatives` (and `_ext` with `f_ext`), by the method of [`with_derivative_method`].
+/// The traced `aba_derivatives` (and `_ext` with `f_ext`), the way of [`with_derivative_trace`].
 fn traced_aba_derivatives(
     model: &Model<Sym>,
     inputs: &[Vec<Sym>],
     f_ext: &[LinkWrench<Sym>],
 ) -> Result<Traced, DynamicsError> {
     let mut dws = derivative_workspace(model);
+    let (q, v, tau) = (&inputs[0], &inputs[1], &inputs[2]);
+    if DERIVATIVE_TRACE.with(std::cell::Cell::get) == DerivativeTrace::Factors {
+        let mut f = AbaDerivativeFactors::new(model);
+        aba_derivative_factors(model, &mut dws, q, v, tau, f_ext, &mut f)?;
+        return Ok(Traced {
+            outputs: vec![
+                f.qdd.iter().copied().collect(),
+                row_major(&f.dtau_dq),
+                row_major(&f.dtau_dv),
+                row_major(&f.minv),
+            ],
+            returned: None,
+        });
+    }
     let mut d = AbaDerivatives::new(model);
-    aba_derivatives(model, &mut dws, &inputs[0], &inputs[1], &inputs[2], f_ext, &mut d)?;
+    aba_derivatives(model, &mut dws, q, v, tau, f_ext, &mut d)?;
     Ok(aba_derivatives_traced(model, &dws, &d))
 }
 
@@ -1583,7 +1609,9 @@ fn traced_rnea_derivatives(
 ) -> Result<Traced, DynamicsError> {
     let mut dws = derivative_workspace(model);
     let mut d = RneaDerivatives::new(model);
-    rnea_derivatives(model, &mut dws, &inputs[0], &inputs[1], &inputs[2], f_ext, &mut d)?;
+    rnea_derivatives(
+        model, &mut dws, &inputs[0], &inputs[1], &inputs[2], f_ext, &mut d,
+    )?;
     Ok(rnea_derivatives_traced(&d))
 }
 
@@ -1676,7 +1704,7 @@ const _: () = {
 
 impl Algorithm {
     /// Whether the function is derivatives that two methods compute on a tree (analytical recursion,
-    /// dual numbers; [`with_derivative_method`]).
+    /// dual numbers; [`DerivativeTrace`]).
     pub(crate) fn has_derivative_methods(self) -> bool {
         matches!(
             self,
@@ -1684,6 +1712,15 @@ impl Algorithm {
                 | Algorithm::RneaDerivatives
                 | Algorithm::AbaDerivativesExt
                 | Algorithm::RneaDerivativesExt
+        )
+    }
+
+    /// Whether the function is forward dynamics' derivatives, which [`DerivativeTrace::Factors`] can
+    /// trace as factors.
+    pub(crate) fn has_derivative_factors(self) -> bool {
+        matches!(
+            self,
+            Algorithm::AbaDerivatives | Algorithm::AbaDerivativesExt
         )
     }
 

@@ -43,7 +43,7 @@ impl Arg {
         }
     }
 
-    fn tokens(&self) -> TokenStream {
+    pub(crate) fn tokens(&self) -> TokenStream {
         let id = format_ident!("{}", self.name);
         if self.scalar {
             return quote!(#id: S);
@@ -96,7 +96,7 @@ pub enum Output {
 
 impl Output {
     /// The parameter name of an output (none for the return value).
-    fn name(&self) -> Option<&'static str> {
+    pub(crate) fn name(&self) -> Option<&'static str> {
         match self {
             Output::Vector { name, .. } | Output::Matrix { name, .. } => Some(name),
             Output::Return(_) => None,
@@ -230,7 +230,7 @@ fn node_ident(names: &ValueNames, n: u32) -> Ident {
 }
 
 /// A length or an index as generated code writes it: `4`, not `4usize`.
-fn num(i: usize) -> Literal {
+pub(crate) fn num(i: usize) -> Literal {
     Literal::usize_unsuffixed(i)
 }
 

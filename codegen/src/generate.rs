@@ -1041,34 +1041,184 @@ fn generate_algorithm(
     taken: &mut std::collections::HashSet<String>,
     emission: Emission,
 ) -> Result<TracedFunction, LoadError> {
+    use crate::algorithm::DerivativeTrace;
     use embedyn_runtime::DerivativeMethod;
-    if !instance.algorithm.has_derivative_methods() || model.has_constraints() {
-        return generate_one_way(loaded, model, instance, links, wrench_names, taken, emission);
+    let algorithm = instance.algorithm;
+    if !algorithm.has_derivative_methods() || model.has_constraints() {
+        return generate_one_way(
+            loaded,
+            model,
+            instance,
+            links,
+            wrench_names,
+            taken,
+            emission,
+            None,
+        );
     }
-    let mut best: Option<(TracedFunction, std::collections::HashSet<String>)> = None;
-    for method in [DerivativeMethod::Analytical, DerivativeMethod::DualNumbers] {
+    let mut ways = vec![
+        DerivativeTrace::Method(DerivativeMethod::Analytical),
+        DerivativeTrace::Method(DerivativeMethod::DualNumbers),
+    ];
+    if algorithm.has_derivative_factors()
+        && FactorProduct::structural_operations(model) > FACTOR_PRODUCT_MIN
+    {
+        ways.push(DerivativeTrace::Factors);
+    }
+    let mut best: Option<(TracedFunction, usize, std::collections::HashSet<String>)> = None;
+    for way in ways {
         let mut names = taken.clone();
-        let traced = crate::algorithm::with_derivative_method(method, || {
-            generate_one_way(loaded, model, instance, links, wrench_names, &mut names, emission)
-        })?;
-        let better = match (&best, &traced) {
-            (None, _) => true,
-            (Some((TracedFunction::Stopped(_), _)), TracedFunction::Emitted(..)) => true,
-            (Some((TracedFunction::Emitted(kept, _), _)), TracedFunction::Emitted(new, _)) => {
-                new.statements < kept.statements
-            }
-            _ => false,
+        let traced = generate_one_way(
+            loaded,
+            model,
+            instance,
+            links,
+            wrench_names,
+            &mut names,
+            emission,
+            Some(way),
+        )?;
+        let cost = match &traced {
+            TracedFunction::Emitted(e, _) => e.statements,
+            TracedFunction::Stopped(_) => usize::MAX,
         };
-        if better {
-            best = Some((traced, names));
+        if best.as_ref().is_none_or(|(_, kept, _)| cost < *kept) {
+            best = Some((traced, cost, names));
         }
     }
-    let (traced, names) = best.expect("two methods were tried");
+    let (traced, _, names) = best.expect("two ways were tried");
     *taken = names;
     Ok(traced)
 }
 
-/// One function traced (by the derivative method set, where it has one) and written.
+/// Forward dynamics' derivatives are traced as factors with the product in a loop
+/// ([`crate::algorithm::DerivativeTrace::Factors`]) only where the product is at least this many
+/// operations: a short product unrolled folds and schedules better than a loop (the Z1 arm's, 864).
+const FACTOR_PRODUCT_MIN: usize = 8_000;
+
+/// The product `−M⁻¹ ∂τ` of forward dynamics' derivatives from their factors: for each column of
+/// `∂τ/∂q` and of `∂τ/∂v`, the rows the trace did not fold to zero (at most a joint's ancestors' and its
+/// subtree's coordinates; none in a free flyer's translation columns of `∂τ/∂q`).
+struct FactorProduct {
+    /// Rows and column starts of `∂τ/∂q`, then of `∂τ/∂v`.
+    rows: [Vec<u16>; 2],
+    starts: [Vec<u16>; 2],
+    nv: usize,
+}
+
+impl FactorProduct {
+    /// Operations of both products before tracing, from the tree alone (each column's ancestors and
+    /// subtree): whether tracing the factors may pay.
+    fn structural_operations(model: &Model<Sym>) -> usize {
+        let mut nonzero = 0;
+        for (k, joint) in model.joints.iter().enumerate() {
+            let mut ancestors = 0;
+            let mut up = joint.parent;
+            while let Some(j) = up {
+                ancestors += model.joints[j].nv();
+                up = model.joints[j].parent;
+            }
+            nonzero += joint.nv() * (ancestors + model.subtree_v_range(k).len());
+        }
+        2 * 2 * model.nv() * nonzero
+    }
+
+    /// From the traced factors (`qdd`, `dtau_dq`, `dtau_dv`, `minv`).
+    fn of(outputs: &[Output]) -> FactorProduct {
+        let mut product = FactorProduct {
+            rows: [Vec::new(), Vec::new()],
+            starts: [vec![0], vec![0]],
+            nv: 0,
+        };
+        for (k, output) in outputs[1..3].iter().enumerate() {
+            let Output::Matrix {
+                rows, cols, values, ..
+            } = output
+            else {
+                unreachable!("∂τ is a matrix")
+            };
+            product.nv = *cols;
+            for c in 0..*cols {
+                for r in 0..*rows {
+                    if !matches!(values[r * cols + c], Sym::Const(x) if x == 0.0) {
+                        product.rows[k].push(r as u16);
+                    }
+                }
+                product.starts[k].push(product.rows[k].len() as u16);
+            }
+        }
+        product
+    }
+
+    /// Multiplications and additions of both products (`∂q̈/∂q`, `∂q̈/∂v`).
+    fn operations(&self) -> usize {
+        2 * self.nv * (self.rows[0].len() + self.rows[1].len())
+    }
+
+    /// `pub fn name(args, outputs)`: `name_factors`, then both products in place.
+    fn wrapper(
+        &self,
+        name: &str,
+        doc: &str,
+        args: &[Arg],
+        outputs: &[Output],
+        helpers: &TokenStream,
+    ) -> TokenStream {
+        let fname = quote::format_ident!("{}", name);
+        let factors = quote::format_ident!("{}_factors", name);
+        let mut params = Vec::new();
+        let mut call = Vec::new();
+        for a in args {
+            let id = quote::format_ident!("{}", a.name);
+            params.push(a.tokens());
+            call.push(quote!(#id));
+        }
+        for o in outputs {
+            let id =
+                quote::format_ident!("{}", o.name().expect("forward dynamics' outputs are named"));
+            params.push(match o {
+                Output::Matrix { rows, cols, .. } => {
+                    let (r, c) = (crate::emit::num(*rows), crate::emit::num(*cols));
+                    quote!(#id: &mut [[S; #c]; #r])
+                }
+                Output::Vector { values, .. } => {
+                    let n = crate::emit::num(values.len());
+                    quote!(#id: &mut [S; #n])
+                }
+                Output::Return(_) => {
+                    unreachable!("forward dynamics' derivatives on a tree return nothing")
+                }
+            });
+            call.push(quote!(#id));
+        }
+        let table =
+            |t: &[u16]| -> Vec<_> { t.iter().map(|&r| crate::emit::num(r.into())).collect() };
+        let (rows_q, rows_v) = (table(&self.rows[0]), table(&self.rows[1]));
+        let (starts_q, starts_v) = (table(&self.starts[0]), table(&self.starts[1]));
+        let (nq, nv) = (
+            crate::emit::num(self.rows[0].len()),
+            crate::emit::num(self.rows[1].len()),
+        );
+        let n = crate::emit::num(self.nv + 1);
+        let doc_lines = doc.lines();
+        quote! {
+            #(#[doc = #doc_lines])*
+            pub fn #fname(#(#params),*) {
+                // The rows of each column of ∂τ/∂q and ∂τ/∂v that are not zero.
+                const ROWS_Q: [u16; #nq] = [#(#rows_q),*];
+                const STARTS_Q: [u16; #n] = [#(#starts_q),*];
+                const ROWS_V: [u16; #nv] = [#(#rows_v),*];
+                const STARTS_V: [u16; #n] = [#(#starts_v),*];
+                #factors(#(#call),*);
+                #helpers::minus_symmetric_times_sparse(dqdd_dtau, dqdd_dq, &ROWS_Q, &STARTS_Q);
+                #helpers::minus_symmetric_times_sparse(dqdd_dtau, dqdd_dv, &ROWS_V, &STARTS_V);
+            }
+        }
+    }
+}
+
+/// One function traced (derivatives `way`, where they have ways) and written.
+#[allow(clippy::too_many_arguments)]
 fn generate_one_way(
     loaded: &Loaded,
     model: &Model<Sym>,
@@ -1077,6 +1227,47 @@ fn generate_one_way(
     wrench_names: &[&str],
     taken: &mut std::collections::HashSet<String>,
     emission: Emission,
+    way: Option<crate::algorithm::DerivativeTrace>,
+) -> Result<TracedFunction, LoadError> {
+    use crate::algorithm::DerivativeTrace;
+    match way {
+        None => generate_traced(
+            loaded,
+            model,
+            instance,
+            links,
+            wrench_names,
+            taken,
+            emission,
+            false,
+        ),
+        Some(way) => crate::algorithm::with_derivative_trace(way, || {
+            generate_traced(
+                loaded,
+                model,
+                instance,
+                links,
+                wrench_names,
+                taken,
+                emission,
+                way == DerivativeTrace::Factors,
+            )
+        }),
+    }
+}
+
+/// [`generate_one_way`]'s work: `factors` for forward dynamics' derivatives traced as factors, written
+/// as `name_factors` with `name` after it multiplying them ([`FactorProduct`]).
+#[allow(clippy::too_many_arguments)]
+fn generate_traced(
+    loaded: &Loaded,
+    model: &Model<Sym>,
+    instance: &Instance,
+    links: &Links,
+    wrench_names: &[&str],
+    taken: &mut std::collections::HashSet<String>,
+    emission: Emission,
+    factors: bool,
 ) -> Result<TracedFunction, LoadError> {
     let Emission {
         helpers,
@@ -1228,9 +1419,22 @@ fn generate_one_way(
     // The lane module's copy takes the same part names: its module-level names are the scalar module's
     // (the same functions, emitted alike), so the names free there before this function are free here.
     let mut lane_taken = taken.clone();
+    // Traced as factors: the traced function is `name_factors`, and `name` multiplies its results.
+    let (traced_name, traced_doc, product) = if factors {
+        let name = format!("{}_factors", instance.name);
+        taken.insert(name.clone());
+        lane_taken.insert(name.clone());
+        let doc = format!(
+            "The factors of `{0}`: `qdd`, and in place of its derivatives the inverse-dynamics derivatives `dtau_dq`, `dtau_dv` at that `qdd` and `M⁻¹`; `{0}` multiplies them (`dqdd_dq = −M⁻¹ dtau_dq`, `dqdd_dv = −M⁻¹ dtau_dv`) in a loop.",
+            instance.name
+        );
+        (name, doc, Some(FactorProduct::of(&outputs)))
+    } else {
+        (instance.name.clone(), doc.clone(), None)
+    };
     let mut emitted = function(
-        &instance.name,
-        &doc,
+        &traced_name,
+        &traced_doc,
         &args,
         &outputs,
         &tape,
@@ -1252,9 +1456,13 @@ fn generate_one_way(
             let lane_doc = format!(
                 "{doc}\n\n{n} states at once, one per lane: every argument's entry holds that entry of each state (`q[i].0[k]` is `q[i]` of state `k`), and lane `k` of every result is bit-identical to the scalar function's result for state `k`."
             );
+            let lane_traced_doc = match product {
+                Some(_) => traced_doc.clone(),
+                None => lane_doc.clone(),
+            };
             let mut lane = function(
-                &instance.name,
-                &lane_doc,
+                &traced_name,
+                &lane_traced_doc,
                 &args,
                 &outputs,
                 &tape,
@@ -1267,15 +1475,28 @@ fn generate_one_way(
                 },
             )
             .map_err(|e| located_at_robot(loaded, e.into()))?;
-            let batch = crate::emit::batch_wrapper(&instance.name, &args, &outputs, emitted.paired);
+            let mut items =
+                crate::emit::batch_wrapper(&instance.name, &args, &outputs, emitted.paired);
+            if let Some(product) = &product {
+                let wrapper = product.wrapper(&instance.name, &lane_doc, &args, &outputs, helpers);
+                items = quote!(#wrapper #items);
+            }
             lane.code =
-                followed_by(lane.code, &batch).map_err(|e| located_at_robot(loaded, e.into()))?;
+                followed_by(lane.code, &items).map_err(|e| located_at_robot(loaded, e.into()))?;
             Some(lane)
         }
     };
     if let Some(wrapper) = spec.wrapper {
         emitted.code = followed_by(emitted.code, &wrapper())
             .map_err(|e| located_at_robot(loaded, e.into()))?;
+    }
+    if let Some(product) = &product {
+        // What runs: the loop's product counts half (its inner loop takes two numbers per SSE2
+        // instruction), for choosing between the ways of tracing.
+        emitted.statements += product.operations() / 2;
+        let wrapper = product.wrapper(&instance.name, &doc, &args, &outputs, helpers);
+        emitted.code =
+            followed_by(emitted.code, &wrapper).map_err(|e| located_at_robot(loaded, e.into()))?;
     }
     Ok(TracedFunction::Emitted(emitted, lane_function))
 }
@@ -1406,9 +1627,10 @@ mod tests {
         assert!(lets > 1000 && lets <= 2_400, "{lets} lets in `{function}`");
     }
 
-    /// A floating quadruped's `aba_derivatives` (47k operations) is under the pairing limit and paired,
-    /// and every computed entry of its outputs is written by the part that computes it: the public
-    /// function reads no scratch slot into an output.
+    /// A floating quadruped's `aba_derivatives` is traced as factors (the product `−M⁻¹ ∂τ`, 10k
+    /// operations, in a loop after them), which are under the pairing limit and paired, and every
+    /// computed entry of its outputs is written by the part that computes it: the function of the
+    /// factors reads no scratch slot into an output.
     #[test]
     fn a_quadrupeds_derivatives_are_paired_and_written_where_computed() {
         let path = concat!(
@@ -1426,13 +1648,19 @@ mod tests {
         .with_requested(Some(vec![Algorithm::AbaDerivatives]), &[]);
         let text = generate_source(&crate::load(path.as_ref()).unwrap(), &options).unwrap();
         assert!(text.contains("type P = "), "not paired");
-        assert!(text.contains("mod aba_derivatives_parts_0"), "not in parts");
-        let public = &text[text.find("pub fn aba_derivatives(").unwrap()..];
         assert!(
-            !public.contains("= s["),
+            text.contains("mod aba_derivatives_factors_parts_0"),
+            "not in parts"
+        );
+        let factors = &text[text.find("pub fn aba_derivatives_factors(").unwrap()..];
+        let factors = &factors[..factors.find("pub fn aba_derivatives(").unwrap()];
+        assert!(
+            !factors.contains("= s["),
             "an output read from the scratch array"
         );
         assert!(text.contains("dqdd_dq[0][0] = "));
+        let public = &text[text.find("pub fn aba_derivatives(").unwrap()..];
+        assert_eq!(public.matches("minus_symmetric_times_sparse").count(), 2);
     }
 
     /// A paired function's `_batch` form goes state by state through the scalar function where the lane

@@ -55,15 +55,16 @@ pub mod tree;
 
 #[cfg(feature = "alloc")]
 pub use algorithms::{
-    aba, aba_derivatives, aba_derivatives_independent, aba_ext, center_of_mass,
-    centroidal_momentum, centroidal_momentum_matrix, centroidal_momentum_rate, com_jacobian,
-    constraint_kinematics, crba, derivative_singularity_threshold, embedding_map, embedding_map_in,
-    forward_kinematics, forward_kinematics_acceleration, frame_classical_acceleration,
-    frame_jacobian, frame_placement, frame_velocity, gravity, kinetic_energy, kkt_forward_dynamics,
-    link_poses, mass_matrix_inverse, nle, nle_ext, potential_energy, reduced_mass_matrix,
-    reduced_mass_matrix_in, rnea, rnea_derivatives, rnea_ext, rnea_with_gravity, step,
-    step_derivatives, AbaDerivatives, CenterOfMass, DerivativeMethod, DerivativeWorkspace, DynamicsError, Kinematics,
-    LinkWrench, ManifoldDerivatives, Reference, RneaDerivatives, StepDerivatives, Sweep, Workspace,
+    aba, aba_derivative_factors, aba_derivatives, aba_derivatives_independent, aba_ext,
+    center_of_mass, centroidal_momentum, centroidal_momentum_matrix, centroidal_momentum_rate,
+    com_jacobian, constraint_kinematics, crba, derivative_singularity_threshold, embedding_map,
+    embedding_map_in, forward_kinematics, forward_kinematics_acceleration,
+    frame_classical_acceleration, frame_jacobian, frame_placement, frame_velocity, gravity,
+    kinetic_energy, kkt_forward_dynamics, link_poses, mass_matrix_inverse, nle, nle_ext,
+    potential_energy, reduced_mass_matrix, reduced_mass_matrix_in, rnea, rnea_derivatives,
+    rnea_ext, rnea_with_gravity, step, step_derivatives, AbaDerivativeFactors, AbaDerivatives,
+    CenterOfMass, DerivativeMethod, DerivativeWorkspace, DynamicsError, Kinematics, LinkWrench,
+    ManifoldDerivatives, Reference, RneaDerivatives, StepDerivatives, Sweep, Workspace,
 };
 #[cfg(feature = "alloc")]
 pub use configuration::{

@@ -157,8 +157,7 @@ pub(crate) fn rnea_partials<T: Real>(
             while let Some(j) = ancestor {
                 let jj = &model.joints[j];
                 for col in jj.v_index..jj.v_index + jj.nv() {
-                    dtau_dq[(r, col)] =
-                        -(s.alpha[col].dot(&a) + s.eta[col].dot(&b));
+                    dtau_dq[(r, col)] = -(s.alpha[col].dot(&a) + s.eta[col].dot(&b));
                     dtau_dv[(r, col)] = s.beta[col].dot(&a) + s.column[col].dot(&b);
                     if let Some(m) = mass_matrix.as_deref_mut() {
                         let mrc = s.column[col].dot(&a);
@@ -170,10 +169,8 @@ pub(crate) fn rnea_partials<T: Real>(
             }
             // Rows of the strict ancestors, column r: J_j · ∂F_k.
             let (eta, alpha, beta) = (s.eta[r], s.alpha[r], s.beta[r]);
-            let force_q = xi.cross_force(fk)
-                - ic.mul_motion(&alpha)
-                - mul6(bc, &eta)
-                - eta.cross_force(hc);
+            let force_q =
+                xi.cross_force(fk) - ic.mul_motion(&alpha) - mul6(bc, &eta) - eta.cross_force(hc);
             let force_v = ic.mul_motion(&beta) + bxi + xi.cross_force(hc);
             let mut ancestor = joint.parent;
             while let Some(j) = ancestor {

@@ -313,24 +313,25 @@ pub fn aba_derivatives<T: Real>(
         &[&out.dqdd_dq, &out.dqdd_dv, &out.dqdd_dtau],
         "AbaDerivatives",
     )?;
-    let qdd = super::aba_ext(model, &mut dws.plain, q, v, tau, f_ext)?;
-    out.qdd.copy_from_slice(qdd);
-    check_derivative_condition(model, &dws.plain)?;
     if dws.analytical(model) {
         // ∂τ at (q, v, q̈), then ∂q̈ = −M⁻¹ ∂τ and ∂q̈/∂τ = M⁻¹.
-        let partials = InverseDynamicsPartials {
-            dtau_dq: &mut dws.dtau_dq,
-            dtau_dv: &mut dws.dtau_dv,
-            mass_matrix: None,
-        };
-        let inputs = (q, v, out.qdd.as_slice());
-        rnea_partials(model, &mut dws.plain, &mut dws.analytical, inputs, f_ext, partials)?;
-        let minv = super::mass_matrix_inverse(model, &mut dws.plain, q)?;
-        out.dqdd_dtau.copy_from(minv);
+        let (dtau_dq, dtau_dv) = (&mut dws.dtau_dq, &mut dws.dtau_dv);
+        let factors = (&mut out.qdd, dtau_dq, dtau_dv, &mut out.dqdd_dtau);
+        factors_into(
+            model,
+            &mut dws.plain,
+            &mut dws.analytical,
+            (q, v, tau),
+            f_ext,
+            factors,
+        )?;
         forward_partials(model, &out.dqdd_dtau, &dws.dtau_dq, &mut out.dqdd_dq);
         forward_partials(model, &out.dqdd_dtau, &dws.dtau_dv, &mut out.dqdd_dv);
         return Ok(());
     }
+    let qdd = super::aba_ext(model, &mut dws.plain, q, v, tau, f_ext)?;
+    out.qdd.copy_from_slice(qdd);
+    check_derivative_condition(model, &dws.plain)?;
     let outputs = [&mut out.dqdd_dq, &mut out.dqdd_dv, &mut out.dqdd_dtau];
     spanning_passes(
         model,
@@ -340,6 +341,111 @@ pub fn aba_derivatives<T: Real>(
         f_ext,
         outputs,
     )
+}
+
+/// The factors of [`aba_derivatives`] on a model without loops, couplings or mimic joints: `q̈ = aba(q, v,
+/// τ)`, the inverse-dynamics derivatives `∂τ/∂q`, `∂τ/∂v` at that `q̈`, and `M⁻¹`, from which
+/// `∂q̈/∂q = −M⁻¹ ∂τ/∂q`, `∂q̈/∂v = −M⁻¹ ∂τ/∂v` and `∂q̈/∂τ = M⁻¹`. Generated code for large trees
+/// computes these unrolled and multiplies them in a loop (an unrolled product of a 38-DoF humanoid is
+/// 100k operations of straight-line code).
+#[derive(Clone, Debug, PartialEq)]
+pub struct AbaDerivativeFactors<T: Real> {
+    /// `q̈ = aba(q, v, τ)`.
+    pub qdd: DVector<T>,
+    /// `∂τ/∂q` at `(q, v, q̈)` (tangent space).
+    pub dtau_dq: DMatrix<T>,
+    /// `∂τ/∂v` at `(q, v, q̈)`.
+    pub dtau_dv: DMatrix<T>,
+    /// `M⁻¹`.
+    pub minv: DMatrix<T>,
+}
+
+impl<T: Real> AbaDerivativeFactors<T> {
+    /// Zeros of `model`'s sizes.
+    pub fn new(model: &Model<T>) -> Self {
+        let nv = model.nv();
+        AbaDerivativeFactors {
+            qdd: DVector::zeros(nv),
+            dtau_dq: DMatrix::zeros(nv, nv),
+            dtau_dv: DMatrix::zeros(nv, nv),
+            minv: DMatrix::zeros(nv, nv),
+        }
+    }
+}
+
+/// [`AbaDerivativeFactors`] at `(q, v, τ)` with the wrenches `f_ext` held fixed.
+///
+/// # Errors
+/// Those of [`crate::aba_ext`] at `(q, v, τ)`; [`DynamicsError::TreeOnly`] on a model
+/// with loops, couplings or mimic joints (whose derivatives are not a product of these).
+pub fn aba_derivative_factors<T: Real>(
+    model: &Model<T>,
+    dws: &mut DerivativeWorkspace<T>,
+    q: &[T],
+    v: &[T],
+    tau: &[T],
+    f_ext: &[LinkWrench<T>],
+    out: &mut AbaDerivativeFactors<T>,
+) -> Result<(), DynamicsError> {
+    dws.check_for(model)?;
+    check_out(
+        model,
+        out.qdd.len(),
+        &[&out.dtau_dq, &out.dtau_dv, &out.minv],
+        "AbaDerivativeFactors",
+    )?;
+    if model.has_constraints() {
+        return Err(DynamicsError::TreeOnly {
+            function: "aba_derivative_factors",
+        });
+    }
+    let factors = (
+        &mut out.qdd,
+        &mut out.dtau_dq,
+        &mut out.dtau_dv,
+        &mut out.minv,
+    );
+    factors_into(
+        model,
+        &mut dws.plain,
+        &mut dws.analytical,
+        (q, v, tau),
+        f_ext,
+        factors,
+    )
+}
+
+/// `q̈ = aba(q, v, τ)`, `∂τ/∂q` and `∂τ/∂v` at `q̈`, and `M⁻¹`, into `(qdd, dtau_dq, dtau_dv, minv)`.
+#[allow(clippy::type_complexity)]
+fn factors_into<T: Real>(
+    model: &Model<T>,
+    plain: &mut Workspace<T>,
+    analytical: &mut AnalyticalScratch<T>,
+    (q, v, tau): (&[T], &[T], &[T]),
+    f_ext: &[LinkWrench<T>],
+    (qdd, dtau_dq, dtau_dv, minv): (
+        &mut DVector<T>,
+        &mut DMatrix<T>,
+        &mut DMatrix<T>,
+        &mut DMatrix<T>,
+    ),
+) -> Result<(), DynamicsError> {
+    qdd.copy_from_slice(super::aba_ext(model, plain, q, v, tau, f_ext)?);
+    let partials = InverseDynamicsPartials {
+        dtau_dq,
+        dtau_dv,
+        mass_matrix: None,
+    };
+    rnea_partials(
+        model,
+        plain,
+        analytical,
+        (q, v, qdd.as_slice()),
+        f_ext,
+        partials,
+    )?;
+    minv.copy_from(super::mass_matrix_inverse(model, plain, q)?);
+    Ok(())
 }
 
 /// The derivatives of inverse dynamics, `rnea(q, v, q̈)` with the wrenches `f_ext` held fixed, into
@@ -369,7 +475,14 @@ pub fn rnea_derivatives<T: Real>(
             dtau_dv: &mut out.dtau_dv,
             mass_matrix: Some(&mut out.dtau_dqdd),
         };
-        rnea_partials(model, &mut dws.plain, &mut dws.analytical, (q, v, qdd), f_ext, partials)?;
+        rnea_partials(
+            model,
+            &mut dws.plain,
+            &mut dws.analytical,
+            (q, v, qdd),
+            f_ext,
+            partials,
+        )?;
         out.tau.copy_from_slice(&dws.plain.tau);
         return Ok(());
     }

@@ -23,8 +23,9 @@ pub use centroidal::{
 };
 pub use crba::crba;
 pub use derivatives::{
-    aba_derivatives, aba_derivatives_independent, derivative_singularity_threshold,
-    rnea_derivatives, step, step_derivatives, AbaDerivatives, DerivativeMethod, DerivativeWorkspace,
+    aba_derivative_factors, aba_derivatives, aba_derivatives_independent,
+    derivative_singularity_threshold, rnea_derivatives, step, step_derivatives,
+    AbaDerivativeFactors, AbaDerivatives, DerivativeMethod, DerivativeWorkspace,
     ManifoldDerivatives, RneaDerivatives, StepDerivatives,
 };
 pub(crate) use embedded::position_kinematics;
@@ -133,6 +134,12 @@ pub enum DynamicsError {
     SingularGroup {
         /// The group, by the names of its constraints.
         group: GroupLabel,
+    },
+    /// A function defined on trees only was called on a model with loops, couplings or mimic joints.
+    #[error("`{function}` is defined for models without loops, couplings or mimic joints")]
+    TreeOnly {
+        /// The function.
+        function: &'static str,
     },
 }
 
