@@ -44,8 +44,12 @@ def main():
         "",
         f"Generated f64 code vs Pinocchio 4.1's analytical derivatives in one session ({datetime.date.today()}, "
         f"{platform.machine()}, `bench/derivatives.sh`), each side from {copies} fresh copies of its binary "
-        "(medians, and the range over copies). The generated derivatives are forward-mode dual numbers through "
-        "`aba` and `rnea`, traced and folded (docs/conventions.md, \"Derivatives\").",
+        "(medians, and the range over copies). The generator traces each derivative function each way it can — "
+        "the analytical world-frame recursion, forward-mode dual numbers through `aba` and `rnea`, and for "
+        "forward dynamics of a large tree the factors `q̈`, `∂τ`, `M⁻¹` with `−M⁻¹ ∂τ` in a loop — and keeps the "
+        "one that runs fewer statements (docs/conventions.md, \"Derivatives\"). *operations*: arithmetic of the "
+        "unrolled code; the loop's product adds 2 · nv · (nonzero rows of ∂τ/∂q and ∂τ/∂v): 13.6k on the "
+        "ANYmal B, 97.7k on the TALOS.",
         "",
         "| robot | call | operations | embedyn generated (ns) | range | Pinocchio (ns) | range | ratio | target |",
         "|---|---|---:|---:|---:|---:|---:|---:|---:|",
@@ -79,29 +83,28 @@ def main():
         ops = operations(urdf, False, "aba_derivatives_independent")
         a, d = statistics.median(base), statistics.median(xs)
         lines.append(f"| {robot} | {what} | {ops:,} | {a:,.0f} | {d:,.0f} | {spread(xs)} | {d / a:.1f} |")
-    lines += ["", "Forward mode costs each direction a pass of the algorithm's tangent arithmetic: on the floating "
-              "ANYmal B the 18 directions of q take 19.6k operations of `aba_derivatives`, those of v 20.1k and those "
-              "of τ 8.0k (beside the value pass's 4.4k); of `rnea_derivatives` 7.0k, 11.8k and 4.4k (measured by "
-              "generating each group alone). That is about Pinocchio's analytical time, not issue 12's 0.25×: the "
-              "analytical recursions, the tree's sparsity in ∂τ and M⁻¹, and lanes are the next steps. On the "
-              "38-DoF TALOS forward mode loses outright: 256k operations (nv² growth) in one straight-line function "
-              "of megabytes, which runs from L2 and memory rather than the instruction cache (0.46 ns per operation "
-              "against `aba`'s 0.28), 2.9× Pinocchio's analytical derivatives; there the analytical recursion, "
-              "O(nv·depth) instead of O(nv²) tangent work, is not an option but a need.",
-              "", "Size (measured 2026-12-02, `embedyn generate`, then `cargo build --release` of the standalone crate): "
-              "the floating TALOS reduced (nv = 38) has 256,549 operations in `aba_derivatives` alone, 7.0 MB of "
-              "source, 36 s to compile (one core, 0.6 GB), against issue 12's < 20 s; the floating Solo-12's `step` "
-              "(the Jacobian of one Euler step) 70,651 operations. Forward mode grows as nv² times the tangent work per "
-              "body; fewer operations per direction is the same task as the speed. On 2026-12-03, with the parts in 16 "
-              "modules that rustc builds in parallel, on 2 cores: TALOS's `aba_derivatives` in f64 alone 17.1 s wall "
-              "(26.7 s of CPU, 0.67 GB), with `rnea_derivatives` 26.3 s (10.5 MB of source, 0.93 GB), both functions "
-              "in f64 and f32 99 s (1.6 GB; the machine was shared with a test run then). That last crate used to be "
-              "refused before tracing at a predicted 7.1 GB (the size guard now traces what it predicts within four "
-              "times the limit).",
-              "", "The interpreted derivatives run the same dual numbers untraced, eight directions per pass, with no "
-              "zero folded: `aba_derivatives` took 120 µs on the Z1 and 565 µs on the floating ANYmal B (61× and 140× "
-              "the interpreted `aba`; measured 2026-12-02 with a loop over one state). They are the oracle and the "
-              "way to loop models' manifold derivatives; a control loop calls the generated functions."]
+    lines += ["", "Which way each function takes, and why: on the Z1 (a 6-DoF chain) the recursion unrolled, 11.3k "
+              "operations against dual numbers' 16.3k. On the floating ANYmal B dual numbers fold the free flyer's and "
+              "each leg's zeros and pair leg with leg (32.1k statements), the recursion unrolled with its product is "
+              "40.9k unpaired, the factors 16.2k (paired) plus the loop: factors (6.2 µs against dual numbers' 8.9 µs "
+              "in one run). On the TALOS (nv = 38) dual numbers grow as nv² (254k), the recursion as nv · depth: "
+              "`rnea_derivatives` 35.5k against 105k, `aba_derivatives` 89.5k factors plus the loop against 187k "
+              "unrolled (its 98k-operation product, straight-line, ran at 0.65 ns per operation: 3.5× Pinocchio in "
+              "that run). The 0.25× target: the Z1 would need 0.08 ns per operation of its 11.3k (it runs at 0.24); "
+              "on the ANYmal B the loop's `M⁻¹ ∂τ` alone takes 1.8–1.9 µs of 6.5–6.7 (the standalone crate, "
+              "`aba_derivatives` against `aba_derivatives_factors` in one binary), more than the target's whole "
+              "2.4 µs; Pinocchio pays the same product, in a dense matrix product.",
+              "", "Size and compile time (2026-12-03, `embedyn generate`, then `cargo build --release` of the standalone "
+              "crate on 2 cores, dependencies built): the floating TALOS's `aba_derivatives` and `rnea_derivatives` in "
+              "f64, 4.7 MB of source, 14.1 s wall (0.65 GB); in f64 and f32, 9.2 MB, 32.9 s (1.1 GB). Before the "
+              "recursion (dual numbers, 16 modules in parallel): 26.3 s and 99 s; before the modules, 36 s for "
+              "`aba_derivatives` alone. `step_derivatives` is still dual numbers (the floating Solo-12's 70,651 "
+              "operations).",
+              "", "Interpreted (a loop over one state, 2026-12-03, `--release`): `aba_derivatives` by the recursion "
+              "5.9 µs on the Z1, 19.9 µs on the floating ANYmal B, 86 µs on the floating TALOS, against dual numbers' "
+              "57.6, 274 and 1,468 µs (6×, 9× and 16× the interpreted `aba`, against 61×, 127× and 255×). Dual "
+              "numbers remain the way to loop models' derivatives and a second opinion on trees "
+              "(`DerivativeMethod::DualNumbers`); the two agree to 1e-12."]
     write_section("\n".join(lines) + "\n")
 
 

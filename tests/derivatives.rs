@@ -8,8 +8,9 @@ use crate::constraint_embedding::{consistent_state, LOOP_MODELS};
 use embedyn::constraints::{complete_configuration, complete_velocity};
 use embedyn::nalgebra::{DMatrix, DVector, Vector3};
 use embedyn::{
-    aba, aba_derivatives, aba_derivatives_independent, aba_ext, crba, integrate, rnea_derivatives,
-    rnea_ext, step, step_derivatives, AbaDerivatives, DerivativeMethod, DerivativeWorkspace,
+    aba, aba_derivative_factors, aba_derivatives, aba_derivatives_independent, aba_ext, crba,
+    integrate, mass_matrix_inverse, rnea_derivatives, rnea_ext, step, step_derivatives,
+    AbaDerivativeFactors, AbaDerivatives, DerivativeMethod, DerivativeWorkspace, DynamicsError,
     FrameId, LinkWrench, ManifoldDerivatives, Model, RneaDerivatives, StepDerivatives, Workspace,
 };
 
@@ -218,6 +219,49 @@ fn the_analytical_recursion_and_dual_numbers_agree() {
             "{name}: {errors:?}"
         );
     }
+}
+
+/// `aba_derivative_factors` gives the factors `aba_derivatives` multiplies: `q̈` of `aba`, `∂τ` of
+/// `rnea_derivatives` at that `q̈`, `M⁻¹` of `mass_matrix_inverse`, and `−M⁻¹ ∂τ` is `aba_derivatives`'
+/// result; a model with loops is refused (its derivatives are not that product).
+#[test]
+fn forward_derivative_factors_multiply_to_the_derivatives() {
+    for (name, model, q, v, tau) in trees() {
+        let f_ext = one_wrench(&model);
+        let mut dws = DerivativeWorkspace::new(&model);
+        let mut f = AbaDerivativeFactors::new(&model);
+        aba_derivative_factors(&model, &mut dws, &q, &v, &tau, &f_ext, &mut f).unwrap();
+        let mut ws = Workspace::new(&model);
+        let qdd = aba_ext(&model, &mut ws, &q, &v, &tau, &f_ext)
+            .unwrap()
+            .to_vec();
+        assert_eq!(f.qdd.as_slice(), qdd.as_slice(), "{name}");
+        let mut id = RneaDerivatives::new(&model);
+        rnea_derivatives(&model, &mut dws, &q, &v, &qdd, &f_ext, &mut id).unwrap();
+        assert_eq!(f.dtau_dq, id.dtau_dq, "{name}");
+        assert_eq!(f.dtau_dv, id.dtau_dv, "{name}");
+        let minv = mass_matrix_inverse(&model, &mut ws, &q).unwrap().clone();
+        assert_eq!(f.minv, minv, "{name}");
+        let mut fd = AbaDerivatives::new(&model);
+        aba_derivatives(&model, &mut dws, &q, &v, &tau, &f_ext, &mut fd).unwrap();
+        let errors = [
+            rel(&fd.dqdd_dq, &(-&f.minv * &f.dtau_dq)),
+            rel(&fd.dqdd_dv, &(-&f.minv * &f.dtau_dv)),
+        ];
+        assert!(errors[0] < 1e-13 && errors[1] < 1e-13, "{name}: {errors:?}");
+    }
+    let model = load_model::<f64>("models/loops/four_bar_internal.urdf", false);
+    let mut ws = Workspace::new(&model);
+    let (q, v) = consistent_state(&model, &mut ws, &mut Rng::new(5));
+    let mut dws = DerivativeWorkspace::new(&model);
+    let mut f = AbaDerivativeFactors::new(&model);
+    let tau = vec![0.0; model.nv()];
+    assert_eq!(
+        aba_derivative_factors(&model, &mut dws, &q, &v, &tau, &[], &mut f),
+        Err(DynamicsError::TreeOnly {
+            function: "aba_derivative_factors"
+        })
+    );
 }
 
 /// Along the constraint manifold: the independent coordinates moved, the dependent ones completed

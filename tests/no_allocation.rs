@@ -7,14 +7,14 @@ use common::{load_model, Rng};
 use embedyn::constraints::{complete_configuration, complete_velocity};
 use embedyn::nalgebra::{Matrix3xX, Matrix6xX, Vector3};
 use embedyn::{
-    aba, aba_derivatives, aba_derivatives_independent, aba_ext, center_of_mass,
-    centroidal_momentum, centroidal_momentum_matrix, centroidal_momentum_rate, com_jacobian, crba,
-    difference, embedding_map_in, forward_kinematics, forward_kinematics_acceleration,
-    frame_classical_acceleration, frame_jacobian, frame_placement, frame_velocity, gravity,
-    integrate, mass_matrix_inverse, nle, nle_ext, random_configuration, reduced_mass_matrix_in,
-    rnea, rnea_derivatives, rnea_ext, step, step_derivatives, AbaDerivatives, DerivativeWorkspace,
-    DynamicsError, LinkWrench, ManifoldDerivatives, Reference, RneaDerivatives, StepDerivatives,
-    Workspace,
+    aba, aba_derivative_factors, aba_derivatives, aba_derivatives_independent, aba_ext,
+    center_of_mass, centroidal_momentum, centroidal_momentum_matrix, centroidal_momentum_rate,
+    com_jacobian, crba, difference, embedding_map_in, forward_kinematics,
+    forward_kinematics_acceleration, frame_classical_acceleration, frame_jacobian, frame_placement,
+    frame_velocity, gravity, integrate, mass_matrix_inverse, nle, nle_ext, random_configuration,
+    reduced_mass_matrix_in, rnea, rnea_derivatives, rnea_ext, step, step_derivatives,
+    AbaDerivativeFactors, AbaDerivatives, DerivativeMethod, DerivativeWorkspace, DynamicsError,
+    LinkWrench, ManifoldDerivatives, Reference, RneaDerivatives, StepDerivatives, Workspace,
 };
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
@@ -89,6 +89,7 @@ fn algorithm_calls_do_not_allocate() {
         // Derivatives: one workspace and the outputs, made once.
         let mut dws = DerivativeWorkspace::new(&model);
         let mut forward = AbaDerivatives::new(&model);
+        let mut factors = AbaDerivativeFactors::new(&model);
         let mut inverse = RneaDerivatives::new(&model);
         let mut stepped = StepDerivatives::new(&model);
         let (mut q_next, mut v_next) = (vec![0.0; model.nq()], vec![0.0; model.nv()]);
@@ -118,6 +119,12 @@ fn algorithm_calls_do_not_allocate() {
             )
             .unwrap();
             aba_derivatives(&model, &mut dws, &q, &v, &tau, &wrenches, &mut forward).unwrap();
+            aba_derivative_factors(&model, &mut dws, &q, &v, &tau, &wrenches, &mut factors)
+                .unwrap();
+            // The other method, dual numbers, allocates nothing either.
+            dws.set_method(DerivativeMethod::DualNumbers);
+            aba_derivatives(&model, &mut dws, &q, &v, &tau, &wrenches, &mut forward).unwrap();
+            dws.set_method(DerivativeMethod::Analytical);
             rnea_derivatives(&model, &mut dws, &q, &v, &tau, &wrenches, &mut inverse).unwrap();
             let _ = aba_ext(&model, &mut ws, &q, &v, &tau, &wrenches).unwrap();
             let _ = rnea_ext(&model, &mut ws, &q, &v, &tau, &wrenches).unwrap();
