@@ -230,7 +230,9 @@ pub(crate) fn forward_partials<T: Real>(
     }
 }
 
-/// `İ = v ×* I − I v×` as a 6 × 6 matrix (columns `İ eₘ`), `[angular; linear]` on both sides.
+/// `İ = v ×* I − I v×` as a 6 × 6 matrix (columns `İ eₘ`), `[angular; linear]` on both sides. It is
+/// symmetric (`v ×* = −(v×)ᵀ`): the lower triangle is computed and mirrored, so that the matrix is
+/// exactly symmetric and its upper half costs nothing.
 fn inertia_rate<T: Real>(inertia: &SpatialInertia<T>, v: &Motion<T>) -> Matrix6<T> {
     let mut m = Matrix6::zeros();
     for c in 0..6 {
@@ -238,8 +240,10 @@ fn inertia_rate<T: Real>(inertia: &SpatialInertia<T>, v: &Motion<T>) -> Matrix6<
         e[c] = T::one();
         let e = Motion::from_array(e);
         let col = v.cross_force(&inertia.mul_motion(&e)) - inertia.mul_motion(&v.cross_motion(&e));
-        for (r, x) in col.to_array().into_iter().enumerate() {
-            m[(r, c)] = x;
+        let col = col.to_array();
+        for r in c..6 {
+            m[(r, c)] = col[r];
+            m[(c, r)] = col[r];
         }
     }
     m
