@@ -187,8 +187,9 @@ fn forward_derivatives_are_minus_m_inverse_times_inverse_derivatives() {
     }
 }
 
-/// The two methods, the world-frame recursion (the default on trees) and dual numbers through `aba` and
-/// `rnea`, share no arithmetic beyond the value pass: they agree to rounding, with a wrench on a link.
+/// The two methods, the world-frame recursion (the default on trees; the chain rule for `step`) and dual
+/// numbers through `aba`, `rnea` and `step`, share no arithmetic beyond the value pass: they agree to
+/// rounding, with a wrench on a link.
 #[test]
 fn the_analytical_recursion_and_dual_numbers_agree() {
     for (name, model, q, v, u) in trees() {
@@ -201,9 +202,25 @@ fn the_analytical_recursion_and_dual_numbers_agree() {
             aba_derivatives(&model, &mut dws, &q, &v, &u, &f_ext, &mut fd).unwrap();
             let mut id = RneaDerivatives::new(&model);
             rnea_derivatives(&model, &mut dws, &q, &v, &u, &f_ext, &mut id).unwrap();
-            results.push((fd, id));
+            let mut sd = StepDerivatives::new(&model);
+            step_derivatives(&model, &mut dws, &q, &v, &u, 0.01, &f_ext, &mut sd).unwrap();
+            results.push((fd, id, sd));
         }
-        let ((fa, ia), (fb, ib)) = (&results[0], &results[1]);
+        let ((fa, ia, sa), (fb, ib, sb)) = (&results[0], &results[1]);
+        assert_eq!(sa.q_next, sb.q_next, "{name}");
+        assert_eq!(sa.v_next, sb.v_next, "{name}");
+        let steps = [
+            rel(&sa.dq_next_dq, &sb.dq_next_dq),
+            rel(&sa.dq_next_dv, &sb.dq_next_dv),
+            rel(&sa.dq_next_dtau, &sb.dq_next_dtau),
+            rel(&sa.dv_next_dq, &sb.dv_next_dq),
+            rel(&sa.dv_next_dv, &sb.dv_next_dv),
+            rel(&sa.dv_next_dtau, &sb.dv_next_dtau),
+        ];
+        assert!(
+            steps.iter().fold(0.0, |a, &b| crate::common::worse(a, b)) < 1e-12,
+            "{name}: step {steps:?}"
+        );
         assert_eq!(fa.qdd, fb.qdd, "{name}");
         assert_eq!(ia.tau, ib.tau, "{name}");
         let errors = [

@@ -1346,7 +1346,7 @@ pub const ALGORITHMS: &[AlgorithmSpec] = &[
         growth: Growth::Quadratic,
         predicted_operations: |c| 700.0 * c.nv * c.nv,
         trace: |model, _, inputs, _| {
-            let mut dws = DerivativeWorkspace::new(model);
+            let mut dws = derivative_workspace(model);
             let mut d = StepDerivatives::new(model);
             let dt = inputs[3][0];
             step_derivatives(model, &mut dws, &inputs[0], &inputs[1], &inputs[2], dt, &[], &mut d)?;
@@ -1712,6 +1712,7 @@ impl Algorithm {
                 | Algorithm::RneaDerivatives
                 | Algorithm::AbaDerivativesExt
                 | Algorithm::RneaDerivativesExt
+                | Algorithm::StepDerivatives
         )
     }
 

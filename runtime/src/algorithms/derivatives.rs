@@ -74,6 +74,11 @@ pub struct DerivativeWorkspace<T: Real> {
     analytical: AnalyticalScratch<T>,
     dtau_dq: DMatrix<T>,
     dtau_dv: DMatrix<T>,
+    /// [`step_derivatives`]' `q̈` and the configuration's part of the step: `∂q'/∂q` at a fixed step and
+    /// `∂q'/∂s` for the step `s = dt v'` (block diagonal, one block per joint).
+    qdd: DVector<T>,
+    next_dq: DMatrix<T>,
+    next_ds: DMatrix<T>,
 }
 
 impl<T: Real> DerivativeWorkspace<T> {
@@ -161,6 +166,9 @@ impl<T: Real> DerivativeWorkspace<T> {
             analytical: AnalyticalScratch::new(model),
             dtau_dq: DMatrix::zeros(model.nv(), model.nv()),
             dtau_dv: DMatrix::zeros(model.nv(), model.nv()),
+            qdd: DVector::zeros(model.nv()),
+            next_dq: DMatrix::zeros(model.nv(), model.nv()),
+            next_ds: DMatrix::zeros(model.nv(), model.nv()),
             model: dual,
         }
     }
@@ -696,6 +704,9 @@ pub fn step_derivatives<T: Real>(
     for (d, &x) in dws.next0.iter_mut().zip(out.q_next.iter()) {
         *d = Dual::constant(x);
     }
+    if dws.analytical(model) {
+        return step_by_chain_rule(model, dws, (q, v, tau), dt, f_ext, out);
+    }
     let StepDerivatives {
         dq_next_dq,
         dq_next_dv,
@@ -725,6 +736,132 @@ pub fn step_derivatives<T: Real>(
             }
         },
     )
+}
+
+/// [`step_derivatives`] on a tree by the chain rule through `v' = v + dt q̈` and `q' = integrate(q, s)`,
+/// `s = dt v'`: `∂q̈` by the analytical recursion, and the configuration's part, `∂q'/∂q` at a fixed `s`
+/// and `∂q'/∂s` (block diagonal: a joint's coordinates move only its own; the identity but for a free
+/// flyer), by dual numbers through `integrate` and `difference` alone. Then
+/// `∂v'/∂x = ∂v/∂x + dt ∂q̈/∂x` and `∂q'/∂x = ∂q'/∂q · ∂q/∂x + ∂q'/∂s · dt ∂v'/∂x`.
+fn step_by_chain_rule<T: Real>(
+    model: &Model<T>,
+    dws: &mut DerivativeWorkspace<T>,
+    (q, v, tau): (&[T], &[T], &[T]),
+    dt: T,
+    f_ext: &[LinkWrench<T>],
+    out: &mut StepDerivatives<T>,
+) -> Result<(), DynamicsError> {
+    let nv = model.nv();
+    // ∂q̈/∂q, ∂q̈/∂v and M⁻¹ into the ∂v' blocks, then v' = v + dt q̈.
+    let factors = (
+        &mut dws.qdd,
+        &mut dws.dtau_dq,
+        &mut dws.dtau_dv,
+        &mut out.dv_next_dtau,
+    );
+    factors_into(
+        model,
+        &mut dws.plain,
+        &mut dws.analytical,
+        (q, v, tau),
+        f_ext,
+        factors,
+    )?;
+    forward_partials(model, &out.dv_next_dtau, &dws.dtau_dq, &mut out.dv_next_dq);
+    forward_partials(model, &out.dv_next_dtau, &dws.dtau_dv, &mut out.dv_next_dv);
+    for m in [
+        &mut out.dv_next_dq,
+        &mut out.dv_next_dv,
+        &mut out.dv_next_dtau,
+    ] {
+        for x in m.iter_mut() {
+            *x = dt * *x;
+        }
+    }
+    for i in 0..nv {
+        out.dv_next_dv[(i, i)] += T::one();
+    }
+    configuration_step_partials(model, dws, q, out.v_next.as_slice(), dt)?;
+    // ∂q'/∂x, joint by joint (the blocks of ∂q'/∂q and ∂q'/∂s are the joint's own).
+    for joint in &model.joints {
+        let rows = joint.v_index..joint.v_index + joint.nv();
+        for r in rows.clone() {
+            for c in 0..nv {
+                let through = |m: &DMatrix<T>| {
+                    let mut sum = T::zero();
+                    for k in rows.clone() {
+                        sum += dws.next_ds[(r, k)] * (dt * m[(k, c)]);
+                    }
+                    sum
+                };
+                let mut dq = through(&out.dv_next_dq);
+                if rows.contains(&c) {
+                    dq += dws.next_dq[(r, c)];
+                }
+                out.dq_next_dq[(r, c)] = dq;
+                out.dq_next_dv[(r, c)] = through(&out.dv_next_dv);
+                out.dq_next_dtau[(r, c)] = through(&out.dv_next_dtau);
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The blocks of `∂(q' ⊖ q'₀)/∂q` at a fixed step and of `∂(q' ⊖ q'₀)/∂s`, `q' = integrate(q, s)` at
+/// `s = dt v'`, into `dws.next_dq` and `dws.next_ds` (`dws.next0` holds the undisturbed `q'₀`): dual
+/// numbers through `integrate` and `difference`, [`DIRECTIONS`] at a time.
+fn configuration_step_partials<T: Real>(
+    model: &Model<T>,
+    dws: &mut DerivativeWorkspace<T>,
+    q: &[T],
+    v_next: &[T],
+    dt: T,
+) -> Result<(), DynamicsError> {
+    let nv = model.nv();
+    for (d, &x) in dws.q0.iter_mut().zip(q) {
+        *d = Dual::constant(x);
+    }
+    dws.next_dq.fill(T::zero());
+    dws.next_ds.fill(T::zero());
+    let mut start = 0;
+    while start < 2 * nv {
+        let n = DIRECTIONS.min(2 * nv - start);
+        for i in 0..nv {
+            dws.step[i] = Dual::constant(T::zero());
+            dws.v[i] = Dual::constant(dt * v_next[i]);
+        }
+        for lane in 0..n {
+            let c = start + lane;
+            if c < nv {
+                dws.step[c].eps[lane] = T::one();
+            } else {
+                dws.v[c - nv].eps[lane] = T::one();
+            }
+        }
+        crate::configuration::integrate(&dws.model, &dws.q0, &dws.step, &mut dws.q)?;
+        crate::configuration::integrate(&dws.model, &dws.q, &dws.v, &mut dws.next)?;
+        let (displacement, _) = dws.out.split_at_mut(nv);
+        crate::configuration::difference(&dws.model, &dws.next0, &dws.next, displacement)?;
+        for lane in 0..n {
+            let c = start + lane;
+            let (matrix, col) = if c < nv {
+                (&mut dws.next_dq, c)
+            } else {
+                (&mut dws.next_ds, c - nv)
+            };
+            // Only the column's own joint moves.
+            let joint = model
+                .joints
+                .iter()
+                .find(|j| (j.v_index..j.v_index + j.nv()).contains(&col))
+                .expect("every velocity coordinate has a joint");
+            for r in joint.v_index..joint.v_index + joint.nv() {
+                matrix[(r, col)] = dws.out[r].eps[lane];
+            }
+        }
+        start += n;
+    }
+    Ok(())
 }
 
 fn check_out<T: Real>(
