@@ -826,9 +826,9 @@ fn configuration_step_partials<T: Real>(
     let mut start = 0;
     while start < 2 * nv {
         let n = DIRECTIONS.min(2 * nv - start);
-        for i in 0..nv {
-            dws.step[i] = Dual::constant(T::zero());
-            dws.v[i] = Dual::constant(dt * v_next[i]);
+        for ((step, s), &v) in dws.step.iter_mut().zip(dws.v.iter_mut()).zip(v_next) {
+            *step = Dual::constant(T::zero());
+            *s = Dual::constant(dt * v);
         }
         for lane in 0..n {
             let c = start + lane;
