@@ -1202,7 +1202,7 @@ pub const ALGORITHMS: &[AlgorithmSpec] = &[
         readme_note_with_constraints: Some(" — forward dynamics and its derivatives over every spanning coordinate (tangent space); returns the singularity measure, to compare with `DERIVATIVE_SINGULARITY_THRESHOLD`"),
         cli: None,
         growth: Growth::Quadratic,
-        predicted_operations: |c| 600.0 * c.nv * c.nv,
+        predicted_operations: predicted_forward_derivatives,
         trace: |model, _, inputs, _| {
             traced_aba_derivatives(model, inputs, &[])
         },
@@ -1230,7 +1230,7 @@ pub const ALGORITHMS: &[AlgorithmSpec] = &[
         readme_note_with_constraints: None,
         cli: None,
         growth: Growth::Quadratic,
-        predicted_operations: |c| 300.0 * c.nv * c.nv,
+        predicted_operations: predicted_inverse_derivatives,
         trace: |model, _, inputs, _| {
             traced_rnea_derivatives(model, inputs, &[])
         },
@@ -1344,7 +1344,7 @@ pub const ALGORITHMS: &[AlgorithmSpec] = &[
         readme_note_with_constraints: Some(" — one semi-implicit Euler step and its Jacobian over the spanning coordinates; returns the singularity measure, to compare with `DERIVATIVE_SINGULARITY_THRESHOLD`"),
         cli: None,
         growth: Growth::Quadratic,
-        predicted_operations: |c| 700.0 * c.nv * c.nv,
+        predicted_operations: predicted_step_derivatives,
         trace: |model, _, inputs, _| {
             let mut dws = derivative_workspace(model);
             let mut d = StepDerivatives::new(model);
@@ -1450,7 +1450,7 @@ pub const ALGORITHMS: &[AlgorithmSpec] = &[
         readme_note_with_constraints: Some(" — `aba_derivatives` with the wrenches `f_ext` (rows as in `aba_ext`) held fixed in their links' frames; returns the singularity measure, to compare with `DERIVATIVE_SINGULARITY_THRESHOLD`"),
         cli: None,
         growth: Growth::Quadratic,
-        predicted_operations: |c| 650.0 * c.nv * c.nv,
+        predicted_operations: |c| predicted_forward_derivatives(c) + 50.0 * c.nv * c.links,
         trace: |model, _, inputs, links| {
             let f_ext = link_wrenches(links.wrenches, &inputs[3]);
             traced_aba_derivatives(model, inputs, &f_ext)
@@ -1480,7 +1480,7 @@ pub const ALGORITHMS: &[AlgorithmSpec] = &[
         readme_note_with_constraints: None,
         cli: None,
         growth: Growth::Quadratic,
-        predicted_operations: |c| 320.0 * c.nv * c.nv,
+        predicted_operations: |c| predicted_inverse_derivatives(c) + 20.0 * c.nv * c.links,
         trace: |model, _, inputs, links| {
             let f_ext = link_wrenches(links.wrenches, &inputs[3]);
             traced_rnea_derivatives(model, inputs, &f_ext)
@@ -1541,6 +1541,39 @@ const RNEA_DERIVATIVE_OUTPUTS: &[OutputSpec] = &[
         unit: MASS_UNIT,
     },
 ];
+
+/// Predicted operations of `rnea_derivatives`: on a tree (`ni = nv`) the analytical recursion, about 60 per
+/// pair of coordinates on one branch (`c.crba` counts 24 each, with 30 per coordinate) and 1,100 per
+/// coordinate (measured 2026-12-03: the Z1 7.2k against 9.3k predicted, the floating ANYmal B 20k traced
+/// against 32k, the floating TALOS 34k against 74k); with constraints, dual numbers (`300 nv²`).
+fn predicted_inverse_derivatives(c: &SizeCounts) -> f64 {
+    if c.ni < c.nv {
+        return 300.0 * c.nv * c.nv;
+    }
+    3.0 * c.crba + 1200.0 * c.nv
+}
+
+/// Predicted operations of `aba_derivatives`: on a tree its factors (`aba`, `minv`'s `38 nv² + 170 nv`,
+/// the recursion), an upper bound of the way kept (the Z1 11k against 14k, the ANYmal B 16k against 55k,
+/// the TALOS 88k against 152k); with constraints, dual numbers (`600 nv²`).
+fn predicted_forward_derivatives(c: &SizeCounts) -> f64 {
+    if c.ni < c.nv {
+        return 600.0 * c.nv * c.nv;
+    }
+    440.0 * c.nv + 38.0 * c.nv * c.nv + 170.0 * c.nv + predicted_inverse_derivatives(c)
+}
+
+/// Predicted operations of `step_derivatives`: on a tree the factors, the product `−M⁻¹ ∂τ` unrolled (4 per
+/// row of `M⁻¹` and nonzero of `∂τ`, at most twice the branch pairs) and the chain rule (the Z1 11k
+/// against 16k, the ANYmal B 48k against 78k, the TALOS 203k against 286k); with constraints, dual
+/// numbers (`700 nv²`).
+fn predicted_step_derivatives(c: &SizeCounts) -> f64 {
+    if c.ni < c.nv {
+        return 700.0 * c.nv * c.nv;
+    }
+    let branch_pairs = (c.crba - 30.0 * c.nv) / 24.0;
+    predicted_forward_derivatives(c) + 8.0 * c.nv * branch_pairs + 10.0 * c.nv * c.nv
+}
 
 /// How a traced function differentiates, for the functions of [`Algorithm::has_derivative_methods`] on a
 /// tree; the generator traces each way and keeps the shortest code (`generate_algorithm`).
