@@ -38,8 +38,8 @@ pub trait Float: Copy {
 pub fn minus_symmetric_times_sparse<S, const N: usize>(
     a: &[[S; N]; N],
     x: &mut [[S; N]; N],
-    rows: &[u16],
-    starts: &[u16],
+    rows: &[u32],
+    starts: &[u32],
 ) where
     S: Copy + core::ops::Add<Output = S> + core::ops::Mul<Output = S> + core::ops::Neg<Output = S>,
 {

@@ -1,4 +1,4 @@
-//! Derivatives of inverse dynamics by a recursion over the tree in the world frame, and of forward
+//! Derivatives of inverse dynamics by a recursion over the tree in world-aligned frames, and of forward
 //! dynamics from them (`∂q̈ = −M⁻¹ ∂τ`): the analytical alternative to the dual numbers of
 //! [`super::derivatives`], for models without loops, couplings or mimic joints.
 //!
@@ -8,7 +8,11 @@
 //!
 //! # The recursion
 //!
-//! Everything is in the world frame: `Jₖ` the columns of joint `k`'s motion subspace, `v_i` and `a_i` the
+//! Everything is in one inertial frame per root body: the world's axes at that body's origin at `q` (any
+//! inertial frame serves, and this one keeps the numbers of the robot's size: about the world origin a
+//! body `d` away has inertia entries of `m d²` that the dot products cancel back, losing digits as `ε d²`,
+//! so that a robot 100 m out had 1e-11 in f64 and 4 % in f32; subtrees of different roots never meet).
+//! In it: `Jₖ` the columns of joint `k`'s motion subspace, `v_i` and `a_i` the
 //! bodies' spatial velocities and accelerations (the root's parent accelerating at `−g`), `I_i` their
 //! inertias, `h_i = I_i v_i`, `İ_i = v_i ×* I_i − I_i v_i×` (the inertia's rate, symmetric), and for each
 //! subtree `k` the sums `Ic_k = Σ I_i`, `Hc_k = Σ h_i`, `Bc_k = Σ İ_i` and its force `F_k = Σ f_i`.
@@ -101,7 +105,8 @@ pub(crate) fn rnea_partials<T: Real>(
     for (i, (joint, body)) in model.joints.iter().zip(&model.bodies).enumerate() {
         let x = match joint.parent {
             Some(p) => s.placement[p].compose(&plain.parent_placement[i]),
-            None => plain.parent_placement[i],
+            // A root body's frame of reference: the world's axes at the body's origin (module docs).
+            None => Transform::new(plain.parent_placement[i].rotation, Vector3::zeros()),
         };
         let vel = x.act_motion(&plain.velocity[i]);
         let acc = x.act_motion(&plain.acceleration[i]);

@@ -105,13 +105,30 @@ impl<T: Real> DerivativeWorkspace<T> {
                     .zip(b.inertia.rotational.iter())
                     .all(|(&x, &y)| same(x, y))
         });
+        let same_placement = |a: &crate::Transform<T>, b: &crate::Transform<D<T>>| {
+            same3(&a.translation, &b.translation)
+                && a.rotation
+                    .iter()
+                    .zip(b.rotation.iter())
+                    .all(|(&x, &y)| same(x, y))
+        };
+        // Everything the dual passes read from the model (an attacker's trial: another armature or a
+        // turned placement went through and dual numbers differentiated the old model).
         let joints = model.joints.iter().zip(&self.model.joints).all(|(a, b)| {
             a.joint_type == b.joint_type
                 && a.parent == b.parent
                 && same3(&a.axis, &b.axis)
-                && same3(&a.placement.translation, &b.placement.translation)
+                && same_placement(&a.placement, &b.placement)
+                && same(a.armature, b.armature)
         });
-        if bodies && joints && same3(&model.gravity, &self.model.gravity) {
+        let links = model.bodies.iter().zip(&self.model.bodies).all(|(a, b)| {
+            a.link_placements.len() == b.link_placements.len()
+                && a.link_placements
+                    .iter()
+                    .zip(&b.link_placements)
+                    .all(|(x, y)| same_placement(x, y))
+        });
+        if bodies && joints && links && same3(&model.gravity, &self.model.gravity) {
             Ok(())
         } else {
             Err(DynamicsError::WrongLength {
