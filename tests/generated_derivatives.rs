@@ -51,14 +51,23 @@ mod four_bar {
 
 // A quadruped's derivatives are paired (its left and right legs side by side), under the generator's
 // pairing limit of 60k operations; `aba_derivatives` is traced as factors with the product `−M⁻¹ ∂τ` in
-// a loop after them. Two lanes: the lane module's loop product as well.
+// a loop after them, here with two lanes: the lane module's loop product as well (`rnea_derivatives`
+// without lanes, in a module of its own: a lane copy costs the test build about four times a scalar one).
 mod solo12_free {
     embedyn::robot!(
         "tests/data/pinocchio/solo12.urdf",
         floating,
         f64_only,
-        only(aba_derivatives, rnea_derivatives),
+        only(aba_derivatives),
         lanes = 2
+    );
+}
+mod solo12_inverse {
+    embedyn::robot!(
+        "tests/data/pinocchio/solo12.urdf",
+        floating,
+        f64_only,
+        only(rnea_derivatives)
     );
 }
 
@@ -355,7 +364,7 @@ fn paired_derivatives_of_a_floating_quadruped_match_the_interpreted() {
         rnea_derivatives(&model, &mut dws, &q, &v, &u, &[], &mut r).unwrap();
         let (mut x, mut blocks) = ([f64::NAN; NV], [[[f64::NAN; NV]; NV]; 3]);
         let [b0, b1, b2] = &mut blocks;
-        solo12_free::f64::rnea_derivatives(&q_arr, &arr(&v), &arr(&u), &mut x, b0, b1, b2);
+        solo12_inverse::f64::rnea_derivatives(&q_arr, &arr(&v), &arr(&u), &mut x, b0, b1, b2);
         let expected = [&r.dtau_dq, &r.dtau_dv, &r.dtau_dqdd];
         let worst = worst_of(&x, r.tau.as_slice(), &blocks, expected);
         assert!(worst < 1e-12, "rnea_derivatives: {worst:e}");
