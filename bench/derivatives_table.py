@@ -83,14 +83,14 @@ def main():
         ops = operations(urdf, False, "aba_derivatives_independent")
         a, d = statistics.median(base), statistics.median(xs)
         lines.append(f"| {robot} | {what} | {ops:,} | {a:,.0f} | {d:,.0f} | {spread(xs)} | {d / a:.1f} |")
-    lines += ["", "Which way each function takes, and why: on the Z1 (a 6-DoF chain) the recursion unrolled, 11.3k "
+    lines += ["", "Which way each function takes, and why: on the Z1 (a 6-DoF chain) the recursion unrolled, 11.0k "
               "operations against dual numbers' 16.3k. On the floating ANYmal B dual numbers fold the free flyer's and "
               "each leg's zeros and pair leg with leg (32.1k statements), the recursion unrolled with its product is "
-              "40.9k unpaired, the factors 16.2k (paired) plus the loop: factors (6.2 µs against dual numbers' 8.9 µs "
-              "in one run). On the TALOS (nv = 38) dual numbers grow as nv² (254k), the recursion as nv · depth: "
-              "`rnea_derivatives` 35.5k against 105k, `aba_derivatives` 89.5k factors plus the loop against 187k "
+              "40.9k unpaired, the factors 15.1k (paired) plus the loop: factors (6.2–6.4 µs against dual numbers' "
+              "8.9 µs). On the TALOS (nv = 38) dual numbers grow as nv² (254k), the recursion as nv · depth: "
+              "`rnea_derivatives` 32.6k against 105k, `aba_derivatives` 85.5k factors plus the loop against 187k "
               "unrolled (its 98k-operation product, straight-line, ran at 0.65 ns per operation: 3.5× Pinocchio in "
-              "that run). The 0.25× target: the Z1 would need 0.08 ns per operation of its 11.3k (it runs at 0.24); "
+              "that run). The 0.25× target: the Z1 would need 0.08 ns per operation of its 11.0k (it runs at 0.25); "
               "on the ANYmal B the loop's `M⁻¹ ∂τ` alone takes 1.8–1.9 µs of 6.5–6.7 (the standalone crate, "
               "`aba_derivatives` against `aba_derivatives_factors` in one binary), more than the target's whole "
               "2.4 µs; Pinocchio pays the same product, in a dense matrix product.",
