@@ -551,12 +551,15 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
             };
             let limit = options.max_compile_memory_mb;
             let budget = size::tape_budget(limit, scalars.len());
-            let (function, lane_function) = match generate_algorithm(
+            let request = FunctionRequest {
                 loaded,
-                &model,
+                model: &model,
                 instance,
-                &links,
-                &wrench_names,
+                links: &links,
+                wrench_names: &wrench_names,
+            };
+            let (function, lane_function) = match generate_algorithm(
+                &request,
                 &mut taken,
                 Emission {
                     helpers: &options.helpers,
@@ -1035,28 +1038,15 @@ enum TracedFunction {
 /// against 32.1k paired dual numbers and 40.9k unrolled; the floating TALOS 89.5k factors + 48.9k loop
 /// against 187k unrolled and 254k dual numbers.
 fn generate_algorithm(
-    loaded: &Loaded,
-    model: &Model<Sym>,
-    instance: &Instance,
-    links: &Links,
-    wrench_names: &[&str],
+    request: &FunctionRequest,
     taken: &mut std::collections::HashSet<String>,
     emission: Emission,
 ) -> Result<TracedFunction, LoadError> {
     use crate::algorithm::DerivativeTrace;
     use embedyn_runtime::DerivativeMethod;
-    let algorithm = instance.algorithm;
+    let (model, algorithm) = (request.model, request.instance.algorithm);
     if !algorithm.has_derivative_methods() || model.has_constraints() {
-        return generate_one_way(
-            loaded,
-            model,
-            instance,
-            links,
-            wrench_names,
-            taken,
-            emission,
-            None,
-        );
+        return generate_one_way(request, taken, emission, None);
     }
     // The likely winner first, so that the others can stop early: a way whose tape grows past three times
     // the best code so far (plus a margin) cannot run fewer statements, and its trace stops there (a
@@ -1082,11 +1072,7 @@ fn generate_algorithm(
         };
         let mut names = taken.clone();
         let traced = generate_one_way(
-            loaded,
-            model,
-            instance,
-            links,
-            wrench_names,
+            request,
             &mut names,
             Emission { budget, ..emission },
             Some(way),
@@ -1235,58 +1221,47 @@ impl FactorProduct {
     }
 }
 
+/// What one generated function is of: the model (as loaded, and traced), the function, the links of
+/// its frame and wrenches.
+struct FunctionRequest<'a> {
+    loaded: &'a Loaded,
+    model: &'a Model<Sym>,
+    instance: &'a Instance<'a>,
+    links: &'a Links<'a>,
+    wrench_names: &'a [&'a str],
+}
+
 /// One function traced (derivatives `way`, where they have ways) and written.
-#[allow(clippy::too_many_arguments)]
 fn generate_one_way(
-    loaded: &Loaded,
-    model: &Model<Sym>,
-    instance: &Instance,
-    links: &Links,
-    wrench_names: &[&str],
+    request: &FunctionRequest,
     taken: &mut std::collections::HashSet<String>,
     emission: Emission,
     way: Option<crate::algorithm::DerivativeTrace>,
 ) -> Result<TracedFunction, LoadError> {
     use crate::algorithm::DerivativeTrace;
     match way {
-        None => generate_traced(
-            loaded,
-            model,
-            instance,
-            links,
-            wrench_names,
-            taken,
-            emission,
-            false,
-        ),
+        None => generate_traced(request, taken, emission, false),
         Some(way) => crate::algorithm::with_derivative_trace(way, || {
-            generate_traced(
-                loaded,
-                model,
-                instance,
-                links,
-                wrench_names,
-                taken,
-                emission,
-                way == DerivativeTrace::Factors,
-            )
+            generate_traced(request, taken, emission, way == DerivativeTrace::Factors)
         }),
     }
 }
 
 /// [`generate_one_way`]'s work: `factors` for forward dynamics' derivatives traced as factors, written
 /// as `name_factors` with `name` after it multiplying them ([`FactorProduct`]).
-#[allow(clippy::too_many_arguments)]
 fn generate_traced(
-    loaded: &Loaded,
-    model: &Model<Sym>,
-    instance: &Instance,
-    links: &Links,
-    wrench_names: &[&str],
+    request: &FunctionRequest,
     taken: &mut std::collections::HashSet<String>,
     emission: Emission,
     factors: bool,
 ) -> Result<TracedFunction, LoadError> {
+    let FunctionRequest {
+        loaded,
+        model,
+        instance,
+        links,
+        wrench_names,
+    } = *request;
     let Emission {
         helpers,
         lanes,
