@@ -1592,12 +1592,17 @@ std::thread_local! {
         const { std::cell::Cell::new(DerivativeTrace::Method(DerivativeMethod::Analytical)) };
 }
 
-/// Runs `f` (a trace) with the derivatives traced `way`.
+/// Runs `f` (a trace) with the derivatives traced `way`; the way before is back afterwards, also when
+/// `f` panics (a proc-macro server runs many expansions on one thread).
 pub(crate) fn with_derivative_trace<R>(way: DerivativeTrace, f: impl FnOnce() -> R) -> R {
-    let before = DERIVATIVE_TRACE.with(|m| m.replace(way));
-    let r = f();
-    DERIVATIVE_TRACE.with(|m| m.set(before));
-    r
+    struct Restore(DerivativeTrace);
+    impl Drop for Restore {
+        fn drop(&mut self) {
+            DERIVATIVE_TRACE.with(|m| m.set(self.0));
+        }
+    }
+    let _restore = Restore(DERIVATIVE_TRACE.with(|m| m.replace(way)));
+    f()
 }
 
 fn derivative_workspace(model: &Model<Sym>) -> DerivativeWorkspace<Sym> {
@@ -1908,6 +1913,24 @@ fn known_names() -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A trace that panics leaves the derivative way as it found it: the next expansion on the thread
+    /// (a proc-macro server's) must not trace factors it did not ask for.
+    #[test]
+    fn the_derivative_way_is_restored_after_a_panic() {
+        let way = || DERIVATIVE_TRACE.with(std::cell::Cell::get);
+        let before = way();
+        let panicked = std::panic::catch_unwind(|| {
+            with_derivative_trace(DerivativeTrace::Factors, || panic!("a trace failed"))
+        });
+        assert!(panicked.is_err());
+        assert_eq!(way(), before);
+        assert_eq!(
+            with_derivative_trace(DerivativeTrace::Factors, way),
+            DerivativeTrace::Factors
+        );
+        assert_eq!(way(), before);
+    }
 
     /// A row of the function tables of docs/generated-code.md.
     #[derive(Debug, PartialEq)]
