@@ -1112,7 +1112,7 @@ pub const ALGORITHMS: &[AlgorithmSpec] = &[
             let mut partial: Vec<Vec<Sym>> = vec![vec![Sym::Const(0.0); 6]; model.joints.len()];
             let mut h = vec![Sym::Const(0.0); 6];
             for (i, joint) in model.joints.iter().enumerate().rev() {
-                for k in joint.v_index..joint.v_index + joint.nv() {
+                for k in joint.v_range() {
                     for r in 0..6 {
                         partial[i][r] += a_g[(r, k)] * inputs[1][k];
                     }

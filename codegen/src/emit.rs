@@ -102,6 +102,23 @@ impl Output {
             Output::Return(_) => None,
         }
     }
+
+    /// The output parameter of a generated function (`qdd: &mut [S; 18]`, `m: &mut [[S; 18]; 18]`);
+    /// none for the return value.
+    pub(crate) fn param(&self) -> Option<TokenStream> {
+        let id = format_ident!("{}", self.name()?);
+        Some(match self {
+            Output::Vector { values, .. } => {
+                let n = num(values.len());
+                quote!(#id: &mut [S; #n])
+            }
+            Output::Matrix { rows, cols, .. } => {
+                let (cols, rows) = (num(*cols), num(*rows));
+                quote!(#id: &mut [[S; #cols]; #rows])
+            }
+            Output::Return(_) => unreachable!("the return value has no name"),
+        })
+    }
 }
 
 /// The doc of a generated function with its header: the bodies whose values it computes (in the
@@ -785,8 +802,7 @@ fn output_tokens(
                 values,
             } => {
                 let id = format_ident!("{}", oname);
-                let n = num(values.len());
-                out_params.push(quote!(#id: &mut [S; #n]));
+                out_params.extend(o.param());
                 for (i, v) in values.iter().enumerate().filter(|(_, v)| !computed(v)) {
                     let i = num(i);
                     let val = value_tokens(v, split, slot, operand, nodes, args);
@@ -800,8 +816,7 @@ fn output_tokens(
                 values,
             } => {
                 let id = format_ident!("{}", oname);
-                let (cols_lit, rows_lit) = (num(*cols), num(*rows));
-                out_params.push(quote!(#id: &mut [[S; #cols_lit]; #rows_lit]));
+                out_params.extend(o.param());
                 for r in 0..*rows {
                     for c in 0..*cols {
                         let v = &values[r * cols + c];

@@ -1116,12 +1116,7 @@ impl FactorProduct {
     fn structural_operations(model: &Model<Sym>) -> usize {
         let mut nonzero = 0;
         for (k, joint) in model.joints.iter().enumerate() {
-            let mut ancestors = 0;
-            let mut up = joint.parent;
-            while let Some(j) = up {
-                ancestors += model.joints[j].nv();
-                up = model.joints[j].parent;
-            }
+            let ancestors: usize = model.ancestors(k).map(|j| model.joints[j].nv()).sum();
             nonzero += joint.nv() * (ancestors + model.subtree_v_range(k).len());
         }
         2 * 2 * model.nv() * nonzero
@@ -1178,21 +1173,10 @@ impl FactorProduct {
             call.push(quote!(#id));
         }
         for o in outputs {
-            let id =
-                quote::format_ident!("{}", o.name().expect("forward dynamics' outputs are named"));
-            params.push(match o {
-                Output::Matrix { rows, cols, .. } => {
-                    let (r, c) = (crate::emit::num(*rows), crate::emit::num(*cols));
-                    quote!(#id: &mut [[S; #c]; #r])
-                }
-                Output::Vector { values, .. } => {
-                    let n = crate::emit::num(values.len());
-                    quote!(#id: &mut [S; #n])
-                }
-                Output::Return(_) => {
-                    unreachable!("forward dynamics' derivatives on a tree return nothing")
-                }
-            });
+            // Forward dynamics' derivatives on a tree return nothing: every output is a parameter.
+            let name = o.name().expect("forward dynamics' outputs are named");
+            let id = quote::format_ident!("{}", name);
+            params.extend(o.param());
             call.push(quote!(#id));
         }
         let table =

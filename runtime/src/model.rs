@@ -138,6 +138,10 @@ impl<T: Real> Joint<T> {
     pub fn nv(&self) -> usize {
         self.joint_type.nv()
     }
+    /// This joint's indices in `v`: `v_index..v_index + nv`.
+    pub fn v_range(&self) -> core::ops::Range<usize> {
+        self.v_index..self.v_index + self.nv()
+    }
 
     /// `X_J(q)`: the pose of the child body frame in the joint frame.
     #[inline(always)]
@@ -457,6 +461,10 @@ impl<T: Real> Model<T> {
     pub fn subtree_end(&self, i: usize) -> usize {
         self.subtree_end[i]
     }
+    /// The bodies body `i` hangs from, its parent first, up to its root (`i` itself not included).
+    pub fn ancestors(&self, i: usize) -> impl Iterator<Item = usize> + '_ {
+        core::iter::successors(self.joints[i].parent, move |&j| self.joints[j].parent)
+    }
     /// Velocity indices `[v_index(i), end)` of the subtree rooted at body `i`.
     pub fn subtree_v_range(&self, i: usize) -> core::ops::Range<usize> {
         let start = self.joints[i].v_index;
@@ -683,7 +691,7 @@ impl<T: Real> Model<T> {
             .iter()
             .enumerate()
             .filter(|&(j, _)| self.is_independent(j))
-            .flat_map(|(_, joint)| joint.v_index..joint.v_index + joint.nv())
+            .flat_map(|(_, joint)| joint.v_range())
     }
 
     /// Number of independent velocity coordinates.

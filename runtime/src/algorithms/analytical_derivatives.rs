@@ -158,10 +158,8 @@ pub(crate) fn rnea_partials<T: Real>(
             let bxi = mul6(bc, &xi);
             let b = bxi - xi.cross_force(hc);
             // Rows r, columns of this joint and its ancestors.
-            let mut ancestor = Some(k);
-            while let Some(j) = ancestor {
-                let jj = &model.joints[j];
-                for col in jj.v_index..jj.v_index + jj.nv() {
+            for j in core::iter::once(k).chain(model.ancestors(k)) {
+                for col in model.joints[j].v_range() {
                     dtau_dq[(r, col)] = -(s.alpha[col].dot(&a) + s.eta[col].dot(&b));
                     dtau_dv[(r, col)] = s.beta[col].dot(&a) + s.column[col].dot(&b);
                     if let Some(m) = mass_matrix.as_deref_mut() {
@@ -170,26 +168,22 @@ pub(crate) fn rnea_partials<T: Real>(
                         m[(col, r)] = mrc;
                     }
                 }
-                ancestor = jj.parent;
             }
             // Rows of the strict ancestors, column r: J_j · ∂F_k.
             let (eta, alpha, beta) = (s.eta[r], s.alpha[r], s.beta[r]);
             let force_q =
                 xi.cross_force(fk) - ic.mul_motion(&alpha) - mul6(bc, &eta) - eta.cross_force(hc);
             let force_v = ic.mul_motion(&beta) + bxi + xi.cross_force(hc);
-            let mut ancestor = joint.parent;
-            while let Some(j) = ancestor {
-                let jj = &model.joints[j];
-                for row in jj.v_index..jj.v_index + jj.nv() {
+            for j in model.ancestors(k) {
+                for row in model.joints[j].v_range() {
                     dtau_dq[(row, r)] = s.column[row].dot(&force_q);
                     dtau_dv[(row, r)] = s.column[row].dot(&force_v);
                 }
-                ancestor = jj.parent;
             }
         }
         if joint.has_armature() {
             if let Some(m) = mass_matrix.as_deref_mut() {
-                for r in joint.v_index..joint.v_index + joint.nv() {
+                for r in joint.v_range() {
                     m[(r, r)] += joint.armature;
                 }
             }
@@ -215,16 +209,13 @@ pub(crate) fn forward_partials<T: Real>(
     let nv = model.nv();
     for (k, joint) in model.joints.iter().enumerate() {
         let subtree = model.subtree_v_range(k);
-        for col in joint.v_index..joint.v_index + joint.nv() {
+        for col in joint.v_range() {
             for row in 0..nv {
                 let mut sum = T::zero();
-                let mut ancestor = joint.parent;
-                while let Some(j) = ancestor {
-                    let jj = &model.joints[j];
-                    for r in jj.v_index..jj.v_index + jj.nv() {
+                for j in model.ancestors(k) {
+                    for r in model.joints[j].v_range() {
                         sum += minv[(row, r)] * dtau[(r, col)];
                     }
-                    ancestor = jj.parent;
                 }
                 for r in subtree.clone() {
                     sum += minv[(row, r)] * dtau[(r, col)];

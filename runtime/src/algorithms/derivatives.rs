@@ -74,8 +74,9 @@ pub struct DerivativeWorkspace<T: Real> {
     analytical: AnalyticalScratch<T>,
     dtau_dq: DMatrix<T>,
     dtau_dv: DMatrix<T>,
-    /// [`step_derivatives`]' `q̈` and the configuration's part of the step: `∂q'/∂q` at a fixed step and
-    /// `∂q'/∂s` for the step `s = dt v'` (block diagonal, one block per joint).
+    /// `q̈` of the analytical forward derivatives, and [`step_derivatives`]' configuration's part of the
+    /// step: `∂q'/∂q` at a fixed step and `∂q'/∂s` for the step `s = dt v'` (block diagonal, one block
+    /// per joint).
     qdd: DVector<T>,
     next_dq: DMatrix<T>,
     next_ds: DMatrix<T>,
@@ -150,6 +151,34 @@ impl<T: Real> DerivativeWorkspace<T> {
     /// [`DerivativeMethod::Analytical`]).
     pub fn set_method(&mut self, method: DerivativeMethod) {
         self.method = method;
+    }
+
+    /// `∂q̈/∂q`, `∂q̈/∂v` and `∂q̈/∂τ = M⁻¹` by the analytical recursion into `[dq, dv, dtau]`
+    /// (`−M⁻¹ ∂τ` at `q̈ = aba(q, v, τ)`), `q̈` into `self.qdd`.
+    fn forward_by_recursion(
+        &mut self,
+        model: &Model<T>,
+        inputs: (&[T], &[T], &[T]),
+        f_ext: &[LinkWrench<T>],
+        [dq, dv, minv]: [&mut DMatrix<T>; 3],
+    ) -> Result<(), DynamicsError> {
+        let factors = (
+            &mut self.qdd,
+            &mut self.dtau_dq,
+            &mut self.dtau_dv,
+            &mut *minv,
+        );
+        factors_into(
+            model,
+            &mut self.plain,
+            &mut self.analytical,
+            inputs,
+            f_ext,
+            factors,
+        )?;
+        forward_partials(model, minv, &self.dtau_dq, dq);
+        forward_partials(model, minv, &self.dtau_dv, dv);
+        Ok(())
     }
 
     /// Whether the calls on `model` take the analytical recursion.
@@ -339,19 +368,9 @@ pub fn aba_derivatives<T: Real>(
         "AbaDerivatives",
     )?;
     if dws.analytical(model) {
-        // ∂τ at (q, v, q̈), then ∂q̈ = −M⁻¹ ∂τ and ∂q̈/∂τ = M⁻¹.
-        let (dtau_dq, dtau_dv) = (&mut dws.dtau_dq, &mut dws.dtau_dv);
-        let factors = (&mut out.qdd, dtau_dq, dtau_dv, &mut out.dqdd_dtau);
-        factors_into(
-            model,
-            &mut dws.plain,
-            &mut dws.analytical,
-            (q, v, tau),
-            f_ext,
-            factors,
-        )?;
-        forward_partials(model, &out.dqdd_dtau, &dws.dtau_dq, &mut out.dqdd_dq);
-        forward_partials(model, &out.dqdd_dtau, &dws.dtau_dv, &mut out.dqdd_dv);
+        let derivatives = [&mut out.dqdd_dq, &mut out.dqdd_dv, &mut out.dqdd_dtau];
+        dws.forward_by_recursion(model, (q, v, tau), f_ext, derivatives)?;
+        out.qdd.copy_from(&dws.qdd);
         return Ok(());
     }
     let qdd = super::aba_ext(model, &mut dws.plain, q, v, tau, f_ext)?;
@@ -770,22 +789,12 @@ fn step_by_chain_rule<T: Real>(
 ) -> Result<(), DynamicsError> {
     let nv = model.nv();
     // ∂q̈/∂q, ∂q̈/∂v and M⁻¹ into the ∂v' blocks, then v' = v + dt q̈.
-    let factors = (
-        &mut dws.qdd,
-        &mut dws.dtau_dq,
-        &mut dws.dtau_dv,
+    let derivatives = [
+        &mut out.dv_next_dq,
+        &mut out.dv_next_dv,
         &mut out.dv_next_dtau,
-    );
-    factors_into(
-        model,
-        &mut dws.plain,
-        &mut dws.analytical,
-        (q, v, tau),
-        f_ext,
-        factors,
-    )?;
-    forward_partials(model, &out.dv_next_dtau, &dws.dtau_dq, &mut out.dv_next_dq);
-    forward_partials(model, &out.dv_next_dtau, &dws.dtau_dv, &mut out.dv_next_dv);
+    ];
+    dws.forward_by_recursion(model, (q, v, tau), f_ext, derivatives)?;
     for m in [
         &mut out.dv_next_dq,
         &mut out.dv_next_dv,
@@ -801,7 +810,7 @@ fn step_by_chain_rule<T: Real>(
     configuration_step_partials(model, dws, q, out.v_next.as_slice(), dt)?;
     // ∂q'/∂x, joint by joint (the blocks of ∂q'/∂q and ∂q'/∂s are the joint's own).
     for joint in &model.joints {
-        let rows = joint.v_index..joint.v_index + joint.nv();
+        let rows = joint.v_range();
         for r in rows.clone() {
             for c in 0..nv {
                 let through = |m: &DMatrix<T>| {
@@ -870,9 +879,9 @@ fn configuration_step_partials<T: Real>(
             let joint = model
                 .joints
                 .iter()
-                .find(|j| (j.v_index..j.v_index + j.nv()).contains(&col))
+                .find(|j| j.v_range().contains(&col))
                 .expect("every velocity coordinate has a joint");
-            for r in joint.v_index..joint.v_index + joint.nv() {
+            for r in joint.v_range() {
                 matrix[(r, col)] = dws.out[r].eps[lane];
             }
         }

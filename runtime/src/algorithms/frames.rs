@@ -206,8 +206,7 @@ pub fn frame_jacobian<T: Real>(
     };
     let world = ws.world_placement[b].compose(in_body);
     let origin = world.translation;
-    let mut next = frame.body;
-    while let Some(i) = next {
+    for i in core::iter::once(b).chain(model.ancestors(b)) {
         let joint = &model.joints[i];
         let x = &ws.world_placement[i];
         for k in 0..joint.nv() {
@@ -222,7 +221,6 @@ pub fn frame_jacobian<T: Real>(
             };
             write_column(jacobian, joint.v_index + k, &col.linear, &col.angular);
         }
-        next = joint.parent;
     }
     Ok(())
 }
