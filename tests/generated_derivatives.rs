@@ -27,7 +27,10 @@ mod ur5_step {
         "tests/data/pinocchio/ur5.urdf",
         f64_only,
         only(step, step_derivatives, aba_derivatives_ext),
-        wrenches(tool0, wrist_2_link)
+        wrenches(tool0, wrist_2_link),
+        // (the AVX twins are tested on `solo12_free` and `ur5`; leaving them out here spares the test
+        // build their compile time)
+        no_avx_twins
     );
 }
 // A floating base: the step's derivatives of the base configuration go through the logarithm of the
@@ -38,14 +41,16 @@ mod pendulum_free_step {
         "tests/data/pinocchio/double_pendulum.urdf",
         floating,
         f64_only,
-        only(step_derivatives)
+        only(step_derivatives),
+        no_avx_twins
     );
 }
 mod four_bar {
     embedyn::robot!(
         "models/loops/four_bar_internal.urdf",
         f64_only,
-        only(aba_derivatives, aba_derivatives_independent)
+        only(aba_derivatives, aba_derivatives_independent),
+        no_avx_twins
     );
 }
 
@@ -67,7 +72,8 @@ mod solo12_inverse {
         "tests/data/pinocchio/solo12.urdf",
         floating,
         f64_only,
-        only(rnea_derivatives)
+        only(rnea_derivatives),
+        no_avx_twins
     );
 }
 
@@ -408,6 +414,68 @@ fn lane_derivatives_of_a_floating_quadruped_are_the_scalar_ones() {
                 );
             }
         }
+    }
+}
+
+/// A large function's AVX twin (docs/generated-code.md, "AVX where the CPU has it") gives the bits of its
+/// baseline copy: the UR5's `aba_derivatives` and `rnea_derivatives`, the floating Solo-12's factored
+/// `aba_derivatives` and the batch of 32 sines and cosines, each run with the twins allowed and forbidden. (On a CPU without AVX, or a build
+/// that enables AVX itself, both runs take the same copy and the test passes trivially; the CI machines
+/// have AVX.)
+#[test]
+fn avx_twins_give_the_bits_of_the_baseline_code() {
+    use embedyn::codegen_support::dispatch::use_avx;
+    // Runs of both copies, each state computed with the twins allowed, then forbidden.
+    fn both<T: PartialEq + std::fmt::Debug>(mut run: impl FnMut() -> T) {
+        use_avx(true);
+        let with_twin = run();
+        use_avx(false);
+        let baseline = run();
+        use_avx(true);
+        assert_eq!(with_twin, baseline);
+    }
+    let bits = |m: &[[f64; N]; N]| m.map(|row| row.map(f64::to_bits));
+    // The batch of sines and cosines every generated function starts with has its own AVX copy.
+    let angles: [f64; 32] = std::array::from_fn(|i| (i as f64 - 15.5) * 0.7391);
+    both(|| {
+        let (s, c) = embedyn::codegen_support::sincos_batch_f64(angles);
+        (s.map(f64::to_bits), c.map(f64::to_bits))
+    });
+    let ur5_model: Model<f64> = load_model("tests/data/pinocchio/ur5.urdf", false);
+    let solo: Model<f64> = load_model("tests/data/pinocchio/solo12.urdf", true);
+    let mut rng = Rng::new(14);
+    for _ in 0..3 {
+        let q: [f64; N] = std::array::from_fn(|_| rng.uniform(-3.0, 3.0));
+        let v: [f64; N] = std::array::from_fn(|_| rng.uniform(-2.0, 2.0));
+        let u: [f64; N] = std::array::from_fn(|_| rng.uniform(-5.0, 5.0));
+        assert_eq!(ur5_model.nq(), N);
+        both(|| {
+            let (mut x, mut blocks) = ([f64::NAN; N], [[[f64::NAN; N]; N]; 3]);
+            let [b0, b1, b2] = &mut blocks;
+            ur5::f64::aba_derivatives(&q, &v, &u, &mut x, b0, b1, b2);
+            (x.map(f64::to_bits), blocks.each_ref().map(bits))
+        });
+        both(|| {
+            let (mut x, mut blocks) = ([f64::NAN; N], [[[f64::NAN; N]; N]; 3]);
+            let [b0, b1, b2] = &mut blocks;
+            ur5::f64::rnea_derivatives(&q, &v, &u, &mut x, b0, b1, b2);
+            (x.map(f64::to_bits), blocks.each_ref().map(bits))
+        });
+        const NQ: usize = solo12_free::NQ;
+        const NV: usize = solo12_free::NV;
+        let configuration = rng.configuration(&solo);
+        let q: [f64; NQ] = std::array::from_fn(|i| configuration[i]);
+        let v: [f64; NV] = std::array::from_fn(|_| rng.uniform(-2.0, 2.0));
+        let u: [f64; NV] = std::array::from_fn(|_| rng.uniform(-5.0, 5.0));
+        both(|| {
+            let (mut x, mut blocks) = ([f64::NAN; NV], [[[f64::NAN; NV]; NV]; 3]);
+            let [b0, b1, b2] = &mut blocks;
+            solo12_free::f64::aba_derivatives(&q, &v, &u, &mut x, b0, b1, b2);
+            (
+                x.map(f64::to_bits),
+                blocks.map(|m| m.map(|row| row.map(f64::to_bits))),
+            )
+        });
     }
 }
 

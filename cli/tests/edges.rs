@@ -161,6 +161,7 @@ fn hostile_names_generate_a_crate_that_builds_and_means_what_the_model_says() {
             "license",
             "name",
             "publish",
+            "rust-version",
             "version"
         ]
     );

@@ -374,6 +374,21 @@ pub(crate) fn function_text(
     writeln!(text, "    #[allow(unused_variables, clippy::all)]").unwrap();
     let ret = if returns { " -> S" } else { "" };
     writeln!(text, "    pub fn {name}({public_params}){ret} {{").unwrap();
+    // Matrices mostly of zeros are zeroed whole first, and their zero entries not written one by one.
+    for out in outputs {
+        if let Output::Matrix {
+            name: o,
+            rows,
+            cols,
+            values,
+        } = out
+        {
+            if crate::emit::zero_filled(values) {
+                let zero = constant_text(0.0, lanes);
+                writeln!(text, "        *{o} = [[{zero}; {cols}]; {rows}];").unwrap();
+            }
+        }
+    }
     if nslots > 0 {
         writeln!(
             text,
@@ -413,7 +428,11 @@ pub(crate) fn function_text(
                 values,
                 ..
             } => {
+                let filled = crate::emit::zero_filled(values);
                 for (k, v) in values.iter().enumerate() {
+                    if filled && crate::emit::is_positive_zero(v) {
+                        continue;
+                    }
                     if let Some(value) = outside(v) {
                         writeln!(text, "        {o}[{}][{}] = {value};", k / cols, k % cols)
                             .unwrap();

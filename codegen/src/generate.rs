@@ -48,6 +48,10 @@ pub struct GenerateOptions {
     /// Lanes of the lane modules (`f64x4`, `f32x4` for 4: every function evaluating that many states
     /// at once, one per lane); 0 for none (the default). Macro `lanes = 4`, `embedyn generate --lanes 4`.
     pub lanes: usize,
+    /// Give each large function an AVX twin that runs where the CPU has AVX (x86-64 builds without AVX
+    /// enabled; `src/dispatch.rs`, docs/generated-code.md). Default true; macro `avx_twins = false`,
+    /// `embedyn generate --no-avx-twins` (half the compile time of large functions, baseline speed).
+    pub avx_twins: bool,
 }
 
 /// Links named at generation time, by name (macro `wrenches(…)`, `frames(…)`, `reference = …`;
@@ -87,6 +91,7 @@ impl Default for GenerateOptions {
             max_compile_memory_mb: Some(crate::size::DEFAULT_COMPILE_MEMORY_MB),
             links: LinkOptions::default(),
             lanes: 0,
+            avx_twins: true,
         }
     }
 }
@@ -267,6 +272,9 @@ struct Generated {
     header: TokenStream,
     scalars: Vec<&'static str>,
     functions: Vec<Emitted>,
+    /// For each of `functions`, its code with an AVX twin where it has one: the `f64` module's copy
+    /// (src/dispatch.rs).
+    f64_twins: Vec<Option<Code>>,
     /// The same functions for the lane modules (those without a hand-written wrapper), when asked for.
     lane_functions: Vec<Emitted>,
     /// Lanes per lane module (0: none).
@@ -537,6 +545,7 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
     let wrench_frames: Vec<FrameId> = wrench_links.iter().map(|(_, f)| *f).collect();
     let wrench_names: Vec<&str> = wrench_links.iter().map(|(n, _)| n.as_str()).collect();
     let mut functions = Vec::new();
+    let mut f64_twins = Vec::new();
     let mut lane_functions = Vec::new();
     if !scalars.is_empty() {
         let instance_algorithms: Vec<Algorithm> = instances.iter().map(|i| i.algorithm).collect();
@@ -574,6 +583,15 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
                     return Err(size::refuse(loaded, &sizes, &scalars, limit.unwrap_or(0)));
                 }
             };
+            // The f64 module's copy with an AVX twin (f64 only: the twin doubles the function's compile
+            // time, src/dispatch.rs).
+            let twin = (options.avx_twins
+                && options.f64
+                && (crate::dispatch::TWIN_MIN_STATEMENTS..=crate::dispatch::TWIN_MAX_STATEMENTS)
+                    .contains(&function.statements))
+            .then(|| {
+                crate::dispatch::with_avx_twin(&function.code, &instance.name, &options.helpers)
+            });
             // Constants are folded in f64; the f32 module writes them as f32 literals.
             if options.f32 && function.largest_constant > f64::from(f32::MAX) {
                 return Err(located_at_robot(
@@ -589,6 +607,10 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
                 operations: function.operations,
                 // The lane module's copy is compiled beside each scalar's, at several times the cost.
                 compile_bytes: function.compile_bytes
+                    // The twin is one more copy, in the f64 module (this is per scalar module).
+                    + twin
+                        .as_ref()
+                        .map_or(0.0, |_| function.compile_bytes / scalars.len() as f64)
                     + lane_function
                         .as_ref()
                         .map_or(0.0, |f| size::LANE_MEMORY_FACTOR * f.compile_bytes),
@@ -598,6 +620,7 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
             // Exact for what is traced: refused as soon as that alone is too large.
             size::check(loaded, &sizes[..=k], &sizes, &scalars, limit, 1.0)?;
             functions.push(function);
+            f64_twins.push(twin);
             lane_functions.extend(lane_function);
         }
     }
@@ -719,6 +742,7 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
         header,
         scalars,
         functions,
+        f64_twins,
         lane_functions,
         lanes: options.lanes,
         helpers: options.helpers.clone(),
@@ -877,23 +901,33 @@ pub fn generate_tokens(
     options: &GenerateOptions,
 ) -> Result<TokenStream, LoadError> {
     let generated = generate_items(loaded, options)?;
+    let lex = |code: Code| match code {
+        Code::Tokens(t) => Ok(t),
+        // Lexed by syn, whose error (unlike proc_macro2's) may cross threads with the LoadError.
+        Code::Text(text) => syn::parse_str::<TokenStream>(&text)
+            .map_err(|e| located_at_robot(loaded, LoadErrorKind::Tokenize { error: e.into() })),
+    };
     let tokens = |emitted: Vec<Emitted>| {
         emitted
             .into_iter()
-            .map(|f| match f.code {
-                Code::Tokens(t) => Ok(t),
-                // Lexed by syn, whose error (unlike proc_macro2's) may cross threads with the LoadError.
-                Code::Text(text) => syn::parse_str::<TokenStream>(&text).map_err(|e| {
-                    located_at_robot(loaded, LoadErrorKind::Tokenize { error: e.into() })
-                }),
-            })
+            .map(|f| lex(f.code))
             .collect::<Result<Vec<_>, _>>()
     };
     let functions = tokens(generated.functions)?;
-    let modules = generated
-        .scalars
+    // The f64 module's: a function's twinned code where it has one (src/dispatch.rs).
+    let f64_functions = functions
         .iter()
-        .map(|scalar| scalar_module(scalar, generated.constrained, &generated.limits, &functions));
+        .zip(generated.f64_twins)
+        .map(|(plain, twin)| twin.map_or_else(|| Ok(plain.clone()), lex))
+        .collect::<Result<Vec<_>, _>>()?;
+    let modules = generated.scalars.iter().map(|scalar| {
+        let functions = if *scalar == "f64" {
+            &f64_functions
+        } else {
+            &functions
+        };
+        scalar_module(scalar, generated.constrained, &generated.limits, functions)
+    });
     let lane_functions = tokens(generated.lane_functions)?;
     let lane_modules: Vec<TokenStream> = match generated.lanes {
         0 => Vec::new(),
@@ -928,24 +962,38 @@ pub fn generate_source(loaded: &Loaded, options: &GenerateOptions) -> Result<Str
     let mut text = format_tokens(&generated.header).map_err(fail)?;
     // Each function formatted on its own inside a module, so that it is indented (and its lines
     // broken) exactly as inside the scalar module.
+    let text_of = |code: &Code| match code {
+        Code::Tokens(t) => {
+            let wrapped = format_tokens(&quote!(mod m { #t })).map_err(fail)?;
+            Ok(module_body(&wrapped).to_string())
+        }
+        Code::Text(body) => Ok(body.clone()),
+    };
     let texts = |emitted: &[Emitted]| {
         emitted
             .iter()
-            .map(|f| match &f.code {
-                Code::Tokens(t) => {
-                    let wrapped = format_tokens(&quote!(mod m { #t })).map_err(fail)?;
-                    Ok(module_body(&wrapped).to_string())
-                }
-                Code::Text(body) => Ok(body.clone()),
-            })
+            .map(|f| text_of(&f.code))
             .collect::<Result<Vec<String>, LoadError>>()
     };
     let functions = texts(&generated.functions)?;
+    // The f64 module's: a function's twinned code where it has one (src/dispatch.rs).
+    let f64_functions = functions
+        .iter()
+        .zip(&generated.f64_twins)
+        .map(|(plain, twin)| twin.as_ref().map_or_else(|| Ok(plain.clone()), text_of))
+        .collect::<Result<Vec<String>, LoadError>>()?;
     let lane_functions = texts(&generated.lane_functions)?;
     let mut modules = Vec::new();
     for scalar in &generated.scalars {
         let empty = scalar_module(scalar, generated.constrained, &generated.limits, &[]);
-        modules.push((empty, &functions));
+        modules.push((
+            empty,
+            if *scalar == "f64" {
+                &f64_functions
+            } else {
+                &functions
+            },
+        ));
     }
     if generated.lanes > 0 {
         for scalar in &generated.scalars {
@@ -1620,6 +1668,8 @@ mod tests {
                 floating: true,
                 ..ModelOptions::default()
             },
+            // (without the AVX twin, which repeats the function in a module of its own)
+            avx_twins: false,
             ..GenerateOptions::default()
         }
         .with_requested(Some(vec![Algorithm::AbaDerivatives]), &[]);
@@ -1677,6 +1727,54 @@ mod tests {
     }
 
     /// The generated source of `algorithm` alone, f64 only.
+    /// A function of at least `TWIN_MIN_STATEMENTS` statements gets an AVX twin in the f64 module only
+    /// (src/dispatch.rs), in both the source text and the macro's tokens; one below it, or with
+    /// `avx_twins` off, does not.
+    #[test]
+    fn large_functions_get_an_avx_twin_in_the_f64_module() {
+        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../models/peers/z1.urdf");
+        let loaded = crate::load(path.as_ref()).unwrap();
+        let options = |algorithm, avx_twins| {
+            GenerateOptions {
+                avx_twins,
+                ..GenerateOptions::default()
+            }
+            .with_requested(Some(vec![algorithm]), &[])
+        };
+        // The Z1's `aba_derivatives`: 11k statements.
+        let text = generate_source(&loaded, &options(Algorithm::AbaDerivatives, true)).unwrap();
+        let f32_start = text.find("pub mod f32 {").unwrap();
+        let (f64_module, f32_module) = text.split_at(f32_start);
+        assert_eq!(f64_module.matches("mod aba_derivatives_avx {").count(), 1);
+        assert_eq!(f64_module.matches("dispatch::avx()").count(), 1);
+        assert!(f64_module.contains("aba_derivatives_avx::aba_derivatives("));
+        assert!(!f32_module.contains("_avx"), "the f32 module has no twins");
+        // Every function of the twin has AVX, and only those: as many attributes as twin functions.
+        let twin = &f64_module[f64_module.find("mod aba_derivatives_avx {").unwrap()..];
+        let functions = twin
+            .lines()
+            .filter(|l| {
+                l.trim_start().starts_with("pub(super) fn ")
+                    || l.trim_start().starts_with("pub fn ")
+            })
+            .count();
+        assert!(functions > 1);
+        assert_eq!(
+            twin.matches("#[target_feature(enable = \"avx\")]").count(),
+            functions
+        );
+        let tokens = generate_tokens(&loaded, &options(Algorithm::AbaDerivatives, true))
+            .unwrap()
+            .to_string();
+        assert_eq!(tokens.matches("mod aba_derivatives_avx").count(), 1);
+
+        let without = generate_source(&loaded, &options(Algorithm::AbaDerivatives, false)).unwrap();
+        assert!(!without.contains("_avx"));
+        // Its `aba` (1.8k statements) has none.
+        let small = generate_source(&loaded, &options(Algorithm::Aba, true)).unwrap();
+        assert!(!small.contains("dispatch::avx()"));
+    }
+
     fn f64_source(loaded: &Loaded, algorithm: Algorithm) -> String {
         let options = GenerateOptions {
             f32: false,
@@ -1820,6 +1918,8 @@ mod tests {
                 ..Default::default()
             },
             lanes,
+            // (the AVX twins repeat the names in modules of their own)
+            avx_twins: false,
             ..GenerateOptions::default()
         }
         .with_requested(None, &[Algorithm::CentroidalBias, Algorithm::Centroidal]);

@@ -17,6 +17,7 @@
 pub mod algorithm;
 mod assemble;
 pub mod bounded_read;
+mod dispatch;
 mod emit;
 mod emit_large;
 mod error;

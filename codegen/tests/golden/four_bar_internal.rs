@@ -101,6 +101,7 @@ pub mod f64 {
     /// Bodies it computes, in the model's order: `crank`, `coupler`, `tip`, `rocker`.
     #[allow(unused_variables, clippy::all)]
     pub fn kinematics(q: &[S; 4], frames: &mut [[S; 12]; 4]) {
+        *frames = [[0.0; 12]; 4];
         let crank_joint_q: S = q[0];
         let coupler_joint_q: S = q[1];
         let tip_joint_q: S = q[2];
@@ -200,33 +201,11 @@ pub mod f64 {
         frames[2][9] = tip_pose_px;
         let tip_pose_pz: S = coupler_pose_pz + t73;
         frames[2][11] = tip_pose_pz;
-        frames[0][1] = 0.0;
-        frames[0][3] = 0.0;
         frames[0][4] = 1.0;
-        frames[0][5] = 0.0;
-        frames[0][7] = 0.0;
-        frames[0][9] = 0.0;
-        frames[0][10] = 0.0;
-        frames[0][11] = 0.0;
-        frames[1][1] = 0.0;
-        frames[1][3] = 0.0;
         frames[1][4] = 1.0;
-        frames[1][5] = 0.0;
-        frames[1][7] = 0.0;
-        frames[1][10] = 0.0;
-        frames[2][1] = 0.0;
-        frames[2][3] = 0.0;
         frames[2][4] = 1.0;
-        frames[2][5] = 0.0;
-        frames[2][7] = 0.0;
-        frames[2][10] = 0.0;
-        frames[3][1] = 0.0;
-        frames[3][3] = 0.0;
         frames[3][4] = 1.0;
-        frames[3][5] = 0.0;
-        frames[3][7] = 0.0;
         frames[3][9] = 0.3;
-        frames[3][10] = 0.0;
         frames[3][11] = 0.05;
     }
     /// Forward dynamics with constraint embedding: `qdd` over all spanning coordinates (the O(N) articulated-body algorithm with each aggregate link inline, unrolled); only `Xᵀ τ` acts. Returns the singularity measure, the largest condition number cond₁(Y1) over the loops: where it is not below `SINGULARITY_THRESHOLD` (`!(cond < SINGULARITY_THRESHOLD)`, which also catches NaN) the configuration is at or too near a singular one (a toggle) and `qdd` is meaningless — the interpreted solver refuses there.

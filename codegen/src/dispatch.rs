@@ -1,0 +1,268 @@
+//! AVX twins: a large function's code compiled a second time with AVX enabled, in a module of its own,
+//! and its public functions calling that copy where the CPU has AVX.
+//!
+//! Why: on x86-64 the baseline target is SSE2, whose arithmetic instructions overwrite one of their two
+//! operands, so every value the code reads twice costs a register copy first; long unrolled functions
+//! are made of such values. The same code compiled with AVX (three-operand encoding) needs none of those
+//! copies: the floating TALOS's `aba` took 0.53× the time, its `rnea` 0.85×, the floating ANYmal B's
+//! `aba_derivatives` 0.66× (2026-12-03, docs/generated-code.md). Only AVX is enabled, not FMA: the AVX
+//! copy performs the same IEEE operations in the same order, so both copies give the same bits, and a
+//! user need not know which one ran.
+//!
+//! The choice is made at run time (`helpers::dispatch::avx()`: `cpuid` once, then one atomic load), so
+//! the generated crate still runs on any x86-64 CPU and needs no build flag; a build that enables AVX
+//! itself (`-C target-cpu=native`) compiles the twin out. Other architectures never see it. The twin
+//! costs compile time (its code is optimized twice), so only functions of at least
+//! [`TWIN_MIN_STATEMENTS`] statements get one: below that the measured gain was nil (the Z1's `aba`,
+//! 1.8k operations, the same time either way).
+
+use crate::emit::Code;
+use proc_macro2::TokenStream;
+use quote::{format_ident, quote};
+
+/// Statements (a pair's operation counting once, [`crate::emit::Emitted::statements`]) from which a
+/// function gets an AVX twin. Measured with and without AVX (2026-12-03, baseline x86-64 against
+/// `-C target-feature=+avx`, one binary each): the Z1's `aba` (1,757 operations) and `rnea` the same
+/// time; the floating ANYmal B's `crba` 0.85×, `rnea` 0.91×, `aba` 0.97–1.0×; the Z1's
+/// `aba_derivatives` (11k) 0.78×; the floating G1's and TALOS's `aba` (6k) 0.53–0.56×.
+pub const TWIN_MIN_STATEMENTS: usize = 4_000;
+
+/// Statements up to which a function gets an AVX twin: beyond, the twin's compile time outweighs it
+/// (the floating TALOS's `aba_derivatives`, 135k statements, takes 10 s to compile alone; issue 12's
+/// target for the humanoid's derivatives is 20 s), and a chain of a thousand bodies would double the
+/// compiler's memory, already near the default limit.
+pub const TWIN_MAX_STATEMENTS: usize = 25_000;
+
+/// The cfg under which twins exist: an x86-64 build that does not enable AVX itself.
+fn twin_cfg() -> TokenStream {
+    quote!(#[cfg(all(target_arch = "x86_64", not(target_feature = "avx")))])
+}
+
+/// `code` (the items of function `function`: its public functions and part modules) with an AVX twin:
+/// the items as they are, each public function first calling its twin where the CPU has AVX, and the
+/// items again in module `{function}_avx`, every function in them compiled with AVX. (The module is in
+/// the type namespace, where the scalar module holds only the part modules, `aba_parts_0`, and CamelCase
+/// types besides.)
+pub fn with_avx_twin(code: &Code, function: &str, helpers: &TokenStream) -> Code {
+    let twin_module = format!("{function}_avx");
+    match code {
+        Code::Tokens(tokens) => {
+            Code::Tokens(tokens_with_twin(tokens.clone(), &twin_module, helpers))
+        }
+        Code::Text(text) => Code::Text(text_with_twin(text, &twin_module, helpers)),
+    }
+}
+
+/// The statement a public function starts with: `return` its twin's result where the CPU has AVX.
+fn dispatch_statement(
+    signature: &syn::Signature,
+    twin_module: &str,
+    helpers: &TokenStream,
+) -> TokenStream {
+    let module = format_ident!("{}", twin_module);
+    let name = &signature.ident;
+    let arguments = signature.inputs.iter().map(|input| match input {
+        syn::FnArg::Typed(typed) => {
+            let pattern = &typed.pat;
+            quote!(#pattern)
+        }
+        syn::FnArg::Receiver(_) => unreachable!("generated functions are free functions"),
+    });
+    let cfg = twin_cfg();
+    quote! {
+        #cfg
+        if #helpers::dispatch::avx() {
+            // SAFETY: the CPU has AVX (`dispatch::avx` asked it), the one requirement of the twin.
+            return unsafe { #module::#name(#(#arguments),*) };
+        }
+    }
+}
+
+/// The attribute every function of a twin carries.
+fn avx_attribute() -> syn::Attribute {
+    syn::parse_quote!(#[target_feature(enable = "avx")])
+}
+
+/// Adds the AVX attribute to every function among `items`, in nested modules too.
+fn enable_avx(items: &mut [syn::Item]) {
+    for item in items {
+        match item {
+            syn::Item::Fn(function) => function.attrs.push(avx_attribute()),
+            syn::Item::Mod(module) => {
+                if let Some((_, inner)) = &mut module.content {
+                    enable_avx(inner);
+                }
+            }
+            _ => {}
+        }
+    }
+}
+
+fn tokens_with_twin(tokens: TokenStream, twin_module: &str, helpers: &TokenStream) -> TokenStream {
+    let file: syn::File = syn::parse2(tokens).expect("generated code parses as items");
+    let mut twin = file.items.clone();
+    enable_avx(&mut twin);
+    let mut items = file.items;
+    for item in &mut items {
+        if let syn::Item::Fn(function) = item {
+            if matches!(function.vis, syn::Visibility::Public(_)) {
+                let statement = dispatch_statement(&function.sig, twin_module, helpers);
+                let statement: syn::Stmt =
+                    syn::parse2(quote!({ #statement })).expect("the dispatch statement parses");
+                // `{ … }` parsed as one block statement: unwrap it to keep the `if` at the top level.
+                let statement = match statement {
+                    syn::Stmt::Expr(syn::Expr::Block(block), _) => block.block.stmts,
+                    other => vec![other],
+                };
+                function.block.stmts.splice(0..0, statement);
+            }
+        }
+    }
+    let module = format_ident!("{}", twin_module);
+    let cfg = twin_cfg();
+    quote! {
+        #(#items)*
+        #cfg
+        /// The functions above compiled with AVX (see `helpers::dispatch`).
+        mod #module {
+            #[allow(unused_imports)]
+            use super::*;
+            #(#twin)*
+        }
+    }
+}
+
+/// Whether a trimmed line starts a function item (`fn`, `pub fn`, `pub(super) fn`): the emitters write
+/// no other line that way (bodies are `let` statements and assignments, docs start with `///`).
+fn starts_function(trimmed: &str) -> bool {
+    ["fn ", "pub fn ", "pub(super) fn ", "pub(crate) fn "]
+        .iter()
+        .any(|p| trimmed.starts_with(p))
+}
+
+/// The same for text written by [`crate::emit_large`] (items indented by four spaces, each function's
+/// signature ending on the first line at its indentation that ends with `{`).
+fn text_with_twin(text: &str, twin_module: &str, helpers: &TokenStream) -> String {
+    let lines: Vec<&str> = text.lines().collect();
+    let mut portable = String::with_capacity(text.len() + 1024);
+    let mut twin = String::with_capacity(text.len() + 65_536);
+    let mut i = 0;
+    while i < lines.len() {
+        let line = lines[i];
+        let trimmed = line.trim_start();
+        let indent = &line[..line.len() - trimmed.len()];
+        if starts_function(trimmed) {
+            twin.push_str("    ");
+            twin.push_str(indent);
+            twin.push_str("#[target_feature(enable = \"avx\")]\n");
+        }
+        if trimmed.starts_with("pub fn ") && indent.len() == 4 {
+            // A public function: its whole signature, then the dispatch as its first statement.
+            let start = i;
+            while !(lines[i].starts_with("    ") && lines[i].trim_end().ends_with('{')) {
+                i += 1;
+            }
+            let mut signature = String::new();
+            for l in &lines[start..=i] {
+                portable.push_str(l);
+                portable.push('\n');
+                push_line(&mut twin, l);
+                signature.push_str(l.trim());
+                signature.push(' ');
+            }
+            // The signature without `pub` and the opening brace.
+            let signature = signature.trim_end().trim_end_matches('{');
+            let signature = signature.strip_prefix("pub ").unwrap_or(signature);
+            let signature: syn::Signature =
+                syn::parse_str(signature).expect("a generated signature parses");
+            let statement = dispatch_statement(&signature, twin_module, helpers);
+            let wrapped = crate::generate::format_tokens(&quote!(fn f() { #statement }))
+                .expect("the dispatch statement formats");
+            // The body of the formatted `fn f() { … }`, indented once more for the function's body.
+            for l in wrapped.lines().filter(|l| l.starts_with("    ")) {
+                portable.push_str("    ");
+                portable.push_str(l);
+                portable.push('\n');
+            }
+            i += 1;
+            continue;
+        }
+        portable.push_str(line);
+        portable.push('\n');
+        push_line(&mut twin, line);
+        i += 1;
+    }
+    format!(
+        "{portable}    #[cfg(all(target_arch = \"x86_64\", not(target_feature = \"avx\")))]\n    /// The functions above compiled with AVX (see `helpers::dispatch`).\n    mod {twin_module} {{\n        #[allow(unused_imports)]\n        use super::*;\n{twin}    }}\n"
+    )
+}
+
+/// A line of the twin, indented once more (it sits in the twin's module).
+fn push_line(twin: &mut String, line: &str) {
+    if !line.is_empty() {
+        twin.push_str("    ");
+    }
+    twin.push_str(line);
+    twin.push('\n');
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn helpers() -> TokenStream {
+        quote!(crate::helpers)
+    }
+
+    #[test]
+    fn tokens_get_a_dispatch_and_a_twin_with_avx_everywhere() {
+        let code = quote! {
+            mod f_parts_0 {
+                use super::*;
+                pub(super) fn f_part(q: &[S; 2], s: &mut [S; 1]) { s[0] = q[0]; }
+            }
+            use self::f_parts_0::f_part;
+            pub fn f(q: &[S; 2], out: &mut [S; 1]) -> S { let mut s = [0.0; 1]; f_part(q, &mut s); out[0] = s[0]; s[0] }
+        };
+        let Code::Tokens(out) = with_avx_twin(&Code::Tokens(code), "f", &helpers()) else {
+            panic!("tokens stay tokens")
+        };
+        let text = crate::generate::format_tokens(&quote!(mod m { #out })).unwrap();
+        assert_eq!(
+            text.matches("#[target_feature(enable = \"avx\")]").count(),
+            2,
+            "{text}"
+        );
+        assert!(
+            text.contains("if crate::helpers::dispatch::avx() {"),
+            "{text}"
+        );
+        assert!(
+            text.contains("return unsafe { f_avx::f(q, out) };"),
+            "{text}"
+        );
+        assert_eq!(
+            text.matches("dispatch::avx").count(),
+            1,
+            "the twin must not dispatch: {text}"
+        );
+        assert!(text.contains("mod f_avx {"), "{text}");
+    }
+
+    #[test]
+    fn text_gets_a_dispatch_and_a_twin_with_avx_everywhere() {
+        let text = "    mod g_parts_0 {\n        #[allow(unused_imports)]\n        use super::*;\n        #[inline(never)]\n        pub(super) fn g_part(q: &[S; 2], s: &mut [S; 1]) {\n            s[0] = q[0];\n        }\n    }\n    use self::g_parts_0::g_part;\n    /// Doc.\n    pub fn g(\n        q: &[S; 2],\n        out: &mut [[S; 1]; 1],\n    ) {\n        let mut s: [S; 1] = [0.0; 1];\n        g_part(q, &mut s);\n        out[0][0] = s[0];\n    }\n";
+        let Code::Text(out) = with_avx_twin(&Code::Text(text.to_string()), "g", &helpers()) else {
+            panic!("text stays text")
+        };
+        assert_eq!(
+            out.matches("#[target_feature(enable = \"avx\")]").count(),
+            2,
+            "{out}"
+        );
+        assert_eq!(out.matches("dispatch::avx()").count(), 1, "{out}");
+        assert!(out.contains("return unsafe { g_avx::g(q, out) };"), "{out}");
+        // Both copies parse as items.
+        syn::parse_str::<syn::File>(&out).unwrap();
+    }
+}
