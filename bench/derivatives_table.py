@@ -25,7 +25,7 @@ def operations(urdf, floating, function):
     its AVX twin, the same code again in a module of its own (docs/generated-code.md)."""
     with tempfile.TemporaryDirectory() as out:
         args = ["cargo", "run", "-q", "--release", "-p", "embedyn-cli", "--", "generate", urdf, "--only", function,
-                "--scalar", "f64", "--no-avx-twins", "--out", out] + (["--floating"] if floating else [])
+                "--scalar", "f64", "--avx-twins", "none", "--out", out] + (["--floating"] if floating else [])
         subprocess.run(args, cwd=ROOT, check=True, capture_output=True)
         text = open(os.path.join(out, "src", "lib.rs")).read()
     body = text[text.index("pub mod f64"):]

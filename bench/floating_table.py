@@ -72,6 +72,15 @@ def main():
             )
     lines += [
         "",
+        "AVX twins against the baseline copies, in one binary (`helpers::dispatch::use_avx` switched between 9 "
+        "interleaved rounds, 2026-12-03; the same bits): the floating G1's `aba` 1,030 against 1,854 ns (0.56×; "
+        "TALOS's 0.53× in a build with and one without AVX), `rnea` 0.92× and `crba` 0.97× (these two have no twin: "
+        "below 4,000 statements; they gain only the sines and cosines' AVX copy). The baseline copy of the "
+        "humanoids' `aba` runs 13.5k instructions of which 5.5k are register copies (SSE2 overwrites an operand); "
+        "the AVX copy needs none of them. Before the twins, and before `crba` zeroed M whole instead of storing "
+        "its 762 zeros one by one (TALOS: 0.9× the time), the ratios were `aba` 0.24–0.25, `crba` 0.25–0.27 "
+        "(2026-12-03, an earlier run on this host).",
+        "",
         "Side by side in one binary (generated crates of each variant linked together, bit-identical results, 9 interleaved "
         "rounds, 2026-12-02): the floating G1's paired `aba` in parts of 1,000 / 2,000 / 4,000 statements / one "
         "part took 2,077 / 1,900 / 1,800 / 1,669 ns, `rnea` 1,130 / 1,030 / 936 / 922 ns, `crba` 1,173 / 1,118 / "
@@ -107,7 +116,7 @@ def main():
         "one binary, output no longer valid): without the 703 stores of the upper triangle it takes 0.84× the time, "
         "with only the diagonal (the composite inertias and the 32 sines and cosines, which alone take about 90 ns) "
         "0.44×. So the columns and their stores cost about half; the 0.2 target for the humanoids' `crba` and `aba` "
-        "on this host needs fewer bytes of code per operation (spills, copies, stores), not fewer operations.",
+        "on this host needs fewer bytes of code per operation (spills, copies, stores), not fewer operations. The AVX twins are that for `aba` (above); `crba`, below 4,000 statements, has none: its twin measured 0.93× the time (TALOS, a build with AVX against one without), which would leave the G1 at about 0.205, and would take the G1's default functions from 8.1 to about 9.6 s of issue 13's 10 s compile budget.",
     ]
     write_section("\n".join(lines) + "\n")
 

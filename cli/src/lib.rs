@@ -221,11 +221,10 @@ pub enum Command {
         /// f64, 4 or 8 for f32): every function evaluating that many states at once, one per SIMD lane.
         #[arg(long, value_name = "N")]
         lanes: Option<usize>,
-        /// Leave out the AVX copies of the large functions (x86-64: they run where the CPU has AVX, same
-        /// results, about half the time of the largest; leaving them out halves those functions' compile
-        /// time).
-        #[arg(long)]
-        no_avx_twins: bool,
+        /// Which f64 functions also get an AVX copy that runs where the CPU has it (x86-64; same results,
+        /// up to half the time): `large` (4,000 to 25,000 statements), `all`, or `none` (less compile time).
+        #[arg(long, value_parser = ["none", "large", "all"], default_value = "large")]
+        avx_twins: String,
     },
     /// Time every algorithm for each engine and scalar (median ns per call, in-process, pre-generated
     /// random states).
@@ -859,7 +858,7 @@ pub fn run(cli: Cli) -> Result<Printed, CliError> {
             frames,
             reference,
             lanes,
-            no_avx_twins,
+            avx_twins,
         } => {
             if lanes == Some(0) {
                 return Err(CliError::BadOption {
@@ -871,7 +870,8 @@ pub fn run(cli: Cli) -> Result<Printed, CliError> {
             let loaded = load_reporting(&model)?;
             let options = embedyn_codegen::GenerateOptions {
                 lanes: lanes.unwrap_or(0),
-                avx_twins: !no_avx_twins,
+                avx_twins: embedyn_codegen::AvxTwins::from_name(&avx_twins)
+                    .expect("clap checked the value"),
                 model: scene.options_for(&loaded),
                 f64: scalar != Some(Scalar::F32),
                 f32: scalar != Some(Scalar::F64),

@@ -6,8 +6,9 @@
 //! are made of such values. The same code compiled with AVX (three-operand encoding) needs none of those
 //! copies: the floating TALOS's `aba` took 0.53× the time, its `rnea` 0.85×, the floating ANYmal B's
 //! `aba_derivatives` 0.66× (2026-12-03, docs/generated-code.md). Only AVX is enabled, not FMA: the AVX
-//! copy performs the same IEEE operations in the same order, so both copies give the same bits, and a
-//! user need not know which one ran.
+//! copy performs the same IEEE operations in the same order, so both copies give the same bits (but for
+//! the sign and payload of a NaN: x86 passes on the first operand's NaN, and the two copies may order a
+//! commutative operation's operands differently), and a user need not know which one ran.
 //!
 //! The choice is made at run time (`helpers::dispatch::avx()`: `cpuid` once, then one atomic load), so
 //! the generated crate still runs on any x86-64 CPU and needs no build flag; a build that enables AVX
@@ -32,6 +33,41 @@ pub const TWIN_MIN_STATEMENTS: usize = 4_000;
 /// target for the humanoid's derivatives is 20 s), and a chain of a thousand bodies would double the
 /// compiler's memory, already near the default limit.
 pub const TWIN_MAX_STATEMENTS: usize = 25_000;
+
+/// Which generated functions get an AVX twin (macro `avx_twins = none|large|all`, `embedyn generate
+/// --avx-twins none|large|all`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum AvxTwins {
+    /// None: one copy of every function, half the compile time of the large ones.
+    None,
+    /// The `f64` functions of [`TWIN_MIN_STATEMENTS`] to [`TWIN_MAX_STATEMENTS`] statements (the default).
+    #[default]
+    Large,
+    /// Every `f64` function (each costs about twice its compile time more; the gain below
+    /// [`TWIN_MIN_STATEMENTS`] was small or nil where measured).
+    All,
+}
+
+impl AvxTwins {
+    /// The option's value by name (`none`, `large`, `all`).
+    pub fn from_name(name: &str) -> Option<AvxTwins> {
+        match name {
+            "none" => Some(AvxTwins::None),
+            "large" => Some(AvxTwins::Large),
+            "all" => Some(AvxTwins::All),
+            _ => None,
+        }
+    }
+
+    /// Whether a function of `statements` statements gets a twin.
+    pub fn twins(self, statements: usize) -> bool {
+        match self {
+            AvxTwins::None => false,
+            AvxTwins::Large => (TWIN_MIN_STATEMENTS..=TWIN_MAX_STATEMENTS).contains(&statements),
+            AvxTwins::All => true,
+        }
+    }
+}
 
 /// The cfg under which twins exist: an x86-64 build that does not enable AVX itself.
 fn twin_cfg() -> TokenStream {

@@ -48,10 +48,10 @@ pub struct GenerateOptions {
     /// Lanes of the lane modules (`f64x4`, `f32x4` for 4: every function evaluating that many states
     /// at once, one per lane); 0 for none (the default). Macro `lanes = 4`, `embedyn generate --lanes 4`.
     pub lanes: usize,
-    /// Give each large function an AVX twin that runs where the CPU has AVX (x86-64 builds without AVX
-    /// enabled; `src/dispatch.rs`, docs/generated-code.md). Default true; macro `avx_twins = false`,
-    /// `embedyn generate --no-avx-twins` (half the compile time of large functions, baseline speed).
-    pub avx_twins: bool,
+    /// Which `f64` functions get an AVX twin that runs where the CPU has AVX (x86-64 builds without AVX
+    /// enabled; `src/dispatch.rs`, docs/generated-code.md). Default: the large ones; macro
+    /// `avx_twins = none|large|all`, `embedyn generate --avx-twins none|large|all`.
+    pub avx_twins: crate::AvxTwins,
 }
 
 /// Links named at generation time, by name (macro `wrenches(…)`, `frames(…)`, `reference = …`;
@@ -91,7 +91,7 @@ impl Default for GenerateOptions {
             max_compile_memory_mb: Some(crate::size::DEFAULT_COMPILE_MEMORY_MB),
             links: LinkOptions::default(),
             lanes: 0,
-            avx_twins: true,
+            avx_twins: crate::AvxTwins::Large,
         }
     }
 }
@@ -585,11 +585,7 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
             };
             // The f64 module's copy with an AVX twin (f64 only: the twin doubles the function's compile
             // time, src/dispatch.rs).
-            let twin = (options.avx_twins
-                && options.f64
-                && (crate::dispatch::TWIN_MIN_STATEMENTS..=crate::dispatch::TWIN_MAX_STATEMENTS)
-                    .contains(&function.statements))
-            .then(|| {
+            let twin = (options.f64 && options.avx_twins.twins(function.statements)).then(|| {
                 crate::dispatch::with_avx_twin(&function.code, &instance.name, &options.helpers)
             });
             // Constants are folded in f64; the f32 module writes them as f32 literals.
@@ -827,6 +823,10 @@ fn scalar_module(
         #[allow(clippy::all, clippy::pedantic, unused_parens, non_snake_case, dead_code)]
         pub mod #module {
             type S = #module;
+            // The model's sizes by the path a function one module deeper names them (`super::NQ`): a
+            // function's AVX twin (codegen/src/dispatch.rs) holds a copy of `complete`.
+            #[allow(unused_imports)]
+            use super::{NQ, NV};
             #threshold
             #limits
             #(#functions)*
@@ -887,6 +887,7 @@ fn lane_module(
             const PAIRED_BATCH_PER_STATE: bool = cfg!(not(target_feature = "avx"))
                 && LANES == 4
                 && ::core::mem::size_of::<E>() == 8;
+            #[allow(unused_imports)]
             use super::#scalar_ident as scalar_module;
             #thresholds
             #(#functions)*
@@ -1669,7 +1670,7 @@ mod tests {
                 ..ModelOptions::default()
             },
             // (without the AVX twin, which repeats the function in a module of its own)
-            avx_twins: false,
+            avx_twins: crate::AvxTwins::None,
             ..GenerateOptions::default()
         }
         .with_requested(Some(vec![Algorithm::AbaDerivatives]), &[]);
@@ -1734,9 +1735,13 @@ mod tests {
     fn large_functions_get_an_avx_twin_in_the_f64_module() {
         let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../models/peers/z1.urdf");
         let loaded = crate::load(path.as_ref()).unwrap();
-        let options = |algorithm, avx_twins| {
+        let options = |algorithm, twins: bool| {
             GenerateOptions {
-                avx_twins,
+                avx_twins: if twins {
+                    crate::AvxTwins::Large
+                } else {
+                    crate::AvxTwins::None
+                },
                 ..GenerateOptions::default()
             }
             .with_requested(Some(vec![algorithm]), &[])
@@ -1919,7 +1924,7 @@ mod tests {
             },
             lanes,
             // (the AVX twins repeat the names in modules of their own)
-            avx_twins: false,
+            avx_twins: crate::AvxTwins::None,
             ..GenerateOptions::default()
         }
         .with_requested(None, &[Algorithm::CentroidalBias, Algorithm::Centroidal]);

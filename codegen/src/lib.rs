@@ -18,6 +18,7 @@ pub mod algorithm;
 mod assemble;
 pub mod bounded_read;
 mod dispatch;
+pub use dispatch::AvxTwins;
 mod emit;
 mod emit_large;
 mod error;

@@ -28,8 +28,8 @@ struct Args {
     max_compile_memory: u64,
     /// `lanes = N`: lane modules (`f64xN`, …) of `N` states per call; 0 for none.
     lanes: usize,
-    /// `no_avx_twins`: no AVX copies of the large functions (`GenerateOptions::avx_twins`).
-    avx_twins: bool,
+    /// `avx_twins = none|large|all` (`GenerateOptions::avx_twins`).
+    avx_twins: embedyn_codegen::AvxTwins,
     /// `gravity = [x, y, z]` (m/s², world frame).
     gravity: Option<[f64; 3]>,
     /// `lock(joint = value, …)`.
@@ -143,7 +143,7 @@ impl Parse for Args {
             only: None,
             max_compile_memory: embedyn_codegen::DEFAULT_COMPILE_MEMORY_MB,
             lanes: 0,
-            avx_twins: true,
+            avx_twins: embedyn_codegen::AvxTwins::Large,
             gravity: None,
             locks: Vec::new(),
             rotors: embedyn_codegen::Rotors::Exact,
@@ -183,7 +183,7 @@ impl Parse for Args {
                 "rotors",
                 "max_compile_memory",
                 "lanes",
-                "no_avx_twins",
+                "avx_twins",
             ];
             let name = key.to_string();
             if single.contains(&name.as_str()) || (name == "gravity" && input.peek(Token![=])) {
@@ -191,7 +191,17 @@ impl Parse for Args {
             }
             match name.as_str() {
                 "floating" => args.floating = true,
-                "no_avx_twins" => args.avx_twins = false,
+                "avx_twins" => {
+                    input.parse::<Token![=]>()?;
+                    let value: Ident = input.parse()?;
+                    args.avx_twins = embedyn_codegen::AvxTwins::from_name(&value.to_string())
+                        .ok_or_else(|| {
+                            syn::Error::new(
+                                value.span(),
+                                "avx_twins = none|large|all (which f64 functions get an AVX copy; default large)",
+                            )
+                        })?;
+                }
                 // (`gravity` alone asks for the function, `gravity = [x, y, z]` sets the vector.)
                 name if on_request().any(|a| a.name() == name) && !input.peek(Token![=]) => args
                     .requested
@@ -279,7 +289,7 @@ impl Parse for Args {
                     return Err(syn::Error::new(
                         key.span(),
                         format!(
-                            "unknown option `{other}` (expected floating, {}, f64_only, f32_only, only(…), gravity = [x, y, z], lock(joint = value, …), rotors = exact|reflected, wrenches(link, …), frames(link, …), reference = local|local_world_aligned|world, max_compile_memory = MB, lanes = N, no_avx_twins or crate = path)",
+                            "unknown option `{other}` (expected floating, {}, f64_only, f32_only, only(…), gravity = [x, y, z], lock(joint = value, …), rotors = exact|reflected, wrenches(link, …), frames(link, …), reference = local|local_world_aligned|world, max_compile_memory = MB, lanes = N, avx_twins = none|large|all or crate = path)",
                             requested.join(", ")
                         ),
                     ));

@@ -593,13 +593,15 @@ fn place_in_quadrant(n: u64, s: f64, c: f64) -> (f64, f64) {
     (f64::from_bits(a ^ sin_sign), f64::from_bits(b ^ cos_sign))
 }
 
-/// Whether the generated functions that have an AVX twin run it (x86-64 only; see [`use_avx`]).
+/// Whether the generated functions that have an AVX twin run it (x86-64 only; see `use_avx`).
 ///
 /// Large generated functions are compiled twice on x86-64: for the baseline target (SSE2) and, in a
 /// module of their own, with AVX enabled. They run the AVX copy when the CPU has AVX (and the operating
 /// system saves its registers), found out once with `cpuid` and cached. The two copies compute the same
 /// operations in the same order (AVX's three-operand encoding of them, no fused multiply-add), so their
-/// results are the same bits; the AVX copy needs no register-to-register copies, which SSE2's
+/// results are the same bits (but for the sign and payload of a NaN, which x86 takes from the first
+/// operand of the two, and the copies may order them differently); the AVX copy needs no
+/// register-to-register copies, which SSE2's
 /// two-operand instructions spend on every value read twice (measured: the floating TALOS's `aba` 0.53×
 /// the time, docs/generated-code.md "AVX where the CPU has it").
 #[cfg(target_arch = "x86_64")]
@@ -625,7 +627,9 @@ pub mod dispatch {
 
     /// Turns the AVX copies off (`false`: every function runs its baseline copy) or back on (`true`,
     /// the default: they run where the CPU has AVX). For comparing the two copies, or timing the baseline
-    /// code on a CPU that has AVX; process-wide.
+    /// code on a CPU that has AVX. It holds for every function that calls these helpers: with the
+    /// `robot!` macro every robot of the program (`embedyn::codegen_support`), with a standalone crate
+    /// that crate's functions (each has its own `helpers`).
     pub fn use_avx(allowed: bool) {
         ALLOWED.store(allowed, Ordering::Relaxed);
     }

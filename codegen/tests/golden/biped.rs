@@ -69,6 +69,8 @@ pub mod frames {
 #[allow(clippy::all, clippy::pedantic, unused_parens, non_snake_case, dead_code)]
 pub mod f64 {
     type S = f64;
+    #[allow(unused_imports)]
+    use super::{NQ, NV};
     /// Lower position limit of each coordinate of `q` (rad or m; `<limit lower>`): `-INFINITY`
     /// where the model gives none (continuous and floating joints, a missing attribute).
     pub const LOWER: [S; super::NQ] = [-1.0, 0.0, -1.0, 0.0];

@@ -74,6 +74,8 @@ pub mod frames {
 #[allow(clippy::all, clippy::pedantic, unused_parens, non_snake_case, dead_code)]
 pub mod f64 {
     type S = f64;
+    #[allow(unused_imports)]
+    use super::{NQ, NV};
     /// cond₁(Y1) at or above which a configuration counts as singular in this scalar type,
     /// `min(1e10, 10⁻³ / ε)`: where the condition number returned by `aba`, `embedding` or
     /// `crba_independent` is not below it (`cond.is_nan() || cond >= SINGULARITY_THRESHOLD`), the
