@@ -1773,6 +1773,22 @@ mod tests {
             .to_string();
         assert_eq!(tokens.matches("mod aba_derivatives_avx").count(), 1);
 
+        // The standalone crate's README names it.
+        #[cfg(feature = "standalone")]
+        {
+            let files =
+                crate::standalone::crate_files(&loaded, &options(Algorithm::AbaDerivatives, true))
+                    .unwrap();
+            let readme = &files
+                .iter()
+                .find(|(p, _)| p.ends_with("README.md"))
+                .unwrap()
+                .1;
+            assert!(
+                readme.contains("function `aba_derivatives` is also compiled with AVX"),
+                "{readme}"
+            );
+        }
         let without = generate_source(&loaded, &options(Algorithm::AbaDerivatives, false)).unwrap();
         assert!(!without.contains("_avx"));
         // Its `aba` (1.8k statements) has none.

@@ -227,6 +227,25 @@ pub fn crate_files(
             modules = modules.join(" and ")
         ));
     }
+    // The functions with an AVX twin: their twins' modules (`mod aba_avx {`), at the f64 module's level.
+    let twinned: Vec<String> = body
+        .lines()
+        .filter_map(|l| l.strip_prefix("    mod ")?.strip_suffix("_avx {"))
+        .map(|f| format!("`{f}`"))
+        .collect();
+    if !twinned.is_empty() {
+        readme.push_str(&format!(
+            "On x86-64 the `f64` module's {} also compiled with AVX, and run that copy where the CPU has AVX \
+             (the same results, up to half the time; `helpers::dispatch::use_avx(false)` runs the baseline copies, \
+             e.g. to compare them; `embedyn generate --avx-twins none` leaves them out: embedyn's \
+             docs/generated-code.md, \"AVX where the CPU has it\").\n\n",
+            if twinned.len() == 1 {
+                format!("function {} is", twinned[0])
+            } else {
+                format!("functions {} are", twinned.join(", "))
+            }
+        ));
+    }
     let constrained = model.has_constraints();
     for a in options.generated_algorithms(constrained) {
         readme.push_str(&a.spec().readme_line(constrained));

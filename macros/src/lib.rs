@@ -192,13 +192,20 @@ impl Parse for Args {
             match name.as_str() {
                 "floating" => args.floating = true,
                 "avx_twins" => {
+                    const VALUES: &str =
+                        "avx_twins = none|large|all (which f64 functions get an AVX copy; default large)";
+                    if !input.peek(Token![=]) {
+                        return Err(syn::Error::new(key.span(), VALUES));
+                    }
                     input.parse::<Token![=]>()?;
-                    let value: Ident = input.parse()?;
+                    let value = input
+                        .parse::<Ident>()
+                        .map_err(|e| syn::Error::new(e.span(), VALUES))?;
                     args.avx_twins = embedyn_codegen::AvxTwins::from_name(&value.to_string())
                         .ok_or_else(|| {
                             syn::Error::new(
                                 value.span(),
-                                "avx_twins = none|large|all (which f64 functions get an AVX copy; default large)",
+                                format!("unknown value `{value}`: {VALUES}"),
                             )
                         })?;
                 }
