@@ -15,7 +15,9 @@ mod chain24 {
     embedyn::robot!(
         "tests/data/scale/chain24.urdf",
         minv,
-        max_compile_memory = 4096
+        max_compile_memory = 4096,
+        // (the AVX twins are tested in generated_derivatives.rs; these four would add their compile time)
+        avx_twins = none
     );
 }
 
@@ -109,7 +111,12 @@ fn split_chain_generated_matches_interpreted() {
 mod twin_arms {
     // Two identical 26-link arms: `crba` (17,498 operations, 8,849 statements with the arms side by side)
     // is a paired body of five parts, whose values cross between parts as scalars (`s`) and pairs (`sp`).
-    embedyn::robot!("tests/data/scale/twin_arms.urdf", f64_only, only(crba));
+    embedyn::robot!(
+        "tests/data/scale/twin_arms.urdf",
+        f64_only,
+        only(crba),
+        avx_twins = none
+    );
 }
 
 /// A paired body cut into parts computes the interpreted mass matrix (1e-12 relative).
