@@ -288,6 +288,46 @@ struct Generated {
     limits: LimitTables,
 }
 
+impl Generated {
+    /// The scalar modules' functions, each written by `render` (as tokens or as text): the plain code,
+    /// and for the `f64` module a function's code with its AVX twin where it has one (src/dispatch.rs).
+    fn scalar_functions<T: Clone, E>(
+        &self,
+        render: impl Fn(&Code) -> Result<T, E>,
+    ) -> Result<ScalarFunctions<T>, E> {
+        let plain = self
+            .functions
+            .iter()
+            .map(|f| render(&f.code))
+            .collect::<Result<Vec<T>, E>>()?;
+        let f64 = plain
+            .iter()
+            .zip(&self.f64_twins)
+            .map(|(plain, twin)| twin.as_ref().map_or_else(|| Ok(plain.clone()), &render))
+            .collect::<Result<Vec<T>, E>>()?;
+        Ok(ScalarFunctions { plain, f64 })
+    }
+}
+
+/// The functions of the scalar modules ([`Generated::scalar_functions`]).
+struct ScalarFunctions<T> {
+    /// Every function as traced (the `f32` module's).
+    plain: Vec<T>,
+    /// The `f64` module's: with AVX twins.
+    f64: Vec<T>,
+}
+
+impl<T> ScalarFunctions<T> {
+    /// The functions of the module of `scalar`.
+    fn of(&self, scalar: &str) -> &[T] {
+        if scalar == "f64" {
+            &self.f64
+        } else {
+            &self.plain
+        }
+    }
+}
+
 /// Each coordinate's limits (`None` where the model gives none): position limits per entry of `q`,
 /// velocity and effort limits per entry of `v`.
 struct LimitTables {
@@ -902,34 +942,26 @@ pub fn generate_tokens(
     options: &GenerateOptions,
 ) -> Result<TokenStream, LoadError> {
     let generated = generate_items(loaded, options)?;
-    let lex = |code: Code| match code {
-        Code::Tokens(t) => Ok(t),
+    let lex = |code: &Code| match code {
+        Code::Tokens(t) => Ok(t.clone()),
         // Lexed by syn, whose error (unlike proc_macro2's) may cross threads with the LoadError.
-        Code::Text(text) => syn::parse_str::<TokenStream>(&text)
+        Code::Text(text) => syn::parse_str::<TokenStream>(text)
             .map_err(|e| located_at_robot(loaded, LoadErrorKind::Tokenize { error: e.into() })),
     };
-    let tokens = |emitted: Vec<Emitted>| {
-        emitted
-            .into_iter()
-            .map(|f| lex(f.code))
-            .collect::<Result<Vec<_>, _>>()
-    };
-    let functions = tokens(generated.functions)?;
-    // The f64 module's: a function's twinned code where it has one (src/dispatch.rs).
-    let f64_functions = functions
-        .iter()
-        .zip(generated.f64_twins)
-        .map(|(plain, twin)| twin.map_or_else(|| Ok(plain.clone()), lex))
-        .collect::<Result<Vec<_>, _>>()?;
+    let functions = generated.scalar_functions(lex)?;
     let modules = generated.scalars.iter().map(|scalar| {
-        let functions = if *scalar == "f64" {
-            &f64_functions
-        } else {
-            &functions
-        };
-        scalar_module(scalar, generated.constrained, &generated.limits, functions)
+        scalar_module(
+            scalar,
+            generated.constrained,
+            &generated.limits,
+            functions.of(scalar),
+        )
     });
-    let lane_functions = tokens(generated.lane_functions)?;
+    let lane_functions = generated
+        .lane_functions
+        .iter()
+        .map(|f| lex(&f.code))
+        .collect::<Result<Vec<_>, _>>()?;
     let lane_modules: Vec<TokenStream> = match generated.lanes {
         0 => Vec::new(),
         n => generated
@@ -970,31 +1002,16 @@ pub fn generate_source(loaded: &Loaded, options: &GenerateOptions) -> Result<Str
         }
         Code::Text(body) => Ok(body.clone()),
     };
-    let texts = |emitted: &[Emitted]| {
-        emitted
-            .iter()
-            .map(|f| text_of(&f.code))
-            .collect::<Result<Vec<String>, LoadError>>()
-    };
-    let functions = texts(&generated.functions)?;
-    // The f64 module's: a function's twinned code where it has one (src/dispatch.rs).
-    let f64_functions = functions
+    let functions = generated.scalar_functions(text_of)?;
+    let lane_functions = generated
+        .lane_functions
         .iter()
-        .zip(&generated.f64_twins)
-        .map(|(plain, twin)| twin.as_ref().map_or_else(|| Ok(plain.clone()), text_of))
+        .map(|f| text_of(&f.code))
         .collect::<Result<Vec<String>, LoadError>>()?;
-    let lane_functions = texts(&generated.lane_functions)?;
     let mut modules = Vec::new();
     for scalar in &generated.scalars {
         let empty = scalar_module(scalar, generated.constrained, &generated.limits, &[]);
-        modules.push((
-            empty,
-            if *scalar == "f64" {
-                &f64_functions
-            } else {
-                &functions
-            },
-        ));
+        modules.push((empty, functions.of(scalar)));
     }
     if generated.lanes > 0 {
         for scalar in &generated.scalars {
