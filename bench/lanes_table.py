@@ -20,8 +20,9 @@ def load(name):
 
 
 def main():
-    builds = [("baseline x86-64 (SSE2)", load("lanes_baseline.json")),
-              ("`-C target-cpu=native` (AVX2)", load("lanes_native.json"))]
+    builds = [("baseline x86-64, AVX twins (default)", load("lanes_baseline.json")),
+              ("baseline x86-64, SSE2 copies (`use_avx(false)`)", load("lanes_baseline_copies.json")),
+              ("`-C target-cpu=native`", load("lanes_native.json"))]
     copies = builds[0][1]["copies"]
     lines = [
         "## Many states per call (issue 13)",
@@ -30,8 +31,11 @@ def main():
         f"call, one per SIMD lane, lane by lane bit-identical to the scalar functions) against Pinocchio 4.1's "
         f"single-state calls, in one session ({datetime.date.today()}, {platform.machine()}, `bench/lanes.sh`), each "
         f"binary from {copies} fresh copies (medians). ns per state: a lane call's time divided by {LANES}. Two builds "
-        "of the same code: the baseline x86-64 target (an `F64x4` is two 128-bit registers) and "
-        "`-C target-cpu=native` (one 256-bit register; Pinocchio's wheel is built for the baseline).",
+        "of the same code: the baseline x86-64 target, as it runs (each lane function of the `f64x4` module has an AVX "
+        "twin, chosen at run time where the CPU has AVX: one 256-bit instruction per lane value, "
+        "docs/generated-code.md; the scalar functions here are below the size of a scalar twin) and again with its "
+        "baseline copies alone (`dispatch::use_avx(false)`: an `F64x4` is two 128-bit SSE2 registers), and "
+        "`-C target-cpu=native` (AVX-512 registers on this host; Pinocchio's wheel is built for the baseline).",
         "",
         "| robot | call | build | Pinocchio (ns) | generated (ns) | ratio | lanes (ns per state) | ratio | vs generated | `_batch` of 64 (ns per state) | target |",
         "|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|",
@@ -68,13 +72,13 @@ def main():
               "the rest is reading and writing JSON and the text exchanged with the runner process (the interpreted "
               "engine, in one process, took 0.21 s), so lanes would save under 3 %.",
               "",
-              "Since these measurements the scalar functions of robots with mirrored branches compute both sides "
-              "in one SSE2 register (pairs), and on the baseline target their four f64 lanes became slower per "
-              "state than the scalar call (a floating Go2's `aba`, `embedyn bench`, 2026-12-03: 324 ns per call, "
-              "728 per state through the lanes). The `_batch` form of a paired function now runs the scalar "
-              "function state by state there (four f64 lanes without AVX; the same bits): Go2 `aba_batch` 340 ns "
-              "per state, `rnea_batch` 173 (413), `crba_batch` 122 (166); the Z1, unpaired, keeps the lanes (119 "
-              "ns per state against 197 per call). The table above predates both changes."]
+              "The scalar functions of robots with mirrored branches compute both sides in one SSE2 register "
+              "(pairs; the floating ANYmal B's here), and in their baseline copies four f64 lanes are slower per "
+              "state than the scalar call. So the `_batch` form of a paired function runs the scalar function "
+              "state by state where AVX does not run (the `_batch` column of the SSE2 rows; the same bits), and "
+              "through the lanes in its AVX twin. Lane twins arrived on 2026-12-03: before, lane modules had "
+              "256-bit registers only from `-C target-cpu=native`, and the baseline build ran as its SSE2 rows "
+              "do now."]
     lines += ["", f"### Threads over a batch", "",
               f"{BATCH} states per call of `aba`, ns per state. Pinocchio: a loop of `aba` over the states, and its "
               "OpenMP `abaInParallel` (one state per thread, a `ModelPool` of one `Data` per thread) with 1 and 2 "

@@ -2,7 +2,8 @@
 //! states per call) against the scalar generated functions, per state, on the Z1 arm (fixed base) and
 //! the floating ANYmal B: `aba`, `rnea`, `crba`, and the floating ANYmal B's `aba_derivatives`.
 //!
-//! `cargo bench --bench lanes` (the baseline x86-64 target: SSE2, two f64 per instruction);
+//! `cargo bench --bench lanes` (the baseline x86-64 target: the lane functions' AVX twins where the CPU
+//! has AVX; with `EMBEDYN_BASELINE_COPIES=1` their SSE2 copies, two f64 per instruction);
 //! `RUSTFLAGS="-C target-cpu=native" cargo bench --bench lanes` for the host's widest SIMD.
 //! `bench/lanes.sh` runs both beside Pinocchio and writes BENCHMARKS.md's table. Every call cycles
 //! through 64 pre-generated random states; a lane call's time is divided by its 4 states.
@@ -138,6 +139,11 @@ macro_rules! bench_robot {
 }
 
 fn all(c: &mut Criterion) {
+    // `bench/lanes.sh` times the baseline build twice: as it runs (AVX twins where the CPU has AVX) and
+    // with its baseline copies alone.
+    if std::env::var_os("EMBEDYN_BASELINE_COPIES").is_some() {
+        embedyn::codegen_support::dispatch::use_avx(false);
+    }
     bench_robot!(c, z1, "z1", "models/peers/z1.urdf", false);
     bench_robot!(
         c,

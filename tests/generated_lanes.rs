@@ -357,3 +357,117 @@ fn threads_over_a_batch_equal_the_scalar_calls() {
     ));
     assert_four_bar_aba_per_state(&loops, &qdd, &measure);
 }
+
+/// The AVX twins of the 256-bit lane modules (`f64x4`, `f32x8`: one AVX instruction per lane value where the
+/// CPU has AVX, codegen/src/dispatch.rs) give the bits of their baseline copies and of the scalar functions:
+/// every lane function here run with the twins allowed and forbidden (`use_avx`), the floating ANYmal B's
+/// `aba`, `rnea`, `crba` and `aba_batch` (whose baseline copy goes state by state through the paired scalar
+/// function, its twin through the lanes), the four-bar's pivoting `aba` with its measure, and the Z1's `aba` in
+/// eight f32 lanes. (On a CPU without AVX both runs take the baseline copy; the CI machines have AVX, and the
+/// test says which ran.)
+#[test]
+fn lane_twins_give_the_bits_of_the_baseline_copies() {
+    use embedyn::codegen_support::dispatch::{avx, use_avx};
+    const NV: usize = anymal::NV;
+    let n = 9;
+    let states = anymal_states(n, 31);
+    let (q, v, u) = &states;
+    let packed = |k: usize| {
+        let four = |x: &[[f64; NV]]| -> [[f64; NV]; 4] { std::array::from_fn(|j| x[k + j]) };
+        let q4: [[f64; anymal::NQ]; 4] = std::array::from_fn(|j| q[k + j]);
+        (pack(&q4), pack(&four(v)), pack(&four(u)))
+    };
+    let mut noise = Rng::new(32);
+    let loops = four_bar_states(4, 0.6, &mut noise);
+    let z1_states: [[[f32; z1::NV]; 8]; 3] = std::array::from_fn(|_| {
+        std::array::from_fn(|_| std::array::from_fn(|_| noise.uniform(-2.5, 2.5) as f32))
+    });
+    let pack8 = |states: &[[f32; z1::NV]; 8]| -> [F32x8; z1::NV] {
+        std::array::from_fn(|i| F32x8::new(std::array::from_fn(|k| states[k][i])))
+    };
+    // Every result of one run, as bits.
+    let run = || {
+        let mut out: Vec<u64> = Vec::new();
+        for k in [0, 5] {
+            let (ql, vl, ul) = packed(k);
+            let mut qdd = [F64x4::splat(0.0); NV];
+            anymal::f64x4::aba(&ql, &vl, &ul, &mut qdd);
+            let mut tau = [F64x4::splat(0.0); NV];
+            anymal::f64x4::rnea(&ql, &vl, &ul, &mut tau);
+            let mut m = [[F64x4::splat(0.0); NV]; NV];
+            anymal::f64x4::crba(&ql, &mut m);
+            for j in 0..4 {
+                out.extend(bits(&lane(&qdd, j)));
+                out.extend(bits(&lane(&tau, j)));
+                m.iter().for_each(|row| out.extend(bits(&lane(row, j))));
+            }
+        }
+        let mut qdd = vec![[0.0; NV]; n];
+        assert!(anymal::f64x4::aba_batch(q, v, u, &mut qdd));
+        assert_anymal_aba_per_state(&states, &qdd);
+        qdd.iter().for_each(|x| out.extend(bits(x)));
+        let (lq, lv, lu) = &loops;
+        let four = |x: &[[f64; four_bar::NV]]| -> [[f64; four_bar::NV]; 4] {
+            std::array::from_fn(|j| x[j])
+        };
+        let lq4: [[f64; four_bar::NQ]; 4] = std::array::from_fn(|j| lq[j]);
+        let mut qdd = [F64x4::splat(0.0); four_bar::NV];
+        let measure =
+            four_bar::f64x4::aba(&pack(&lq4), &pack(&four(lv)), &pack(&four(lu)), &mut qdd);
+        out.extend(measure.to_array().map(f64::to_bits));
+        for j in 0..4 {
+            out.extend(bits(&lane(&qdd, j)));
+        }
+        for s in &z1_states {
+            let mut qdd = [F32x8::splat(0.0); z1::NV];
+            z1::f32x8::aba(&pack8(s), &pack8(s), &pack8(s), &mut qdd);
+            for (j, state) in s.iter().enumerate() {
+                let mut expected = [0.0f32; z1::NV];
+                z1::f32::aba(state, state, state, &mut expected);
+                let got: [f32; z1::NV] = std::array::from_fn(|i| qdd[i].to_array()[j]);
+                assert_eq!(
+                    got.map(f32::to_bits),
+                    expected.map(f32::to_bits),
+                    "f32x8, lane {j}"
+                );
+                out.extend(got.map(|x| u64::from(x.to_bits())));
+            }
+        }
+        out
+    };
+    use_avx(true);
+    let with_twins = run();
+    use_avx(false);
+    let baseline = run();
+    use_avx(true);
+    assert_eq!(with_twins.len(), baseline.len());
+    let differing = with_twins
+        .iter()
+        .zip(&baseline)
+        .filter(|(a, b)| a != b)
+        .count();
+    assert_eq!(
+        differing,
+        0,
+        "{differing} of {} results differ",
+        baseline.len()
+    );
+    // The lane results are those of the scalar functions too (the lanes of the first pack).
+    let (ql, vl, ul) = packed(0);
+    let mut qdd = [F64x4::splat(0.0); NV];
+    anymal::f64x4::aba(&ql, &vl, &ul, &mut qdd);
+    for j in 0..4 {
+        let mut expected = [0.0; NV];
+        anymal::f64::aba(&q[j], &v[j], &u[j], &mut expected);
+        assert_eq!(bits(&lane(&qdd, j)), bits(&expected), "aba, lane {j}");
+    }
+    eprintln!(
+        "lane twins: {} (this CPU {} AVX)",
+        if avx() {
+            "compared with the baseline copies"
+        } else {
+            "not run"
+        },
+        if avx() { "has" } else { "lacks" }
+    );
+}

@@ -14,7 +14,7 @@
 //! the generated crate still runs on any x86-64 CPU and needs no build flag; a build that enables AVX
 //! itself (`-C target-cpu=native`) compiles the twin out. Other architectures never see it. The twin
 //! costs compile time (its code is optimized twice), so only functions of at least
-//! [`TWIN_MIN_STATEMENTS`] statements get one: below that the measured gain was nil (the Z1's `aba`,
+//! `TWIN_MIN_STATEMENTS` statements get one: below that the measured gain was nil (the Z1's `aba`,
 //! 1.8k operations, the same time either way).
 
 use crate::emit::Code;
@@ -40,11 +40,11 @@ pub const TWIN_MAX_STATEMENTS: usize = 25_000;
 pub enum AvxTwins {
     /// None: one copy of every function, half the compile time of the large ones.
     None,
-    /// The `f64` functions of [`TWIN_MIN_STATEMENTS`] to [`TWIN_MAX_STATEMENTS`] statements (the default).
+    /// The `f64` functions of `TWIN_MIN_STATEMENTS` to `TWIN_MAX_STATEMENTS` statements (the default).
     #[default]
     Large,
     /// Every `f64` function (each costs about twice its compile time more; the gain below
-    /// [`TWIN_MIN_STATEMENTS`] was small or nil where measured).
+    /// `TWIN_MIN_STATEMENTS` was small or nil where measured).
     All,
 }
 
@@ -67,6 +67,50 @@ impl AvxTwins {
             AvxTwins::All => true,
         }
     }
+
+    /// Whether a lane function of `statements` statements gets a twin in a lane module of 256-bit values
+    /// (`lanes_of_256_bits`). There the twin computes a lane value in one AVX instruction where the
+    /// baseline code takes two SSE2 ones, a gain at any size (2026-12-03, 4 f64 lanes, ns per state, the
+    /// same bits: the Z1's `aba` 108 against 147; the floating ANYmal B's `aba` 251 against 824, `rnea`
+    /// 168 against 494, `crba` 99 against 131), so `Large` twins every lane function up to
+    /// `TWIN_MAX_STATEMENTS`.
+    pub fn twins_lanes(self, statements: usize) -> bool {
+        match self {
+            AvxTwins::None => false,
+            AvxTwins::Large => statements <= TWIN_MAX_STATEMENTS,
+            AvxTwins::All => true,
+        }
+    }
+}
+
+/// Whether the lane module of `lanes` lanes of `scalar` holds 256-bit values (`F64x4`, `F32x8`), which
+/// its functions' AVX twins compute in one instruction each (`TwinOf::Lanes`). The 128-bit ones (`F64x2`,
+/// `F32x4`) are two numbers per SSE2 instruction already: a twin would only re-encode them, as it does
+/// scalar code, which paid only in large functions.
+pub fn lanes_of_256_bits(scalar: &str, lanes: usize) -> bool {
+    avx_lane_type(scalar, lanes).is_some()
+}
+
+/// The AVX twins' lane type of the lane module of `lanes` lanes of `scalar`, if it holds 256-bit values
+/// (runtime/src/codegen_lanes.rs).
+pub fn avx_lane_type(scalar: &str, lanes: usize) -> Option<&'static str> {
+    match (scalar, lanes) {
+        ("f64", 4) => Some("AvxF64x4"),
+        ("f32", 8) => Some("AvxF32x8"),
+        _ => None,
+    }
+}
+
+/// What a twin copies: a scalar module's function, or a lane module's.
+#[derive(Clone, Copy, Debug)]
+pub enum TwinOf<'a> {
+    /// A function of a scalar module: the twin is the same code compiled with AVX.
+    Scalar,
+    /// A function of a lane module of 256-bit values: the twin is the same code over `avx_type`
+    /// (`AvxF64x4`: the lane type's layout, AVX instructions), compiled with AVX; the public functions
+    /// hand their arguments and results over with `dispatch::recast`. `wide`'s lane types pick their
+    /// instructions when the crate is compiled, so the same code over them kept two SSE2 halves per value.
+    Lanes { avx_type: &'a str },
 }
 
 /// The cfg under which twins exist: an x86-64 build that does not enable AVX itself.
@@ -79,37 +123,82 @@ fn twin_cfg() -> TokenStream {
 /// items again in module `{function}_avx`, every function in them compiled with AVX. (The module is in
 /// the type namespace, where the scalar module holds only the part modules, `aba_parts_0`, and CamelCase
 /// types besides.)
-pub fn with_avx_twin(code: &Code, function: &str, helpers: &TokenStream) -> Code {
+pub fn with_avx_twin(code: &Code, function: &str, helpers: &TokenStream, of: TwinOf) -> Code {
     let twin_module = format!("{function}_avx");
+    let twin = Twin {
+        module: &twin_module,
+        helpers,
+        items: twin_items(of, helpers),
+        recast: matches!(of, TwinOf::Lanes { .. }),
+    };
     match code {
-        Code::Tokens(tokens) => {
-            Code::Tokens(tokens_with_twin(tokens.clone(), &twin_module, helpers))
+        Code::Tokens(tokens) => Code::Tokens(tokens_with_twin(tokens.clone(), &twin)),
+        Code::Text(text) => Code::Text(text_with_twin(text, &twin)),
+    }
+}
+
+/// How a function's code gets its twin.
+struct Twin<'a> {
+    /// The twin's module (`aba_avx`).
+    module: &'a str,
+    /// The helper module's path.
+    helpers: &'a TokenStream,
+    /// Items of the twin's module besides the copy, shadowing the enclosing module's names
+    /// (`twin_items`).
+    items: TokenStream,
+    /// Whether arguments and results are handed over with `dispatch::recast` (a lane twin's `S` differs).
+    recast: bool,
+}
+
+/// The items of a twin's module besides the copy. A lane twin's `S` is the AVX lane type, and its batch
+/// forms (`aba_batch`) go through the lanes: the lane module's own constant of that name sends a batch of
+/// 4 f64 lanes of a paired function through the scalar function state by state when the crate is built
+/// without AVX (lane_module in generate.rs), since then an `F64x4` is two SSE2 registers, as full as the
+/// paired scalar code's one; in the twin it is one register.
+fn twin_items(of: TwinOf, helpers: &TokenStream) -> TokenStream {
+    match of {
+        TwinOf::Scalar => quote!(),
+        TwinOf::Lanes { avx_type } => {
+            let avx_type = format_ident!("{}", avx_type);
+            quote! {
+                /// The lane type with AVX instructions (this module runs where the CPU has AVX).
+                pub type S = #helpers::#avx_type;
+                /// Batches through the lanes (see the module's lane type).
+                const PAIRED_BATCH_PER_STATE: bool = false;
+            }
         }
-        Code::Text(text) => Code::Text(text_with_twin(text, &twin_module, helpers)),
     }
 }
 
 /// The statement a public function starts with: `return` its twin's result where the CPU has AVX.
-fn dispatch_statement(
-    signature: &syn::Signature,
-    twin_module: &str,
-    helpers: &TokenStream,
-) -> TokenStream {
-    let module = format_ident!("{}", twin_module);
+fn dispatch_statement(signature: &syn::Signature, twin: &Twin) -> TokenStream {
+    let module = format_ident!("{}", twin.module);
+    let helpers = twin.helpers;
     let name = &signature.ident;
     let arguments = signature.inputs.iter().map(|input| match input {
         syn::FnArg::Typed(typed) => {
             let pattern = &typed.pat;
-            quote!(#pattern)
+            if twin.recast {
+                quote!(#helpers::dispatch::recast(#pattern))
+            } else {
+                quote!(#pattern)
+            }
         }
         syn::FnArg::Receiver(_) => unreachable!("generated functions are free functions"),
     });
+    let call = quote!(#module::#name(#(#arguments),*));
+    let call = if twin.recast {
+        quote!(#helpers::dispatch::recast(#call))
+    } else {
+        call
+    };
     let cfg = twin_cfg();
     quote! {
         #cfg
         if #helpers::dispatch::avx() {
-            // SAFETY: the CPU has AVX (`dispatch::avx` asked it), the one requirement of the twin.
-            return unsafe { #module::#name(#(#arguments),*) };
+            // SAFETY (not in the output: `quote` drops comments): the CPU has AVX, the one requirement
+            // of the twin; a lane twin's type has the layout of the lane module's (`recast`).
+            return unsafe { #call };
         }
     }
 }
@@ -134,15 +223,15 @@ fn enable_avx(items: &mut [syn::Item]) {
     }
 }
 
-fn tokens_with_twin(tokens: TokenStream, twin_module: &str, helpers: &TokenStream) -> TokenStream {
+fn tokens_with_twin(tokens: TokenStream, twin: &Twin) -> TokenStream {
     let file: syn::File = syn::parse2(tokens).expect("generated code parses as items");
-    let mut twin = file.items.clone();
-    enable_avx(&mut twin);
+    let mut copy = file.items.clone();
+    enable_avx(&mut copy);
     let mut items = file.items;
     for item in &mut items {
         if let syn::Item::Fn(function) = item {
             if matches!(function.vis, syn::Visibility::Public(_)) {
-                let statement = dispatch_statement(&function.sig, twin_module, helpers);
+                let statement = dispatch_statement(&function.sig, twin);
                 let statement: syn::Stmt =
                     syn::parse2(quote!({ #statement })).expect("the dispatch statement parses");
                 // `{ … }` parsed as one block statement: unwrap it to keep the `if` at the top level.
@@ -154,8 +243,9 @@ fn tokens_with_twin(tokens: TokenStream, twin_module: &str, helpers: &TokenStrea
             }
         }
     }
-    let module = format_ident!("{}", twin_module);
+    let module = format_ident!("{}", twin.module);
     let cfg = twin_cfg();
+    let twin_items = &twin.items;
     quote! {
         #(#items)*
         #cfg
@@ -163,7 +253,8 @@ fn tokens_with_twin(tokens: TokenStream, twin_module: &str, helpers: &TokenStrea
         mod #module {
             #[allow(unused_imports)]
             use super::*;
-            #(#twin)*
+            #twin_items
+            #(#copy)*
         }
     }
 }
@@ -178,10 +269,25 @@ fn starts_function(trimmed: &str) -> bool {
 
 /// The same for text written by [`crate::emit_large`] (items indented by four spaces, each function's
 /// signature ending on the first line at its indentation that ends with `{`).
-fn text_with_twin(text: &str, twin_module: &str, helpers: &TokenStream) -> String {
+fn text_with_twin(text: &str, twin_spec: &Twin) -> String {
     let lines: Vec<&str> = text.lines().collect();
     let mut portable = String::with_capacity(text.len() + 1024);
     let mut twin = String::with_capacity(text.len() + 65_536);
+    if !twin_spec.items.is_empty() {
+        let items =
+            crate::generate::format_tokens(&twin_spec.items).expect("the twin's items format");
+        for l in items.lines() {
+            // Indented as the twin's other items (two levels: lane module, twin module).
+            push_line(
+                &mut twin,
+                &if l.is_empty() {
+                    String::new()
+                } else {
+                    format!("    {l}")
+                },
+            );
+        }
+    }
     let mut i = 0;
     while i < lines.len() {
         let line = lines[i];
@@ -211,7 +317,7 @@ fn text_with_twin(text: &str, twin_module: &str, helpers: &TokenStream) -> Strin
             let signature = signature.strip_prefix("pub ").unwrap_or(signature);
             let signature: syn::Signature =
                 syn::parse_str(signature).expect("a generated signature parses");
-            let statement = dispatch_statement(&signature, twin_module, helpers);
+            let statement = dispatch_statement(&signature, twin_spec);
             let wrapped = crate::generate::format_tokens(&quote!(fn f() { #statement }))
                 .expect("the dispatch statement formats");
             // The body of the formatted `fn f() { … }`, indented once more for the function's body.
@@ -228,6 +334,7 @@ fn text_with_twin(text: &str, twin_module: &str, helpers: &TokenStream) -> Strin
         push_line(&mut twin, line);
         i += 1;
     }
+    let twin_module = twin_spec.module;
     format!(
         "{portable}    #[cfg(all(target_arch = \"x86_64\", not(target_feature = \"avx\")))]\n    /// The functions above compiled with AVX (see `helpers::dispatch`).\n    mod {twin_module} {{\n        #[allow(unused_imports)]\n        use super::*;\n{twin}    }}\n"
     )
@@ -260,7 +367,8 @@ mod tests {
             use self::f_parts_0::f_part;
             pub fn f(q: &[S; 2], out: &mut [S; 1]) -> S { let mut s = [0.0; 1]; f_part(q, &mut s); out[0] = s[0]; s[0] }
         };
-        let Code::Tokens(out) = with_avx_twin(&Code::Tokens(code), "f", &helpers()) else {
+        let Code::Tokens(out) = with_avx_twin(&Code::Tokens(code), "f", &helpers(), TwinOf::Scalar)
+        else {
             panic!("tokens stay tokens")
         };
         let text = crate::generate::format_tokens(&quote!(mod m { #out })).unwrap();
@@ -288,7 +396,12 @@ mod tests {
     #[test]
     fn text_gets_a_dispatch_and_a_twin_with_avx_everywhere() {
         let text = "    mod g_parts_0 {\n        #[allow(unused_imports)]\n        use super::*;\n        #[inline(never)]\n        pub(super) fn g_part(q: &[S; 2], s: &mut [S; 1]) {\n            s[0] = q[0];\n        }\n    }\n    use self::g_parts_0::g_part;\n    /// Doc.\n    pub fn g(\n        q: &[S; 2],\n        out: &mut [[S; 1]; 1],\n    ) {\n        let mut s: [S; 1] = [0.0; 1];\n        g_part(q, &mut s);\n        out[0][0] = s[0];\n    }\n";
-        let Code::Text(out) = with_avx_twin(&Code::Text(text.to_string()), "g", &helpers()) else {
+        let Code::Text(out) = with_avx_twin(
+            &Code::Text(text.to_string()),
+            "g",
+            &helpers(),
+            TwinOf::Scalar,
+        ) else {
             panic!("text stays text")
         };
         assert_eq!(

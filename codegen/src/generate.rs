@@ -277,6 +277,9 @@ struct Generated {
     f64_twins: Vec<Option<Code>>,
     /// The same functions for the lane modules (those without a hand-written wrapper), when asked for.
     lane_functions: Vec<Emitted>,
+    /// For each of `lane_functions`, its code with an AVX twin where it has one: the copy of the lane
+    /// module of 256-bit values (src/dispatch.rs, `lanes_of_256_bits`).
+    lane_twins: Vec<Option<Code>>,
     /// Lanes per lane module (0: none).
     lanes: usize,
     /// The helper module's path (for the lane modules' scalar type).
@@ -306,6 +309,50 @@ impl Generated {
             .map(|(plain, twin)| twin.as_ref().map_or_else(|| Ok(plain.clone()), &render))
             .collect::<Result<Vec<T>, E>>()?;
         Ok(ScalarFunctions { plain, f64 })
+    }
+
+    /// The lane modules' functions, each written by `render`: for the lane module of 256-bit values a
+    /// function's code with its AVX twin where it has one.
+    fn lane_functions<T: Clone, E>(
+        &self,
+        render: impl Fn(&Code) -> Result<T, E>,
+    ) -> Result<LaneFunctions<T>, E> {
+        let plain = self
+            .lane_functions
+            .iter()
+            .map(|f| render(&f.code))
+            .collect::<Result<Vec<T>, E>>()?;
+        let wide = plain
+            .iter()
+            .zip(&self.lane_twins)
+            .map(|(plain, twin)| twin.as_ref().map_or_else(|| Ok(plain.clone()), &render))
+            .collect::<Result<Vec<T>, E>>()?;
+        Ok(LaneFunctions {
+            plain,
+            wide,
+            lanes: self.lanes,
+        })
+    }
+}
+
+/// The functions of the lane modules ([`Generated::lane_functions`]).
+struct LaneFunctions<T> {
+    /// Every lane function as traced (the 128-bit lane modules').
+    plain: Vec<T>,
+    /// The lane module's of 256-bit values: with AVX twins.
+    wide: Vec<T>,
+    /// Lanes per lane module.
+    lanes: usize,
+}
+
+impl<T> LaneFunctions<T> {
+    /// The functions of the lane module of `scalar`.
+    fn of(&self, scalar: &str) -> &[T] {
+        if crate::dispatch::lanes_of_256_bits(scalar, self.lanes) {
+            &self.wide
+        } else {
+            &self.plain
+        }
     }
 }
 
@@ -587,6 +634,7 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
     let mut functions = Vec::new();
     let mut f64_twins = Vec::new();
     let mut lane_functions = Vec::new();
+    let mut lane_twins = Vec::new();
     if !scalars.is_empty() {
         let instance_algorithms: Vec<Algorithm> = instances.iter().map(|i| i.algorithm).collect();
         let mut sizes =
@@ -626,7 +674,26 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
             // The f64 module's copy with an AVX twin (f64 only: the twin doubles the function's compile
             // time, src/dispatch.rs).
             let twin = (options.f64 && options.avx_twins.twins(function.statements)).then(|| {
-                crate::dispatch::with_avx_twin(&function.code, &instance.name, &options.helpers)
+                crate::dispatch::with_avx_twin(
+                    &function.code,
+                    &instance.name,
+                    &options.helpers,
+                    crate::dispatch::TwinOf::Scalar,
+                )
+            });
+            // The lane function's copy with an AVX twin, for the lane module of 256-bit values.
+            let avx_type = scalars
+                .iter()
+                .find_map(|s| crate::dispatch::avx_lane_type(s, options.lanes));
+            let lane_twin = lane_function.as_ref().and_then(|lane| {
+                let avx_type =
+                    avx_type.filter(|_| options.avx_twins.twins_lanes(lane.statements))?;
+                Some(crate::dispatch::with_avx_twin(
+                    &lane.code,
+                    &instance.name,
+                    &options.helpers,
+                    crate::dispatch::TwinOf::Lanes { avx_type },
+                ))
             });
             // Constants are folded in f64; the f32 module writes them as f32 literals.
             if options.f32 && function.largest_constant > f64::from(f32::MAX) {
@@ -649,7 +716,14 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
                         .map_or(0.0, |_| function.compile_bytes / scalars.len() as f64)
                     + lane_function
                         .as_ref()
-                        .map_or(0.0, |f| size::LANE_MEMORY_FACTOR * f.compile_bytes),
+                        .map_or(0.0, |f| size::LANE_MEMORY_FACTOR * f.compile_bytes)
+                    // The lane twin is one more lane copy, in the 256-bit lane module.
+                    + lane_function
+                        .as_ref()
+                        .filter(|_| lane_twin.is_some())
+                        .map_or(0.0, |f| {
+                            size::LANE_MEMORY_FACTOR * f.compile_bytes / scalars.len() as f64
+                        }),
                 traced: true,
                 tracing_stopped: false,
             };
@@ -657,6 +731,9 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
             size::check(loaded, &sizes[..=k], &sizes, &scalars, limit, 1.0)?;
             functions.push(function);
             f64_twins.push(twin);
+            if lane_function.is_some() {
+                lane_twins.push(lane_twin);
+            }
             lane_functions.extend(lane_function);
         }
     }
@@ -780,6 +857,7 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
         functions,
         f64_twins,
         lane_functions,
+        lane_twins,
         lanes: options.lanes,
         helpers: options.helpers.clone(),
         constrained: model64.has_constraints(),
@@ -907,7 +985,7 @@ fn lane_module(
         quote!()
     };
     let doc = format!(
-        " The generated dynamics in `{scalar}`, {lanes} states per call: the scalar `S` is `{lane_type}` (one SIMD value, one state per lane), the functions are the `{scalar}` module's (less `complete` and `complete_step`), lane by lane bit-identical to them. Pack states with `S::new([…])` per entry, read lane `k` with `to_array()[k]`, or pass slices of states to the `_batch` forms; build with the target's SIMD (`-C target-cpu=native`, or `-C target-feature=+avx` for 256-bit values) to compute a lane value in one instruction."
+        " The generated dynamics in `{scalar}`, {lanes} states per call: the scalar `S` is `{lane_type}` (one SIMD value, one state per lane), the functions are the `{scalar}` module's (less `complete` and `complete_step`), lane by lane bit-identical to them. Pack states with `S::new([…])` per entry, read lane `k` with `to_array()[k]`, or pass slices of states to the `_batch` forms. A lane value of 256 bits (`F64x4`, `F32x8`) takes one instruction per operation where the CPU has AVX: in a build with AVX (`-C target-cpu=native`), and on x86-64 builds without it through the functions' AVX twins, chosen at run time (`avx_twins`, docs/generated-code.md)."
     );
     quote! {
         #[doc = #doc]
@@ -923,7 +1001,9 @@ fn lane_module(
             /// pairs calls that scalar function state by state instead of the lane function: with four f64
             /// lanes on a target without AVX an `F64x4` is two SSE2 registers, and the paired scalar code
             /// already fills one (a floating Go2's `aba`: 323 ns per call, 690 per state through the
-            /// lanes, 2026-12-03). The results are the same bits either way (but for the sign of a NaN).
+            /// lanes, 2026-12-03). Where the CPU has AVX the batch runs in the function's AVX twin, whose
+            /// own constant is false (codegen/src/dispatch.rs). The results are the same bits either way
+            /// (but for the sign of a NaN).
             const PAIRED_BATCH_PER_STATE: bool = cfg!(not(target_feature = "avx"))
                 && LANES == 4
                 && ::core::mem::size_of::<E>() == 8;
@@ -957,11 +1037,7 @@ pub fn generate_tokens(
             functions.of(scalar),
         )
     });
-    let lane_functions = generated
-        .lane_functions
-        .iter()
-        .map(|f| lex(&f.code))
-        .collect::<Result<Vec<_>, _>>()?;
+    let lane_functions = generated.lane_functions(lex)?;
     let lane_modules: Vec<TokenStream> = match generated.lanes {
         0 => Vec::new(),
         n => generated
@@ -973,7 +1049,7 @@ pub fn generate_tokens(
                     n,
                     generated.constrained,
                     &generated.helpers,
-                    &lane_functions,
+                    lane_functions.of(scalar),
                 )
             })
             .collect(),
@@ -1003,11 +1079,7 @@ pub fn generate_source(loaded: &Loaded, options: &GenerateOptions) -> Result<Str
         Code::Text(body) => Ok(body.clone()),
     };
     let functions = generated.scalar_functions(text_of)?;
-    let lane_functions = generated
-        .lane_functions
-        .iter()
-        .map(|f| text_of(&f.code))
-        .collect::<Result<Vec<String>, LoadError>>()?;
+    let lane_functions = generated.lane_functions(text_of)?;
     let mut modules = Vec::new();
     for scalar in &generated.scalars {
         let empty = scalar_module(scalar, generated.constrained, &generated.limits, &[]);
@@ -1022,7 +1094,7 @@ pub fn generate_source(loaded: &Loaded, options: &GenerateOptions) -> Result<Str
                 &generated.helpers,
                 &[],
             );
-            modules.push((empty, &lane_functions));
+            modules.push((empty, lane_functions.of(scalar)));
         }
     }
     for (empty, functions) in modules {
@@ -1744,7 +1816,6 @@ mod tests {
         assert!(!batch(&unpaired).contains("PAIRED_BATCH_PER_STATE"));
     }
 
-    /// The generated source of `algorithm` alone, f64 only.
     /// A function of at least `TWIN_MIN_STATEMENTS` statements gets an AVX twin in the f64 module only
     /// (src/dispatch.rs), in both the source text and the macro's tokens; one below it, or with
     /// `avx_twins` off, does not.
@@ -1813,6 +1884,77 @@ mod tests {
         assert!(!small.contains("dispatch::avx()"));
     }
 
+    /// Every function of a lane module of 256-bit values (`f64x4`, `f32x8`) gets an AVX twin, however
+    /// small, whose batch form goes through the lanes; the 128-bit lane modules (`f32x4`) get none, and
+    /// `avx_twins = none` leaves them all out. The standalone README names the twinned lane functions.
+    #[test]
+    fn lane_modules_of_256_bits_get_an_avx_twin() {
+        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../models/peers/z1.urdf");
+        let loaded = crate::load(path.as_ref()).unwrap();
+        let options = |lanes: usize, twins: crate::AvxTwins| {
+            GenerateOptions {
+                lanes,
+                avx_twins: twins,
+                ..GenerateOptions::default()
+            }
+            .with_requested(Some(vec![Algorithm::Aba]), &[])
+        };
+        let module = |text: &str, name: &str| -> String {
+            let start = text.find(&format!("pub mod {name} {{")).unwrap();
+            let end = text[start + 1..]
+                .find("\npub mod ")
+                .map_or(text.len(), |e| start + 1 + e);
+            text[start..end].to_string()
+        };
+        // The Z1's `aba` (1.8k statements: no twin in the f64 module).
+        let text = generate_source(&loaded, &options(4, crate::AvxTwins::Large)).unwrap();
+        assert!(!module(&text, "f64").contains("_avx"));
+        let f64x4 = module(&text, "f64x4");
+        assert_eq!(f64x4.matches("mod aba_avx {").count(), 1);
+        // `aba` and `aba_batch` dispatch; the twin's batch goes through the lanes.
+        assert_eq!(f64x4.matches("dispatch::avx()").count(), 2, "{f64x4}");
+        assert!(f64x4.contains("aba_avx::aba_batch("));
+        let twin = &f64x4[f64x4.find("mod aba_avx {").unwrap()..];
+        assert!(twin.contains("const PAIRED_BATCH_PER_STATE: bool = false;"));
+        assert!(twin.contains("::AvxF64x4;"), "{twin}");
+        // Arguments and results handed over to the twin's lane type.
+        assert_eq!(
+            f64x4.matches("dispatch::recast(").count(),
+            2 * (1 + 4),
+            "{f64x4}"
+        );
+        assert!(!module(&text, "f32x4").contains("_avx"), "128-bit lanes");
+        let eight = GenerateOptions {
+            f64: false,
+            ..options(8, crate::AvxTwins::Large)
+        };
+        let eight = generate_source(&loaded, &eight).unwrap();
+        assert_eq!(module(&eight, "f32x8").matches("mod aba_avx {").count(), 1);
+        let tokens = generate_tokens(&loaded, &options(4, crate::AvxTwins::Large))
+            .unwrap()
+            .to_string();
+        assert_eq!(tokens.matches("mod aba_avx").count(), 1);
+        let none = generate_source(&loaded, &options(4, crate::AvxTwins::None)).unwrap();
+        assert!(!none.contains("_avx"));
+        #[cfg(feature = "standalone")]
+        {
+            let files =
+                crate::standalone::crate_files(&loaded, &options(4, crate::AvxTwins::Large))
+                    .unwrap();
+            let readme = &files
+                .iter()
+                .find(|(p, _)| p.ends_with("README.md"))
+                .unwrap()
+                .1;
+            assert!(
+                readme.contains("the `f64x4` module's function `aba` is also compiled with AVX"),
+                "{readme}"
+            );
+            assert!(!readme.contains("the `f64` module's"), "{readme}");
+        }
+    }
+
+    /// The generated source of `algorithm` alone, f64 only.
     fn f64_source(loaded: &Loaded, algorithm: Algorithm) -> String {
         let options = GenerateOptions {
             f32: false,

@@ -61,13 +61,13 @@ pub struct FunctionSize {
     pub compile_bytes: f64,
     /// Whether it was traced (else predicted).
     pub traced: bool,
-    /// Whether tracing stopped at the tape's budget ([`tape_budget`]): `operations` is then a lower
+    /// Whether tracing stopped at the tape's budget (`tape_budget`): `operations` is then a lower
     /// bound, the nodes recorded when it stopped.
     pub tracing_stopped: bool,
 }
 
 impl FunctionSize {
-    /// A function whose tracing stopped at the tape's budget ([`tape_budget`]): the nodes recorded, and
+    /// A function whose tracing stopped at the tape's budget (`tape_budget`): the nodes recorded, and
     /// the memory that many emitted operations would take at the budget's own rate (at least the limit).
     pub(crate) fn stopped(algorithm: Algorithm, full: crate::trace::TapeFull) -> FunctionSize {
         FunctionSize {
@@ -113,7 +113,7 @@ pub fn predicted(model: &Model<f64>, algorithm: Algorithm) -> FunctionSize {
     }
 }
 
-/// Nodes a tape may hold for each operation the memory limit allows one function ([`tape_budget`]): a
+/// Nodes a tape may hold for each operation the memory limit allows one function (`tape_budget`): a
 /// tape also holds what folding leaves dead (and common subexpressions are merged as they are added),
 /// so it runs longer than the emitted function.
 const TAPE_SLACK: f64 = 3.0;

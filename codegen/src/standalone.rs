@@ -227,23 +227,42 @@ pub fn crate_files(
             modules = modules.join(" and ")
         ));
     }
-    // The functions with an AVX twin: their twins' modules (`mod aba_avx {`), at the f64 module's level.
-    let twinned: Vec<String> = body
-        .lines()
-        .filter_map(|l| l.strip_prefix("    mod ")?.strip_suffix("_avx {"))
-        .map(|f| format!("`{f}`"))
-        .collect();
-    if !twinned.is_empty() {
+    // The functions with an AVX twin: their twins' modules (`mod aba_avx {`), in the module they twin.
+    let mut twinned: Vec<(&str, Vec<String>)> = Vec::new();
+    for l in body.lines() {
+        if let Some(module) = l
+            .strip_prefix("pub mod ")
+            .and_then(|m| m.strip_suffix(" {"))
+        {
+            twinned.push((module, Vec::new()));
+        } else if let Some(f) = l
+            .strip_prefix("    mod ")
+            .and_then(|m| m.strip_suffix("_avx {"))
+        {
+            if let Some((_, functions)) = twinned.last_mut() {
+                functions.push(format!("`{f}`"));
+            }
+        }
+    }
+    let listed = |functions: &[String]| {
+        if functions.len() == 1 {
+            format!("function {} is", functions[0])
+        } else {
+            format!("functions {} are", functions.join(", "))
+        }
+    };
+    for (module, functions) in twinned.iter().filter(|(_, f)| !f.is_empty()) {
+        let gain = if *module == "f64" {
+            "the same results, up to half the time"
+        } else {
+            "the same results; there a lane value takes one instruction instead of two"
+        };
         readme.push_str(&format!(
-            "On x86-64 the `f64` module's {} also compiled with AVX, and run that copy where the CPU has AVX \
-             (the same results, up to half the time; `helpers::dispatch::use_avx(false)` runs the baseline copies, \
+            "On x86-64 the `{module}` module's {} also compiled with AVX, and run that copy where the CPU has AVX \
+             ({gain}; `helpers::dispatch::use_avx(false)` runs the baseline copies, \
              e.g. to compare them; `embedyn generate --avx-twins none` leaves them out: embedyn's \
              docs/generated-code.md, \"AVX where the CPU has it\").\n\n",
-            if twinned.len() == 1 {
-                format!("function {} is", twinned[0])
-            } else {
-                format!("functions {} are", twinned.join(", "))
-            }
+            listed(functions)
         ));
     }
     let constrained = model.has_constraints();
@@ -313,7 +332,7 @@ const MARKERS: [(&str, &str); 3] = [
 /// Writes the crate into `dir` (created if needed). Returns the files written.
 ///
 /// It replaces only files it wrote itself: a `Cargo.toml`, `README.md` or `src/lib.rs` already in `dir`
-/// whose first line is not its marker ([`MARKERS`]: a user's own crate, given as `--out .`), or that is not
+/// whose first line is not its marker (`MARKERS`: a user's own crate, given as `--out .`), or that is not
 /// a plain file, or a `src` that is a link (either could lead anywhere), is an error before anything is
 /// written. The files are written beside their places first and then renamed into them, so that a
 /// failure to write leaves the folder as it was.

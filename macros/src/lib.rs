@@ -193,7 +193,7 @@ impl Parse for Args {
                 "floating" => args.floating = true,
                 "avx_twins" => {
                     const VALUES: &str =
-                        "avx_twins = none|large|all (which f64 functions get an AVX copy; default large)";
+                        "avx_twins = none|large|all (which f64 functions and 256-bit lane functions get an AVX copy; default large)";
                     if !input.peek(Token![=]) {
                         return Err(syn::Error::new(key.span(), VALUES));
                     }

@@ -7,7 +7,8 @@
 /// scalar's own arithmetic (IEEE add, subtract, multiply, divide and square root, no fused multiply-add,
 /// the scalar sine and cosine), so lane `k` of a lane function's result is bit-identical to the scalar
 /// function's result for state `k`. The SIMD width is the build's: with AVX (`-C target-cpu=native`,
-/// `-C target-feature=+avx`) an `F64x4` is one 256-bit register, on baseline x86-64 two 128-bit ones.
+/// `-C target-feature=+avx`) an `F64x4` is one 256-bit register, on baseline x86-64 two 128-bit ones
+/// (where the CPU has AVX, the generated lane functions' AVX twins compute over `AvxF64x4`, one register).
 macro_rules! lanes_type {
     ($name:ident, $wide:ident, $t:ident, $n:literal) => {
         #[doc = concat!("`", stringify!($n), "` `", stringify!($t), "` lanes in one SIMD value (see the module's lane types).")]
@@ -236,6 +237,172 @@ macro_rules! sincos_per_lane {
 }
 sincos_per_lane!(F32x4);
 sincos_per_lane!(F32x8);
+
+/// The 256-bit lane types of the AVX twins of lane functions (codegen/src/dispatch.rs): `AvxF64x4` and
+/// `AvxF32x8` hold what `F64x4` and `F32x8` hold, with the same layout, and compute with AVX instructions
+/// (`core::arch` intrinsics, one 256-bit instruction per operation; the same IEEE operations lane by lane,
+/// so the same bits). A lane function's twin is its code with these as `S`, compiled with AVX; its public
+/// function hands its arguments over (`dispatch::recast`) where `dispatch::avx()` says the CPU has AVX.
+/// `wide`'s types could not do this: they pick their instructions when the crate is compiled, and the twin
+/// of code over them kept two SSE2 halves per value (the Z1's 4-lane `aba` 137 ns per state either way).
+///
+/// Their operations are AVX instructions whatever code calls them: only an AVX twin may use them (a debug
+/// build checks this when one is made).
+#[cfg(all(target_arch = "x86_64", not(target_feature = "avx")))]
+macro_rules! avx_lanes_type {
+    ($name:ident, $plain:ident, $t:ident, $n:literal, $m:ident, $suffix:ident) => {
+        #[doc = concat!("`", stringify!($plain), "` for AVX twins (see the module's AVX lane types): not for other code.")]
+        #[derive(Clone, Copy)]
+        #[repr(transparent)]
+        pub struct $name(core::arch::x86_64::$m);
+
+        impl $name {
+            /// Every lane `x`.
+            #[inline(always)]
+            pub fn splat(x: $t) -> Self {
+                $name::new([x; $n])
+            }
+            /// Lane `k` is `lanes[k]`.
+            #[inline(always)]
+            pub fn new(lanes: [$t; $n]) -> Self {
+                debug_assert!(dispatch::cpu_has_avx(), "AVX lane values on a CPU without AVX");
+                // SAFETY: an array of `N` numbers is a SIMD value of them, lane `k` element `k`.
+                $name(unsafe { core::mem::transmute::<[$t; $n], core::arch::x86_64::$m>(lanes) })
+            }
+            /// The lanes as an array.
+            #[inline(always)]
+            pub fn to_array(self) -> [$t; $n] {
+                // SAFETY: as in `new`.
+                unsafe { core::mem::transmute::<core::arch::x86_64::$m, [$t; $n]>(self.0) }
+            }
+            /// The same lanes as the baseline lane type (the same layout).
+            #[inline(always)]
+            fn plain(self) -> $plain {
+                $plain::new(self.to_array())
+            }
+        }
+
+        impl From<[$t; $n]> for $name {
+            #[inline(always)]
+            fn from(lanes: [$t; $n]) -> Self {
+                $name::new(lanes)
+            }
+        }
+
+        impl core::fmt::Debug for $name {
+            fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+                self.to_array().fmt(f)
+            }
+        }
+
+        avx_lanes_type!(@op $name, Add, add, add, $suffix);
+        avx_lanes_type!(@op $name, Sub, sub, sub, $suffix);
+        avx_lanes_type!(@op $name, Mul, mul, mul, $suffix);
+        avx_lanes_type!(@op $name, Div, div, div, $suffix);
+
+        /// The sign bit flipped, as the scalar `-x` does.
+        impl core::ops::Neg for $name {
+            type Output = Self;
+            #[inline(always)]
+            fn neg(self) -> Self {
+                use core::arch::x86_64::*;
+                // SAFETY: only AVX twins compute with these values (see the type).
+                $name(unsafe { avx_lanes_type!(@intrinsic xor, $suffix)(self.0, $name::splat(-0.0).0) })
+            }
+        }
+
+        impl Float for $name {
+            #[inline(always)]
+            fn sincos(self) -> (Self, Self) {
+                let (s, c) = self.plain().sincos();
+                ($name::new(s.to_array()), $name::new(c.to_array()))
+            }
+            /// The baseline lane type's batch (the scalar kernel on `wide`'s values, in SSE2 instructions
+            /// encoded with AVX here): the same bits as the baseline code.
+            #[inline(always)]
+            fn sincos_batch<const M: usize>(x: [Self; M]) -> ([Self; M], [Self; M]) {
+                let (s, c) = <$plain as Float>::sincos_batch(x.map($name::plain));
+                (
+                    s.map(|v| $name::new(v.to_array())),
+                    c.map(|v| $name::new(v.to_array())),
+                )
+            }
+            /// IEEE square root (correctly rounded, as the scalar one).
+            #[inline(always)]
+            fn sqrt(self) -> Self {
+                use core::arch::x86_64::*;
+                // SAFETY: only AVX twins compute with these values (see the type).
+                $name(unsafe { avx_lanes_type!(@intrinsic sqrt, $suffix)(self.0) })
+            }
+            #[inline(always)]
+            fn abs(self) -> Self {
+                use core::arch::x86_64::*;
+                // SAFETY: only AVX twins compute with these values (see the type).
+                $name(unsafe { avx_lanes_type!(@intrinsic andnot, $suffix)($name::splat(-0.0).0, self.0) })
+            }
+            #[inline(always)]
+            fn select_gt(lhs: Self, rhs: Self, then: Self, otherwise: Self) -> Self {
+                use core::arch::x86_64::*;
+                // An ordered comparison: false where either side is NaN, as the scalar `>`.
+                // SAFETY: only AVX twins compute with these values (see the type).
+                $name(unsafe {
+                    let greater = avx_lanes_type!(@intrinsic cmp_gt, $suffix)(lhs.0, rhs.0);
+                    avx_lanes_type!(@intrinsic blendv, $suffix)(otherwise.0, then.0, greater)
+                })
+            }
+            type Pair = ArrayPair<Self>;
+            #[inline(always)]
+            fn pair(first: Self, second: Self) -> ArrayPair<Self> {
+                ArrayPair::new(first, second)
+            }
+            #[inline(always)]
+            fn first(pair: ArrayPair<Self>) -> Self {
+                pair.first()
+            }
+            #[inline(always)]
+            fn second(pair: ArrayPair<Self>) -> Self {
+                pair.second()
+            }
+            #[inline(always)]
+            fn negate_second(pair: ArrayPair<Self>) -> ArrayPair<Self> {
+                pair.negate_second()
+            }
+        }
+    };
+    (@op $name:ident, $trait:ident, $method:ident, $op:ident, $suffix:ident) => {
+        impl core::ops::$trait for $name {
+            type Output = Self;
+            #[inline(always)]
+            fn $method(self, rhs: Self) -> Self {
+                use core::arch::x86_64::*;
+                // SAFETY: only AVX twins compute with these values (see the type).
+                $name(unsafe { avx_lanes_type!(@intrinsic $op, $suffix)(self.0, rhs.0) })
+            }
+        }
+    };
+    (@intrinsic add, pd) => { _mm256_add_pd };
+    (@intrinsic sub, pd) => { _mm256_sub_pd };
+    (@intrinsic mul, pd) => { _mm256_mul_pd };
+    (@intrinsic div, pd) => { _mm256_div_pd };
+    (@intrinsic xor, pd) => { _mm256_xor_pd };
+    (@intrinsic sqrt, pd) => { _mm256_sqrt_pd };
+    (@intrinsic andnot, pd) => { _mm256_andnot_pd };
+    (@intrinsic cmp_gt, pd) => { _mm256_cmp_pd::<_CMP_GT_OQ> };
+    (@intrinsic blendv, pd) => { _mm256_blendv_pd };
+    (@intrinsic add, ps) => { _mm256_add_ps };
+    (@intrinsic sub, ps) => { _mm256_sub_ps };
+    (@intrinsic mul, ps) => { _mm256_mul_ps };
+    (@intrinsic div, ps) => { _mm256_div_ps };
+    (@intrinsic xor, ps) => { _mm256_xor_ps };
+    (@intrinsic sqrt, ps) => { _mm256_sqrt_ps };
+    (@intrinsic andnot, ps) => { _mm256_andnot_ps };
+    (@intrinsic cmp_gt, ps) => { _mm256_cmp_ps::<_CMP_GT_OQ> };
+    (@intrinsic blendv, ps) => { _mm256_blendv_ps };
+}
+#[cfg(all(target_arch = "x86_64", not(target_feature = "avx")))]
+avx_lanes_type!(AvxF64x4, F64x4, f64, 4, __m256d, pd);
+#[cfg(all(target_arch = "x86_64", not(target_feature = "avx")))]
+avx_lanes_type!(AvxF32x8, F32x8, f32, 8, __m256, ps);
 
 /// The lane type of `N` lanes of a scalar, for the lane modules' `type S`.
 /// (Eight f64 lanes as two `F64x4` measured 7–9 % slower per state than `F64x4` with AVX2 on the Z1 and

@@ -4,14 +4,14 @@
 // `no_std`, no allocation, no panics. The same text is compiled into embedyn-runtime and copied into every
 // standalone crate `embedyn generate` writes, so both paths compute bit-identical results.
 
-/// The scalar operations generated code needs, for `f64`, `f32` and [`Lanes`] of them.
+/// The scalar operations generated code needs, for `f64`, `f32` and the lane types of them (`F64x4`, …).
 pub trait Float: Copy {
     fn sincos(self) -> (Self, Self);
     /// Sines and cosines of `N` angles at once (see [`sincos_batch_f64`]).
     fn sincos_batch<const N: usize>(x: [Self; N]) -> ([Self; N], [Self; N]);
     fn sqrt(self) -> Self;
     fn abs(self) -> Self;
-    /// `if lhs > rhs { then } else { otherwise }` (lane by lane for [`Lanes`]).
+    /// `if lhs > rhs { then } else { otherwise }` (lane by lane for the lane types).
     fn select_gt(lhs: Self, rhs: Self, then: Self, otherwise: Self) -> Self;
     /// Two values of this type side by side (see [`PairF64`]).
     type Pair: Copy
@@ -118,7 +118,7 @@ pub fn negate_second<S: Float>(pair: S::Pair) -> S::Pair {
     S::negate_second(pair)
 }
 
-/// `if lhs > rhs { then } else { otherwise }`, lane by lane for [`Lanes`]: generated lane functions
+/// `if lhs > rhs { then } else { otherwise }`, lane by lane for the lane types: generated lane functions
 /// write their run-time pivoting with it.
 #[inline(always)]
 pub fn select_gt<S: Float>(lhs: S, rhs: S, then: S, otherwise: S) -> S {
@@ -650,6 +650,32 @@ pub mod dispatch {
     /// that crate's functions (each has its own `helpers`).
     pub fn use_avx(allowed: bool) {
         ALLOWED.store(allowed, Ordering::Relaxed);
+    }
+
+    /// Whether the CPU has AVX (and the operating system saves its registers), whatever [`use_avx`] says.
+    #[inline]
+    pub fn cpu_has_avx() -> bool {
+        match DETECTED.load(Ordering::Relaxed) {
+            2 => true,
+            1 => false,
+            _ => detect(),
+        }
+    }
+
+    /// `x` as a `U` of the same size: the arguments and result of a lane function handed to its AVX
+    /// twin, whose lane type (`AvxF64x4`) has the layout of the function's (`F64x4`).
+    ///
+    /// # Safety
+    ///
+    /// `T` and `U` have the same size and alignment, and every bit pattern of `T` is a valid `U` (lane
+    /// arrays of one scalar, references to them, slices of plain numbers).
+    #[inline(always)]
+    pub unsafe fn recast<T, U>(x: T) -> U {
+        const { assert!(core::mem::size_of::<T>() == core::mem::size_of::<U>()) };
+        const { assert!(core::mem::align_of::<T>() == core::mem::align_of::<U>()) };
+        let x = core::mem::ManuallyDrop::new(x);
+        // SAFETY: same size and alignment (checked when compiled), valid bits (the caller's promise).
+        unsafe { core::mem::transmute_copy(&*x) }
     }
 
     #[cold]
