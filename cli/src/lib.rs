@@ -226,6 +226,10 @@ pub enum Command {
         /// or `f32x8` up to 25,000), `all`, or `none` (less compile time).
         #[arg(long, value_parser = ["none", "large", "all"], default_value = "large")]
         avx_twins: String,
+        /// The crate's package name (default: the robot's name as an identifier, then `_dynamics`), e.g.
+        /// to keep crates generated with different options apart.
+        #[arg(long, value_name = "NAME")]
+        name: Option<String>,
     },
     /// Time every algorithm for each engine and scalar (median ns per call, in-process, pre-generated
     /// random states).
@@ -860,7 +864,20 @@ pub fn run(cli: Cli) -> Result<Printed, CliError> {
             reference,
             lanes,
             avx_twins,
+            name,
         } => {
+            if let Some(problem) = name
+                .as_deref()
+                .and_then(|n| embedyn_codegen::names::check_crate_name(n).err())
+            {
+                return Err(CliError::BadOption {
+                    option: "--name",
+                    message: format!(
+                        "{}: {problem} (a crate name: an ASCII letter, then letters, digits, `_` or `-`)",
+                        embedyn_codegen::names::code_span(name.as_deref().unwrap_or_default())
+                    ),
+                });
+            }
             if lanes == Some(0) {
                 return Err(CliError::BadOption {
                     option: "--lanes",
@@ -873,6 +890,7 @@ pub fn run(cli: Cli) -> Result<Printed, CliError> {
                 lanes: lanes.unwrap_or(0),
                 avx_twins: embedyn_codegen::AvxTwins::from_name(&avx_twins)
                     .expect("clap checked the value"),
+                crate_name: name,
                 model: scene.options_for(&loaded),
                 f64: scalar != Some(Scalar::F32),
                 f32: scalar != Some(Scalar::F64),

@@ -121,11 +121,23 @@ fn standalone_crate_with_lanes_checks_as_no_std() {
     generate(
         "models/arm7.urdf",
         &dir,
-        &["--lanes", "4", "--scalar", "f64", "--only", "aba"],
+        &[
+            "--lanes",
+            "4",
+            "--scalar",
+            "f64",
+            "--only",
+            "aba",
+            "--name",
+            "arm7-lanes",
+        ],
     );
     let src = std::fs::read_to_string(dir.join("src/lib.rs")).unwrap();
     assert!(src.contains("pub mod f64x4") && src.contains("pub type S = crate::helpers::F64x4;"));
+    // The lane functions' AVX twin, over the AVX lane type (checked below with the rest).
+    assert!(src.contains("pub type S = crate::helpers::AvxF64x4;"));
     let cargo = std::fs::read_to_string(dir.join("Cargo.toml")).unwrap();
+    assert!(cargo.contains("name = \"arm7-lanes\""), "{cargo}");
     assert!(
         cargo.contains("[dependencies.wide]") && cargo.contains("default-features = false"),
         "{cargo}"
@@ -142,6 +154,40 @@ fn standalone_crate_with_lanes_checks_as_no_std() {
         "the generated crate does not check:\n{}",
         String::from_utf8_lossy(&out.stderr)
     );
+}
+
+/// `--name` must be a crate name the user's code can refer to: refused otherwise, as a usage error
+/// naming the problem, before anything is written.
+#[test]
+fn crate_names_that_code_cannot_name_are_refused() {
+    for (name, problem) in [
+        ("9lives", "must start with an ASCII letter"),
+        ("arm seven", "is not a letter, digit"),
+        ("bras_à_sept", "is not a letter, digit"),
+        ("self", "keyword"),
+        ("std", "built-in crate"),
+        ("-x", "must start with an ASCII letter"),
+        ("", "must start with an ASCII letter"),
+    ] {
+        let dir = tmp("bad_name");
+        let out = Command::new(env!("CARGO_BIN_EXE_embedyn"))
+            .args([
+                "generate",
+                &repo("models/arm7.urdf").to_string_lossy(),
+                "--out",
+            ])
+            .arg(&dir)
+            .arg(format!("--name={name}"))
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{name:?}: {stderr}");
+        assert!(
+            stderr.contains("--name") && stderr.contains(problem),
+            "{name:?}: {stderr}"
+        );
+        assert!(!dir.exists(), "{name:?}: nothing is written");
+    }
 }
 
 /// `--only` writes exactly the functions named (and lists exactly those in the README); unknown names and

@@ -731,6 +731,14 @@ pub enum LoadErrorKind {
         "is not a folder: `--out` names the folder the crate is written into (created if needed)"
     )]
     OutNotAFolder,
+    /// `embedyn generate --name` gives no usable crate name.
+    #[error("--name {}: {problem} (a crate name: an ASCII letter, then letters, digits, `_` or `-`)", crate::names::code_span(.name))]
+    BadCrateName {
+        /// The name given.
+        name: String,
+        /// What is wrong with it.
+        problem: String,
+    },
     /// A file or folder cannot be written (the location names it).
     #[error("cannot write: {error}")]
     CannotWrite {

@@ -52,6 +52,10 @@ pub struct GenerateOptions {
     /// enabled; `src/dispatch.rs`, docs/generated-code.md). Default: the large ones; macro
     /// `avx_twins = none|large|all`, `embedyn generate --avx-twins none|large|all`.
     pub avx_twins: crate::AvxTwins,
+    /// The standalone crate's package name (`embedyn generate --name`; checked by
+    /// [`crate::names::check_crate_name`]). `None`: the robot's name as an identifier, then `_dynamics`.
+    /// Only the standalone crate has one.
+    pub crate_name: Option<String>,
 }
 
 /// Links named at generation time, by name (macro `wrenches(…)`, `frames(…)`, `reference = …`;
@@ -92,6 +96,7 @@ impl Default for GenerateOptions {
             links: LinkOptions::default(),
             lanes: 0,
             avx_twins: crate::AvxTwins::Large,
+            crate_name: None,
         }
     }
 }

@@ -180,6 +180,35 @@ pub fn crate_name(robot: &str) -> String {
     format!("{}_dynamics", identifier(robot, "robot"))
 }
 
+/// Why `name` cannot be a generated crate's package name (`embedyn generate --name`), if it cannot: it
+/// must be an ASCII letter and then letters, digits, `_` or `-` (at most 64), and its library name (`-`
+/// as `_`) a Rust identifier that is not a keyword nor the name of a crate every Rust program knows
+/// (`core`, `std`, `alloc`, `proc_macro`, `test`), since the user's code names the crate by it.
+pub fn check_crate_name(name: &str) -> Result<(), String> {
+    let mut chars = name.chars();
+    if !chars.next().is_some_and(|c| c.is_ascii_alphabetic()) {
+        return Err("must start with an ASCII letter".into());
+    }
+    if let Some(c) = chars.find(|c| !(c.is_ascii_alphanumeric() || *c == '_' || *c == '-')) {
+        return Err(format!(
+            "{} is not a letter, digit, `_` or `-` of ASCII",
+            fenced(&shown(&c.to_string()))
+        ));
+    }
+    if name.len() > 64 {
+        return Err(format!("is {} characters long (at most 64)", name.len()));
+    }
+    let library = name.replace('-', "_");
+    if ["core", "std", "alloc", "proc_macro", "test"].contains(&library.as_str())
+        || syn::parse_str::<syn::Ident>(&library).is_err()
+    {
+        return Err(format!(
+            "`{library}` is a Rust keyword or a built-in crate's name"
+        ));
+    }
+    Ok(())
+}
+
 /// A name as a reader should see it in generated docs and Markdown: control characters, quotes and
 /// backslashes shown as Rust escapes (`\n`, `\"`, `\u{7}`), so nothing in it can end a comment line or
 /// look like another name; every other character (letters of any script) as it is.

@@ -168,7 +168,21 @@ pub fn crate_files(
     let mut options = options.clone();
     options.helpers = quote!(crate::helpers);
     let body = generate_source(loaded, &options)?;
-    let name = crate_name(&loaded.robot.name);
+    let name = match &options.crate_name {
+        Some(name) => {
+            crate::names::check_crate_name(name).map_err(|problem| {
+                LoadError::at(
+                    Location::new(&loaded.robot.source, None, ""),
+                    LoadErrorKind::BadCrateName {
+                        name: name.clone(),
+                        problem,
+                    },
+                )
+            })?;
+            name.clone()
+        }
+        None => crate_name(&loaded.robot.name),
+    };
     let file_name = loaded
         .robot
         .source
