@@ -1081,11 +1081,27 @@ pub(crate) fn batch_wrapper(
     args: &[Arg],
     outputs: &[Output],
     paired: bool,
+    lanes: usize,
 ) -> TokenStream {
+    // Each lane value's lanes go to their states by literal lane indices: an index that varies at run
+    // time reads the value back through memory, a store-forwarding stall per entry where the value is one
+    // 256-bit register (an AVX twin): a floating Go2's `crba_batch` took 300 ns per state against 128 for
+    // the scalar calls, of which its lane `crba` about 30 (2026-12-03, new user's trial).
+    let lane_index: Vec<proc_macro2::Literal> = (0..lanes).map(num).collect();
     // Called as `self::name`: an output may share the function's name (`com`'s output `com`).
     let fname = format_ident!("{}", name);
     let batch = format_ident!("{}_batch", name);
-    let how = if paired {
+    // A paired function with a matrix output goes state by state through the scalar function wherever
+    // it runs: the transposition of its many outputs out of the lanes costs more than the lanes save (a
+    // floating Go2's `crba_batch` through the AVX twin's lanes 161 ns per state, the scalar calls 130; its
+    // `aba_batch` 240 against 360, `rnea_batch` 158 against 184; 2026-12-03).
+    let always_per_state = paired && outputs.iter().any(|o| matches!(o, Output::Matrix { .. }));
+    let how = if always_per_state {
+        format!(
+            "It calls the scalar module's `{name}` state by state, which computes mirrored branches side by \
+             side: moving its matrix out of the lanes would cost more than the lanes save"
+        )
+    } else if paired {
         format!(
             "Where `PAIRED_BATCH_PER_STATE` is true (four f64 lanes without AVX) it calls the scalar module's \
              `{name}` state by state, which computes mirrored branches side by side and is faster there; else \
@@ -1155,7 +1171,10 @@ pub(crate) fn batch_wrapper(
                 call_args.push(quote!(&mut #lane_id));
                 stores.push(quote!(
                     for i in 0..#n {
-                        #id[s][i] = #lane_id[i].to_array()[k];
+                        let lanes = #lane_id[i].to_array();
+                        #(if start + #lane_index < n {
+                            #id[start + #lane_index][i] = lanes[#lane_index];
+                        })*
                     }
                 ));
             }
@@ -1172,7 +1191,10 @@ pub(crate) fn batch_wrapper(
                 stores.push(quote!(
                     for r in 0..#r {
                         for c in 0..#c {
-                            #id[s][r][c] = #lane_id[r][c].to_array()[k];
+                            let lanes = #lane_id[r][c].to_array();
+                            #(if start + #lane_index < n {
+                                #id[start + #lane_index][r][c] = lanes[#lane_index];
+                            })*
                         }
                     }
                 ));
@@ -1185,7 +1207,12 @@ pub(crate) fn batch_wrapper(
         lengths.push(quote!(measure.len()));
         (
             quote!(let returned = self::#fname(#(#call_args),*);),
-            quote!(measure[s] = returned.to_array()[k];),
+            quote! {
+                let lanes = returned.to_array();
+                #(if start + #lane_index < n {
+                    measure[start + #lane_index] = lanes[#lane_index];
+                })*
+            },
         )
     } else {
         (quote!(self::#fname(#(#call_args),*);), quote!())
@@ -1216,8 +1243,13 @@ pub(crate) fn batch_wrapper(
         } else {
             quote!(scalar_module::#fname(#(#scalar_args),*);)
         };
+        let condition = if always_per_state {
+            quote!(true)
+        } else {
+            quote!(PAIRED_BATCH_PER_STATE)
+        };
         quote! {
-            if PAIRED_BATCH_PER_STATE {
+            if #condition {
                 for s in 0..n {
                     #call
                 }
@@ -1243,13 +1275,8 @@ pub(crate) fn batch_wrapper(
                 #(#lane_args)*
                 #(#out_lanes)*
                 #call
-                for k in 0..LANES {
-                    let s = start + k;
-                    if s < n {
-                        #(#stores)*
-                        #store_measure
-                    }
-                }
+                #(#stores)*
+                #store_measure
                 start += LANES;
             }
             true

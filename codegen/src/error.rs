@@ -731,6 +731,16 @@ pub enum LoadErrorKind {
         "is not a folder: `--out` names the folder the crate is written into (created if needed)"
     )]
     OutNotAFolder,
+    /// With lanes, one frame function's batch form would take another frame function's name.
+    #[error("with lanes, the batch form of `{function}` (the frame function of link {}) would be named `{function}_batch`, the frame function of link {}: name the frames of one of the two links in a crate or module without lanes (or rename the link)", crate::names::code_span(.of_link), crate::names::code_span(.link))]
+    BatchNameTaken {
+        /// The frame function whose batch form clashes.
+        function: String,
+        /// The link whose frame function has the batch form's name.
+        link: String,
+        /// The link of `function`.
+        of_link: String,
+    },
     /// `embedyn generate --name` gives no usable crate name.
     #[error("--name {}: {problem} (a crate name: an ASCII letter, then letters, digits, `_` or `-`)", crate::names::code_span(.name))]
     BadCrateName {

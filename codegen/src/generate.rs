@@ -598,6 +598,25 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
     // One function per algorithm, and per link named for a frame function.
     let frame_names: Vec<&str> = frame_links.iter().map(|(name, _)| name.as_str()).collect();
     let frame_functions = frame_function_names(&model64, &frame_names);
+    // A lane module's batch form of `frame_foo` is `frame_foo_batch`, which is also the frame function of
+    // a link `foo_batch` (attacker's trial: E0428 in the lane module).
+    if options.lanes > 0 {
+        for (k, function) in frame_functions.iter().enumerate() {
+            if let Some(j) = frame_functions
+                .iter()
+                .position(|other| *other == format!("{function}_batch"))
+            {
+                return Err(located_at_robot(
+                    loaded,
+                    LoadErrorKind::BatchNameTaken {
+                        function: function.clone(),
+                        link: frame_names[j].to_string(),
+                        of_link: frame_names[k].to_string(),
+                    },
+                ));
+            }
+        }
+    }
     let mut instances = Vec::new();
     for &algo in &algorithms {
         match algo.spec().parameter {
@@ -722,12 +741,13 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
                     + lane_function
                         .as_ref()
                         .map_or(0.0, |f| size::LANE_MEMORY_FACTOR * f.compile_bytes)
-                    // The lane twin is one more lane copy, in the 256-bit lane module.
+                    // The lane twin: part of one more lane copy, in the 256-bit lane module.
                     + lane_function
                         .as_ref()
                         .filter(|_| lane_twin.is_some())
                         .map_or(0.0, |f| {
-                            size::LANE_MEMORY_FACTOR * f.compile_bytes / scalars.len() as f64
+                            size::LANE_TWIN_MEMORY_SHARE * size::LANE_MEMORY_FACTOR * f.compile_bytes
+                                / scalars.len() as f64
                         }),
                 traced: true,
                 tracing_stopped: false,
@@ -1003,12 +1023,12 @@ fn lane_module(
             /// States per lane call.
             pub const LANES: usize = #n;
             /// Whether the `_batch` form of a function whose scalar form computes mirrored branches as
-            /// pairs calls that scalar function state by state instead of the lane function: with four f64
-            /// lanes on a target without AVX an `F64x4` is two SSE2 registers, and the paired scalar code
-            /// already fills one (a floating Go2's `aba`: 323 ns per call, 690 per state through the
-            /// lanes, 2026-12-03). Where the CPU has AVX the batch runs in the function's AVX twin, whose
-            /// own constant is false (codegen/src/dispatch.rs). The results are the same bits either way
-            /// (but for the sign of a NaN).
+            /// pairs calls that scalar function state by state instead of the lane function. True only in
+            /// a module of four f64 lanes built without AVX: there an `F64x4` is two SSE2 registers, and
+            /// the paired scalar code already fills one (a floating Go2's `aba`: 323 ns per call, 690 per
+            /// state through the lanes, 2026-12-03). Where the CPU has AVX the batch runs in the function's
+            /// AVX twin, whose own constant is false (codegen/src/dispatch.rs). The results are the same
+            /// bits either way (but for the sign of a NaN).
             const PAIRED_BATCH_PER_STATE: bool = cfg!(not(target_feature = "avx"))
                 && LANES == 4
                 && ::core::mem::size_of::<E>() == 8;
@@ -1596,7 +1616,7 @@ fn generate_traced(
             )
             .map_err(|e| located_at_robot(loaded, e.into()))?;
             let mut items =
-                crate::emit::batch_wrapper(&instance.name, &args, &outputs, emitted.paired);
+                crate::emit::batch_wrapper(&instance.name, &args, &outputs, emitted.paired, n);
             if let Some(product) = &product {
                 let wrapper = product.wrapper(&instance.name, &lane_doc, &args, &outputs, helpers);
                 items = quote!(#wrapper #items);
@@ -1957,6 +1977,43 @@ mod tests {
             );
             assert!(!readme.contains("the `f64` module's"), "{readme}");
         }
+    }
+
+    /// With lanes, frames on links `foo` and `foo_batch` would give two functions `frame_foo_batch` in the
+    /// lane module (the batch form of one, the other itself): refused, naming both links; without lanes
+    /// both are generated.
+    #[test]
+    fn a_frame_function_named_like_another_ones_batch_form_is_refused_with_lanes() {
+        let urdf = "<robot name=\"clash\"><link name=\"base\"/><link name=\"foo\"><inertial><mass value=\"1\"/><inertia ixx=\"0.1\" iyy=\"0.1\" izz=\"0.1\" ixy=\"0\" ixz=\"0\" iyz=\"0\"/></inertial></link><link name=\"foo_batch\"><inertial><mass value=\"1\"/><inertia ixx=\"0.1\" iyy=\"0.1\" izz=\"0.1\" ixy=\"0\" ixz=\"0\" iyz=\"0\"/></inertial></link><joint name=\"a\" type=\"revolute\"><parent link=\"base\"/><child link=\"foo\"/><axis xyz=\"0 0 1\"/><limit lower=\"-1\" upper=\"1\" effort=\"1\" velocity=\"1\"/></joint><joint name=\"b\" type=\"revolute\"><parent link=\"foo\"/><child link=\"foo_batch\"/><axis xyz=\"0 1 0\"/><limit lower=\"-1\" upper=\"1\" effort=\"1\" velocity=\"1\"/></joint></robot>";
+        let dir = std::env::temp_dir().join(format!("embedyn-clash-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let file = dir.join("clash.urdf");
+        std::fs::write(&file, urdf).unwrap();
+        let loaded = crate::load(&file).unwrap();
+        let options = |lanes: usize| {
+            GenerateOptions {
+                lanes,
+                f32: false,
+                links: LinkOptions {
+                    frames: vec!["foo".into(), "foo_batch".into()],
+                    ..LinkOptions::default()
+                },
+                ..GenerateOptions::default()
+            }
+            .with_requested(Some(vec![Algorithm::Frame]), &[])
+        };
+        let error = generate_source(&loaded, &options(4))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            error.contains("frame_foo_batch")
+                && error.contains("`foo`")
+                && error.contains("`foo_batch`"),
+            "{error}"
+        );
+        let text = generate_source(&loaded, &options(0)).unwrap();
+        assert!(text.contains("pub fn frame_foo(") && text.contains("pub fn frame_foo_batch("));
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     /// The generated source of `algorithm` alone, f64 only.

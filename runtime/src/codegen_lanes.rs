@@ -102,7 +102,7 @@ macro_rules! lanes_type {
                 ($name::new(s), $name::new(c))
             }
             /// Lane by lane as the scalar batch computes them: for `f64` lanes the scalar kernel's
-            /// operations on whole SIMD values ([`sincos_batch_simd`]), else each lane's angles through the
+            /// operations on whole SIMD values (`sincos_batch_simd`), else each lane's angles through the
             /// scalar batch.
             #[inline(always)]
             fn sincos_batch<const M: usize>(x: [Self; M]) -> ([Self; M], [Self; M]) {
@@ -246,26 +246,28 @@ sincos_per_lane!(F32x8);
 /// `wide`'s types could not do this: they pick their instructions when the crate is compiled, and the twin
 /// of code over them kept two SSE2 halves per value (the Z1's 4-lane `aba` 137 ns per state either way).
 ///
-/// Their operations are AVX instructions whatever code calls them: only an AVX twin may use them (a debug
-/// build checks this when one is made).
+/// Sound to use anywhere: a value is made only by `splat` and `new`, safe functions with AVX enabled, which
+/// code without AVX (that is, anything but an AVX twin) can call only in `unsafe`, promising that the CPU
+/// has AVX; the operations on a value, which are AVX instructions, then run where that promise holds.
 #[cfg(all(target_arch = "x86_64", not(target_feature = "avx")))]
 macro_rules! avx_lanes_type {
     ($name:ident, $plain:ident, $t:ident, $n:literal, $m:ident, $suffix:ident) => {
-        #[doc = concat!("`", stringify!($plain), "` for AVX twins (see the module's AVX lane types): not for other code.")]
+        #[doc = concat!("`", stringify!($plain), "` for AVX twins (see the module's AVX lane types).")]
         #[derive(Clone, Copy)]
         #[repr(transparent)]
         pub struct $name(core::arch::x86_64::$m);
 
         impl $name {
-            /// Every lane `x`.
-            #[inline(always)]
+            /// Every lane `x` (AVX: callable safely only where AVX is enabled).
+            #[target_feature(enable = "avx")]
+            #[inline]
             pub fn splat(x: $t) -> Self {
                 $name::new([x; $n])
             }
-            /// Lane `k` is `lanes[k]`.
-            #[inline(always)]
+            /// Lane `k` is `lanes[k]` (AVX: callable safely only where AVX is enabled).
+            #[target_feature(enable = "avx")]
+            #[inline]
             pub fn new(lanes: [$t; $n]) -> Self {
-                debug_assert!(dispatch::cpu_has_avx(), "AVX lane values on a CPU without AVX");
                 // SAFETY: an array of `N` numbers is a SIMD value of them, lane `k` element `k`.
                 $name(unsafe { core::mem::transmute::<[$t; $n], core::arch::x86_64::$m>(lanes) })
             }
@@ -280,12 +282,12 @@ macro_rules! avx_lanes_type {
             fn plain(self) -> $plain {
                 $plain::new(self.to_array())
             }
-        }
-
-        impl From<[$t; $n]> for $name {
+            /// A value of `lanes` made where a value of this type exists (so the CPU has AVX: see the type).
             #[inline(always)]
-            fn from(lanes: [$t; $n]) -> Self {
-                $name::new(lanes)
+            fn like(self, lanes: [$t; $n]) -> Self {
+                let _ = self;
+                // SAFETY: `self` exists, so a function with AVX made it: the CPU has AVX.
+                unsafe { $name::new(lanes) }
             }
         }
 
@@ -306,8 +308,8 @@ macro_rules! avx_lanes_type {
             #[inline(always)]
             fn neg(self) -> Self {
                 use core::arch::x86_64::*;
-                // SAFETY: only AVX twins compute with these values (see the type).
-                $name(unsafe { avx_lanes_type!(@intrinsic xor, $suffix)(self.0, $name::splat(-0.0).0) })
+                // SAFETY: `self` exists, so the CPU has AVX (see the type).
+                $name(unsafe { avx_lanes_type!(@intrinsic xor, $suffix)(self.0, self.like([-0.0; $n]).0) })
             }
         }
 
@@ -315,36 +317,39 @@ macro_rules! avx_lanes_type {
             #[inline(always)]
             fn sincos(self) -> (Self, Self) {
                 let (s, c) = self.plain().sincos();
-                ($name::new(s.to_array()), $name::new(c.to_array()))
+                (self.like(s.to_array()), self.like(c.to_array()))
             }
             /// The baseline lane type's batch (the scalar kernel on `wide`'s values, in SSE2 instructions
             /// encoded with AVX here): the same bits as the baseline code.
             #[inline(always)]
             fn sincos_batch<const M: usize>(x: [Self; M]) -> ([Self; M], [Self; M]) {
+                let Some(&any) = x.first() else {
+                    return (x, x);
+                };
                 let (s, c) = <$plain as Float>::sincos_batch(x.map($name::plain));
                 (
-                    s.map(|v| $name::new(v.to_array())),
-                    c.map(|v| $name::new(v.to_array())),
+                    s.map(|v| any.like(v.to_array())),
+                    c.map(|v| any.like(v.to_array())),
                 )
             }
             /// IEEE square root (correctly rounded, as the scalar one).
             #[inline(always)]
             fn sqrt(self) -> Self {
                 use core::arch::x86_64::*;
-                // SAFETY: only AVX twins compute with these values (see the type).
+                // SAFETY: a value exists, so the CPU has AVX (see the type).
                 $name(unsafe { avx_lanes_type!(@intrinsic sqrt, $suffix)(self.0) })
             }
             #[inline(always)]
             fn abs(self) -> Self {
                 use core::arch::x86_64::*;
-                // SAFETY: only AVX twins compute with these values (see the type).
-                $name(unsafe { avx_lanes_type!(@intrinsic andnot, $suffix)($name::splat(-0.0).0, self.0) })
+                // SAFETY: `self` exists, so the CPU has AVX (see the type).
+                $name(unsafe { avx_lanes_type!(@intrinsic andnot, $suffix)(self.like([-0.0; $n]).0, self.0) })
             }
             #[inline(always)]
             fn select_gt(lhs: Self, rhs: Self, then: Self, otherwise: Self) -> Self {
                 use core::arch::x86_64::*;
                 // An ordered comparison: false where either side is NaN, as the scalar `>`.
-                // SAFETY: only AVX twins compute with these values (see the type).
+                // SAFETY: a value exists, so the CPU has AVX (see the type).
                 $name(unsafe {
                     let greater = avx_lanes_type!(@intrinsic cmp_gt, $suffix)(lhs.0, rhs.0);
                     avx_lanes_type!(@intrinsic blendv, $suffix)(otherwise.0, then.0, greater)
@@ -375,7 +380,7 @@ macro_rules! avx_lanes_type {
             #[inline(always)]
             fn $method(self, rhs: Self) -> Self {
                 use core::arch::x86_64::*;
-                // SAFETY: only AVX twins compute with these values (see the type).
+                // SAFETY: a value exists, so the CPU has AVX (see the type).
                 $name(unsafe { avx_lanes_type!(@intrinsic $op, $suffix)(self.0, rhs.0) })
             }
         }

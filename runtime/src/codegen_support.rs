@@ -482,11 +482,14 @@ pub fn sincos_batch_f64<const N: usize>(x: [f64; N]) -> ([f64; N], [f64; N]) {
     sincos_passes(x)
 }
 
-/// Angles from which [`sincos_batch_f64`] calls its AVX copy (where the CPU has AVX): below, the call and
-/// the arrays it passes cost about what the wider instructions save (measured 2026-12-03, AVX copy against
-/// baseline: 8 angles 1.03×, 12 0.87×, 18 0.70×, 32 0.57×).
+/// Angles from which [`sincos_batch_f64`] calls its AVX copy (where the CPU has AVX). Alone, the copy pays
+/// from 10 angles (2026-12-03, against the baseline: 8 angles 1.03×, 12 0.87×, 18 0.70×, 32 0.57×); inside
+/// a generated function, though, whose first statements read the sines and cosines the copy has just
+/// stored with 256-bit instructions, it cost more than it saved at 12: a floating Go2's `crba` 1.27× the
+/// time (135 → 170 ns; its `rnea` the same), while the floating G1's (29 angles) took 0.97× (new user's and
+/// own trials, 2026-12-03). In an AVX twin the copy is inlined and the question does not arise.
 #[cfg(all(target_arch = "x86_64", not(target_feature = "avx")))]
-const SINCOS_AVX_MIN: usize = 10;
+const SINCOS_AVX_MIN: usize = 24;
 
 
 /// The kernel over all the angles in three passes (reduce, the two polynomials, the quadrant), each a loop
