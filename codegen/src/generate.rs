@@ -302,18 +302,8 @@ impl Generated {
     fn scalar_functions<T: Clone, E>(
         &self,
         render: impl Fn(&Code) -> Result<T, E>,
-    ) -> Result<ScalarFunctions<T>, E> {
-        let plain = self
-            .functions
-            .iter()
-            .map(|f| render(&f.code))
-            .collect::<Result<Vec<T>, E>>()?;
-        let f64 = plain
-            .iter()
-            .zip(&self.f64_twins)
-            .map(|(plain, twin)| twin.as_ref().map_or_else(|| Ok(plain.clone()), &render))
-            .collect::<Result<Vec<T>, E>>()?;
-        Ok(ScalarFunctions { plain, f64 })
+    ) -> Result<Rendered<T>, E> {
+        Rendered::of_functions(&self.functions, &self.f64_twins, render)
     }
 
     /// The lane modules' functions, each written by `render`: for the lane module of 256-bit values a
@@ -321,59 +311,42 @@ impl Generated {
     fn lane_functions<T: Clone, E>(
         &self,
         render: impl Fn(&Code) -> Result<T, E>,
-    ) -> Result<LaneFunctions<T>, E> {
-        let plain = self
-            .lane_functions
+    ) -> Result<Rendered<T>, E> {
+        Rendered::of_functions(&self.lane_functions, &self.lane_twins, render)
+    }
+}
+
+/// Functions as written for a module: without twins, and with them where they have one.
+struct Rendered<T> {
+    /// Every function as traced.
+    plain: Vec<T>,
+    /// Every function with its AVX twin where it has one (the `f64` module's, the 256-bit lane module's).
+    twinned: Vec<T>,
+}
+
+impl<T: Clone> Rendered<T> {
+    /// `functions` and their `twins` (one per function) written by `render`.
+    fn of_functions<E>(
+        functions: &[Emitted],
+        twins: &[Option<Code>],
+        render: impl Fn(&Code) -> Result<T, E>,
+    ) -> Result<Rendered<T>, E> {
+        let plain = functions
             .iter()
             .map(|f| render(&f.code))
             .collect::<Result<Vec<T>, E>>()?;
-        let wide = plain
+        let twinned = plain
             .iter()
-            .zip(&self.lane_twins)
+            .zip(twins)
             .map(|(plain, twin)| twin.as_ref().map_or_else(|| Ok(plain.clone()), &render))
             .collect::<Result<Vec<T>, E>>()?;
-        Ok(LaneFunctions {
-            plain,
-            wide,
-            lanes: self.lanes,
-        })
+        Ok(Rendered { plain, twinned })
     }
-}
 
-/// The functions of the lane modules ([`Generated::lane_functions`]).
-struct LaneFunctions<T> {
-    /// Every lane function as traced (the 128-bit lane modules').
-    plain: Vec<T>,
-    /// The lane module's of 256-bit values: with AVX twins.
-    wide: Vec<T>,
-    /// Lanes per lane module.
-    lanes: usize,
-}
-
-impl<T> LaneFunctions<T> {
-    /// The functions of the lane module of `scalar`.
-    fn of(&self, scalar: &str) -> &[T] {
-        if crate::dispatch::lanes_of_256_bits(scalar, self.lanes) {
-            &self.wide
-        } else {
-            &self.plain
-        }
-    }
-}
-
-/// The functions of the scalar modules ([`Generated::scalar_functions`]).
-struct ScalarFunctions<T> {
-    /// Every function as traced (the `f32` module's).
-    plain: Vec<T>,
-    /// The `f64` module's: with AVX twins.
-    f64: Vec<T>,
-}
-
-impl<T> ScalarFunctions<T> {
-    /// The functions of the module of `scalar`.
-    fn of(&self, scalar: &str) -> &[T] {
-        if scalar == "f64" {
-            &self.f64
+    /// The functions of a module with twins (`true`) or without.
+    fn of(&self, with_twins: bool) -> &[T] {
+        if with_twins {
+            &self.twinned
         } else {
             &self.plain
         }
@@ -1059,7 +1032,7 @@ pub fn generate_tokens(
             scalar,
             generated.constrained,
             &generated.limits,
-            functions.of(scalar),
+            functions.of(*scalar == "f64"),
         )
     });
     let lane_functions = generated.lane_functions(lex)?;
@@ -1074,7 +1047,7 @@ pub fn generate_tokens(
                     n,
                     generated.constrained,
                     &generated.helpers,
-                    lane_functions.of(scalar),
+                    lane_functions.of(crate::dispatch::lanes_of_256_bits(scalar, n)),
                 )
             })
             .collect(),
@@ -1108,7 +1081,7 @@ pub fn generate_source(loaded: &Loaded, options: &GenerateOptions) -> Result<Str
     let mut modules = Vec::new();
     for scalar in &generated.scalars {
         let empty = scalar_module(scalar, generated.constrained, &generated.limits, &[]);
-        modules.push((empty, functions.of(scalar)));
+        modules.push((empty, functions.of(*scalar == "f64")));
     }
     if generated.lanes > 0 {
         for scalar in &generated.scalars {
@@ -1119,7 +1092,10 @@ pub fn generate_source(loaded: &Loaded, options: &GenerateOptions) -> Result<Str
                 &generated.helpers,
                 &[],
             );
-            modules.push((empty, lane_functions.of(scalar)));
+            modules.push((
+                empty,
+                lane_functions.of(crate::dispatch::lanes_of_256_bits(scalar, generated.lanes)),
+            ));
         }
     }
     for (empty, functions) in modules {
@@ -1889,14 +1865,7 @@ mod tests {
         // The standalone crate's README names it.
         #[cfg(feature = "standalone")]
         {
-            let files =
-                crate::standalone::crate_files(&loaded, &options(Algorithm::AbaDerivatives, true))
-                    .unwrap();
-            let readme = &files
-                .iter()
-                .find(|(p, _)| p.ends_with("README.md"))
-                .unwrap()
-                .1;
+            let readme = standalone_readme(&loaded, &options(Algorithm::AbaDerivatives, true));
             assert!(
                 readme.contains("function `aba_derivatives` is also compiled with AVX"),
                 "{readme}"
@@ -1963,14 +1932,7 @@ mod tests {
         assert!(!none.contains("_avx"));
         #[cfg(feature = "standalone")]
         {
-            let files =
-                crate::standalone::crate_files(&loaded, &options(4, crate::AvxTwins::Large))
-                    .unwrap();
-            let readme = &files
-                .iter()
-                .find(|(p, _)| p.ends_with("README.md"))
-                .unwrap()
-                .1;
+            let readme = standalone_readme(&loaded, &options(4, crate::AvxTwins::Large));
             assert!(
                 readme.contains("the `f64x4` module's function `aba` is also compiled with AVX"),
                 "{readme}"
@@ -2014,6 +1976,17 @@ mod tests {
         let text = generate_source(&loaded, &options(0)).unwrap();
         assert!(text.contains("pub fn frame_foo(") && text.contains("pub fn frame_foo_batch("));
         std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// The README of the standalone crate of `loaded` with `options`.
+    #[cfg(feature = "standalone")]
+    fn standalone_readme(loaded: &Loaded, options: &GenerateOptions) -> String {
+        let files = crate::standalone::crate_files(loaded, options).unwrap();
+        files
+            .into_iter()
+            .find(|(p, _)| p.ends_with("README.md"))
+            .unwrap()
+            .1
     }
 
     /// The generated source of `algorithm` alone, f64 only.

@@ -2,6 +2,30 @@
 // codegen_support.rs (whose `Float` they implement). Compiled into embedyn-runtime's `codegen_support`, and
 // copied into a standalone crate generated with lanes (which then depends on `wide`).
 
+/// The `Float` items of a lane type about pairs: lane functions are not paired (their lanes are states), so
+/// a pair is two values side by side, `ArrayPair`.
+macro_rules! lane_pairs {
+    () => {
+        type Pair = ArrayPair<Self>;
+        #[inline(always)]
+        fn pair(first: Self, second: Self) -> ArrayPair<Self> {
+            ArrayPair::new(first, second)
+        }
+        #[inline(always)]
+        fn first(pair: ArrayPair<Self>) -> Self {
+            pair.first()
+        }
+        #[inline(always)]
+        fn second(pair: ArrayPair<Self>) -> Self {
+            pair.second()
+        }
+        #[inline(always)]
+        fn negate_second(pair: ArrayPair<Self>) -> ArrayPair<Self> {
+            pair.negate_second()
+        }
+    };
+}
+
 /// `N` numbers of one scalar type in one SIMD value, one per state: the scalar `S` of generated lane
 /// modules (`f64x4`, …), which evaluate `N` states in one call. Every operation acts lane by lane with the
 /// scalar's own arithmetic (IEEE add, subtract, multiply, divide and square root, no fused multiply-add,
@@ -134,24 +158,7 @@ macro_rules! lanes_type {
                 // An ordered comparison: false where either side is NaN, as the scalar `>`.
                 $name(wide::CmpGt::cmp_gt(lhs.0, rhs.0).blend(then.0, otherwise.0))
             }
-            // Lane functions are not paired (their lanes are states).
-            type Pair = ArrayPair<Self>;
-            #[inline(always)]
-            fn pair(first: Self, second: Self) -> ArrayPair<Self> {
-                ArrayPair::new(first, second)
-            }
-            #[inline(always)]
-            fn first(pair: ArrayPair<Self>) -> Self {
-                pair.first()
-            }
-            #[inline(always)]
-            fn second(pair: ArrayPair<Self>) -> Self {
-                pair.second()
-            }
-            #[inline(always)]
-            fn negate_second(pair: ArrayPair<Self>) -> ArrayPair<Self> {
-                pair.negate_second()
-            }
+            lane_pairs!();
         }
     };
 }
@@ -355,23 +362,7 @@ macro_rules! avx_lanes_type {
                     avx_lanes_type!(@intrinsic blendv, $suffix)(otherwise.0, then.0, greater)
                 })
             }
-            type Pair = ArrayPair<Self>;
-            #[inline(always)]
-            fn pair(first: Self, second: Self) -> ArrayPair<Self> {
-                ArrayPair::new(first, second)
-            }
-            #[inline(always)]
-            fn first(pair: ArrayPair<Self>) -> Self {
-                pair.first()
-            }
-            #[inline(always)]
-            fn second(pair: ArrayPair<Self>) -> Self {
-                pair.second()
-            }
-            #[inline(always)]
-            fn negate_second(pair: ArrayPair<Self>) -> ArrayPair<Self> {
-                pair.negate_second()
-            }
+            lane_pairs!();
         }
     };
     (@op $name:ident, $trait:ident, $method:ident, $op:ident, $suffix:ident) => {
