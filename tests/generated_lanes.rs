@@ -67,8 +67,8 @@ fn lane<const N: usize>(x: &[F64x4; N], k: usize) -> [f64; N] {
     std::array::from_fn(|i| x[i].to_array()[k])
 }
 
-/// `states[k][i]` packed as entry `i`, lane `k`.
-fn pack<const N: usize>(states: &[[f64; N]; 4]) -> [F64x4; N] {
+/// `states[k][i]` packed as entry `i`, lane `k` (the first four states).
+fn pack<const N: usize>(states: &[[f64; N]]) -> [F64x4; N] {
     std::array::from_fn(|i| F64x4::new(std::array::from_fn(|k| states[k][i])))
 }
 
@@ -372,11 +372,7 @@ fn lane_twins_give_the_bits_of_the_baseline_copies() {
     let n = 9;
     let states = anymal_states(n, 31);
     let (q, v, u) = &states;
-    let packed = |k: usize| {
-        let four = |x: &[[f64; NV]]| -> [[f64; NV]; 4] { std::array::from_fn(|j| x[k + j]) };
-        let q4: [[f64; anymal::NQ]; 4] = std::array::from_fn(|j| q[k + j]);
-        (pack(&q4), pack(&four(v)), pack(&four(u)))
-    };
+    let packed = |k: usize| (pack(&q[k..]), pack(&v[k..]), pack(&u[k..]));
     let mut noise = Rng::new(32);
     let loops = four_bar_states(4, 0.6, &mut noise);
     let z1_states: [[[f32; z1::NV]; 8]; 3] = std::array::from_fn(|_| {
@@ -407,13 +403,8 @@ fn lane_twins_give_the_bits_of_the_baseline_copies() {
         assert_anymal_aba_per_state(&states, &qdd);
         qdd.iter().for_each(|x| out.extend(bits(x)));
         let (lq, lv, lu) = &loops;
-        let four = |x: &[[f64; four_bar::NV]]| -> [[f64; four_bar::NV]; 4] {
-            std::array::from_fn(|j| x[j])
-        };
-        let lq4: [[f64; four_bar::NQ]; 4] = std::array::from_fn(|j| lq[j]);
         let mut qdd = [F64x4::splat(0.0); four_bar::NV];
-        let measure =
-            four_bar::f64x4::aba(&pack(&lq4), &pack(&four(lv)), &pack(&four(lu)), &mut qdd);
+        let measure = four_bar::f64x4::aba(&pack(lq), &pack(lv), &pack(lu), &mut qdd);
         out.extend(measure.to_array().map(f64::to_bits));
         for j in 0..4 {
             out.extend(bits(&lane(&qdd, j)));

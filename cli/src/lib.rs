@@ -866,16 +866,13 @@ pub fn run(cli: Cli) -> Result<Printed, CliError> {
             avx_twins,
             name,
         } => {
-            if let Some(problem) = name
+            if let Some(Err(message)) = name
                 .as_deref()
-                .and_then(|n| embedyn_codegen::names::check_crate_name(n).err())
+                .map(embedyn_codegen::names::check_crate_name)
             {
                 return Err(CliError::BadOption {
                     option: "--name",
-                    message: format!(
-                        "{}: {problem} (a crate name: an ASCII letter, then letters, digits, `_` or `-`)",
-                        embedyn_codegen::names::code_span(name.as_deref().unwrap_or_default())
-                    ),
+                    message,
                 });
             }
             if lanes == Some(0) {

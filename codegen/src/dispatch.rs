@@ -128,8 +128,7 @@ pub fn with_avx_twin(code: &Code, function: &str, helpers: &TokenStream, of: Twi
     let twin = Twin {
         module: &twin_module,
         helpers,
-        items: twin_items(of, helpers),
-        recast: matches!(of, TwinOf::Lanes { .. }),
+        of,
     };
     match code {
         Code::Tokens(tokens) => Code::Tokens(tokens_with_twin(tokens.clone(), &twin)),
@@ -143,11 +142,20 @@ struct Twin<'a> {
     module: &'a str,
     /// The helper module's path.
     helpers: &'a TokenStream,
-    /// Items of the twin's module besides the copy, shadowing the enclosing module's names
-    /// (`twin_items`).
-    items: TokenStream,
+    /// What the twin copies.
+    of: TwinOf<'a>,
+}
+
+impl Twin<'_> {
     /// Whether arguments and results are handed over with `dispatch::recast` (a lane twin's `S` differs).
-    recast: bool,
+    fn recast(&self) -> bool {
+        matches!(self.of, TwinOf::Lanes { .. })
+    }
+
+    /// The items of the twin's module besides the copy, shadowing the enclosing module's names.
+    fn items(&self) -> TokenStream {
+        twin_items(self.of, self.helpers)
+    }
 }
 
 /// The items of a twin's module besides the copy. A lane twin's `S` is the AVX lane type, and its batch
@@ -178,7 +186,7 @@ fn dispatch_statement(signature: &syn::Signature, twin: &Twin) -> TokenStream {
     let arguments = signature.inputs.iter().map(|input| match input {
         syn::FnArg::Typed(typed) => {
             let pattern = &typed.pat;
-            if twin.recast {
+            if twin.recast() {
                 quote!(#helpers::dispatch::recast(#pattern))
             } else {
                 quote!(#pattern)
@@ -187,7 +195,7 @@ fn dispatch_statement(signature: &syn::Signature, twin: &Twin) -> TokenStream {
         syn::FnArg::Receiver(_) => unreachable!("generated functions are free functions"),
     });
     let call = quote!(#module::#name(#(#arguments),*));
-    let call = if twin.recast {
+    let call = if twin.recast() {
         quote!(#helpers::dispatch::recast(#call))
     } else {
         call
@@ -245,7 +253,7 @@ fn tokens_with_twin(tokens: TokenStream, twin: &Twin) -> TokenStream {
     }
     let module = format_ident!("{}", twin.module);
     let cfg = twin_cfg();
-    let twin_items = &twin.items;
+    let twin_items = twin.items();
     quote! {
         #(#items)*
         #cfg
@@ -273,9 +281,9 @@ fn text_with_twin(text: &str, twin_spec: &Twin) -> String {
     let lines: Vec<&str> = text.lines().collect();
     let mut portable = String::with_capacity(text.len() + 1024);
     let mut twin = String::with_capacity(text.len() + 65_536);
-    if !twin_spec.items.is_empty() {
-        let items =
-            crate::generate::format_tokens(&twin_spec.items).expect("the twin's items format");
+    let twin_items = twin_spec.items();
+    if !twin_items.is_empty() {
+        let items = crate::generate::format_tokens(&twin_items).expect("the twin's items format");
         for l in items.lines() {
             // Indented as the twin's other items (two levels: lane module, twin module).
             push_line(

@@ -1221,7 +1221,7 @@ pub(crate) fn batch_wrapper(
     let must_use = "false where the slices' lengths differ (nothing is computed then)";
     // State by state through the scalar module's paired function: the same bits (lanes never change the
     // arithmetic), in the form that is faster there.
-    let per_state = if paired {
+    let per_state = paired.then(|| {
         let scalar_args: Vec<TokenStream> = args
             .iter()
             .map(|a| {
@@ -1243,21 +1243,35 @@ pub(crate) fn batch_wrapper(
         } else {
             quote!(scalar_module::#fname(#(#scalar_args),*);)
         };
-        let condition = if always_per_state {
-            quote!(true)
-        } else {
-            quote!(PAIRED_BATCH_PER_STATE)
-        };
         quote! {
-            if #condition {
-                for s in 0..n {
-                    #call
-                }
-                return true;
+            for s in 0..n {
+                #call
             }
         }
-    } else {
-        quote!()
+    });
+    // Chunks of `LANES` states through the lane function.
+    let through_lanes = quote! {
+        let mut start = 0;
+        while start < n {
+            let at = |k: usize| if start + k < n { start + k } else { start };
+            #(#lane_args)*
+            #(#out_lanes)*
+            #call
+            #(#stores)*
+            #store_measure
+            start += LANES;
+        }
+    };
+    let body = match per_state {
+        Some(per_state) if always_per_state => per_state,
+        Some(per_state) => quote! {
+            if PAIRED_BATCH_PER_STATE {
+                #per_state
+                return true;
+            }
+            #through_lanes
+        },
+        None => through_lanes,
     };
     quote! {
         #[doc = #doc]
@@ -1268,17 +1282,7 @@ pub(crate) fn batch_wrapper(
             if #(#lengths != n)||* {
                 return false;
             }
-            #per_state
-            let mut start = 0;
-            while start < n {
-                let at = |k: usize| if start + k < n { start + k } else { start };
-                #(#lane_args)*
-                #(#out_lanes)*
-                #call
-                #(#stores)*
-                #store_measure
-                start += LANES;
-            }
+            #body
             true
         }
     }

@@ -742,12 +742,10 @@ pub enum LoadErrorKind {
         of_link: String,
     },
     /// `embedyn generate --name` gives no usable crate name.
-    #[error("--name {}: {problem} (a crate name: an ASCII letter, then letters, digits, `_` or `-`)", crate::names::code_span(.name))]
+    #[error("--name {message}")]
     BadCrateName {
-        /// The name given.
-        name: String,
-        /// What is wrong with it.
-        problem: String,
+        /// What is wrong with it, naming it (`names::check_crate_name`).
+        message: String,
     },
     /// A file or folder cannot be written (the location names it).
     #[error("cannot write: {error}")]

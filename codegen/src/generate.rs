@@ -632,6 +632,10 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
     let mut f64_twins = Vec::new();
     let mut lane_functions = Vec::new();
     let mut lane_twins = Vec::new();
+    // The AVX lane type of the lane module of 256-bit values, if one is generated.
+    let avx_type = scalars
+        .iter()
+        .find_map(|s| crate::dispatch::avx_lane_type(s, options.lanes));
     if !scalars.is_empty() {
         let instance_algorithms: Vec<Algorithm> = instances.iter().map(|i| i.algorithm).collect();
         let mut sizes =
@@ -679,9 +683,6 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
                 )
             });
             // The lane function's copy with an AVX twin, for the lane module of 256-bit values.
-            let avx_type = scalars
-                .iter()
-                .find_map(|s| crate::dispatch::avx_lane_type(s, options.lanes));
             let lane_twin = lane_function.as_ref().and_then(|lane| {
                 let avx_type =
                     avx_type.filter(|_| options.avx_twins.twins_lanes(lane.statements))?;
@@ -711,17 +712,15 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
                     + twin
                         .as_ref()
                         .map_or(0.0, |_| function.compile_bytes / scalars.len() as f64)
-                    + lane_function
-                        .as_ref()
-                        .map_or(0.0, |f| size::LANE_MEMORY_FACTOR * f.compile_bytes)
-                    // The lane twin: part of one more lane copy, in the 256-bit lane module.
-                    + lane_function
-                        .as_ref()
-                        .filter(|_| lane_twin.is_some())
-                        .map_or(0.0, |f| {
-                            size::LANE_TWIN_MEMORY_SHARE * size::LANE_MEMORY_FACTOR * f.compile_bytes
-                                / scalars.len() as f64
-                        }),
+                    + lane_function.as_ref().map_or(0.0, |f| {
+                        // The lane twin: part of one more lane copy, in the 256-bit lane module.
+                        let twin = if lane_twin.is_some() {
+                            size::LANE_TWIN_MEMORY_SHARE / scalars.len() as f64
+                        } else {
+                            0.0
+                        };
+                        size::LANE_MEMORY_FACTOR * f.compile_bytes * (1.0 + twin)
+                    }),
                 traced: true,
                 tracing_stopped: false,
             };

@@ -180,33 +180,43 @@ pub fn crate_name(robot: &str) -> String {
     format!("{}_dynamics", identifier(robot, "robot"))
 }
 
-/// Why `name` cannot be a generated crate's package name (`embedyn generate --name`), if it cannot: it
-/// must be an ASCII letter and then letters, digits, `_` or `-` (at most 64), and its library name (`-`
-/// as `_`) a Rust identifier that is not a keyword nor the name of a crate every Rust program knows
-/// (`core`, `std`, `alloc`, `proc_macro`, `test`), since the user's code names the crate by it.
+/// Why `name` cannot be a generated crate's package name (`embedyn generate --name`), if it cannot, as a
+/// message naming it: it must be an ASCII letter and then letters, digits, `_` or `-` (at most 64), and its
+/// library name (`-` as `_`) a Rust identifier that is not a keyword nor the name of a crate every Rust
+/// program knows (`core`, `std`, `alloc`, `proc_macro`, `test`), since the user's code names the crate by it.
 pub fn check_crate_name(name: &str) -> Result<(), String> {
+    crate_name_problem(name).map_or(Ok(()), |problem| {
+        Err(format!(
+            "{}: {problem} (a crate name: an ASCII letter, then letters, digits, `_` or `-`)",
+            code_span(name)
+        ))
+    })
+}
+
+/// What is wrong with `name` as a crate name (see [`check_crate_name`]).
+fn crate_name_problem(name: &str) -> Option<String> {
     let mut chars = name.chars();
     if !chars.next().is_some_and(|c| c.is_ascii_alphabetic()) {
-        return Err("must start with an ASCII letter".into());
+        return Some("must start with an ASCII letter".into());
     }
     if let Some(c) = chars.find(|c| !(c.is_ascii_alphanumeric() || *c == '_' || *c == '-')) {
-        return Err(format!(
+        return Some(format!(
             "{} is not a letter, digit, `_` or `-` of ASCII",
             fenced(&shown(&c.to_string()))
         ));
     }
     if name.len() > 64 {
-        return Err(format!("is {} characters long (at most 64)", name.len()));
+        return Some(format!("is {} characters long (at most 64)", name.len()));
     }
     let library = name.replace('-', "_");
     if ["core", "std", "alloc", "proc_macro", "test"].contains(&library.as_str())
         || syn::parse_str::<syn::Ident>(&library).is_err()
     {
-        return Err(format!(
+        return Some(format!(
             "`{library}` is a Rust keyword or a built-in crate's name"
         ));
     }
-    Ok(())
+    None
 }
 
 /// A name as a reader should see it in generated docs and Markdown: control characters, quotes and

@@ -170,13 +170,10 @@ pub fn crate_files(
     let body = generate_source(loaded, &options)?;
     let name = match &options.crate_name {
         Some(name) => {
-            crate::names::check_crate_name(name).map_err(|problem| {
+            crate::names::check_crate_name(name).map_err(|message| {
                 LoadError::at(
                     Location::new(&loaded.robot.source, None, ""),
-                    LoadErrorKind::BadCrateName {
-                        name: name.clone(),
-                        problem,
-                    },
+                    LoadErrorKind::BadCrateName { message },
                 )
             })?;
             name.clone()

@@ -655,16 +655,6 @@ pub mod dispatch {
         ALLOWED.store(allowed, Ordering::Relaxed);
     }
 
-    /// Whether the CPU has AVX (and the operating system saves its registers), whatever [`use_avx`] says.
-    #[inline]
-    pub fn cpu_has_avx() -> bool {
-        match DETECTED.load(Ordering::Relaxed) {
-            2 => true,
-            1 => false,
-            _ => detect(),
-        }
-    }
-
     /// `x` as a `U` of the same size: the arguments and result of a lane function handed to its AVX
     /// twin, whose lane type (`AvxF64x4`) has the layout of the function's (`F64x4`).
     ///
