@@ -360,14 +360,15 @@ fn threads_over_a_batch_equal_the_scalar_calls() {
 
 /// The AVX twins of the 256-bit lane modules (`f64x4`, `f32x8`: one AVX instruction per lane value where the
 /// CPU has AVX, codegen/src/dispatch.rs) give the bits of their baseline copies and of the scalar functions:
-/// every lane function here run with the twins allowed and forbidden (`use_avx`), the floating ANYmal B's
+/// every lane function here run with both twins allowed (AVX-512 where the CPU has it), with the AVX-512
+/// twins forbidden (`use_avx512`) and with all forbidden (`use_avx`), the floating ANYmal B's
 /// `aba`, `rnea`, `crba` and `aba_batch` (whose baseline copy goes state by state through the paired scalar
 /// function, its twin through the lanes), the four-bar's pivoting `aba` with its measure, and the Z1's `aba` in
 /// eight f32 lanes. (On a CPU without AVX both runs take the baseline copy; the CI machines have AVX, and the
 /// test says which ran.)
 #[test]
 fn lane_twins_give_the_bits_of_the_baseline_copies() {
-    use embedyn::codegen_support::dispatch::{avx, use_avx};
+    use embedyn::codegen_support::dispatch::{avx, avx512, use_avx, use_avx512};
     const NV: usize = anymal::NV;
     let n = 9;
     let states = anymal_states(n, 31);
@@ -427,22 +428,23 @@ fn lane_twins_give_the_bits_of_the_baseline_copies() {
         out
     };
     use_avx(true);
-    let with_twins = run();
+    let with_avx512 = run();
+    use_avx512(false);
+    let with_avx = run();
+    use_avx512(true);
     use_avx(false);
     let baseline = run();
     use_avx(true);
-    assert_eq!(with_twins.len(), baseline.len());
-    let differing = with_twins
-        .iter()
-        .zip(&baseline)
-        .filter(|(a, b)| a != b)
-        .count();
-    assert_eq!(
-        differing,
-        0,
-        "{differing} of {} results differ",
-        baseline.len()
-    );
+    for (twins, name) in [(&with_avx512, "AVX-512"), (&with_avx, "AVX")] {
+        assert_eq!(twins.len(), baseline.len());
+        let differing = twins.iter().zip(&baseline).filter(|(a, b)| a != b).count();
+        assert_eq!(
+            differing,
+            0,
+            "{name} twins: {differing} of {} results differ",
+            baseline.len()
+        );
+    }
     // The lane results are those of the scalar functions too (the lanes of the first pack).
     let (ql, vl, ul) = packed(0);
     let mut qdd = [F64x4::splat(0.0); NV];
@@ -453,12 +455,13 @@ fn lane_twins_give_the_bits_of_the_baseline_copies() {
         assert_eq!(bits(&lane(&qdd, j)), bits(&expected), "aba, lane {j}");
     }
     eprintln!(
-        "lane twins: {} (this CPU {} AVX)",
+        "lane twins: {} (this CPU {} AVX, {} AVX-512 F and VL)",
         if avx() {
             "compared with the baseline copies"
         } else {
             "not run"
         },
-        if avx() { "has" } else { "lacks" }
+        if avx() { "has" } else { "lacks" },
+        if avx512() { "has" } else { "lacks" }
     );
 }

@@ -16,6 +16,9 @@
 //! costs compile time (its code is optimized twice), so only functions of at least
 //! `TWIN_MIN_STATEMENTS` statements get one: below that the measured gain was nil (the Z1's `aba`,
 //! 1.8k operations, the same time either way).
+//!
+//! A lane module of 256-bit values gives its functions two twins (`TwinOf::Lanes`, [`AVX512`] then
+//! [`AVX`]): the one compiled with AVX-512 F and VL runs where the CPU has them, the AVX one elsewhere.
 
 use crate::emit::Code;
 use proc_macro2::TokenStream;
@@ -106,11 +109,49 @@ pub fn avx_lane_type(scalar: &str, lanes: usize) -> Option<&'static str> {
 pub enum TwinOf<'a> {
     /// A function of a scalar module: the twin is the same code compiled with AVX.
     Scalar,
-    /// A function of a lane module of 256-bit values: the twin is the same code over `avx_type`
-    /// (`AvxF64x4`: the lane type's layout, AVX instructions), compiled with AVX; the public functions
-    /// hand their arguments and results over with `dispatch::recast`. `wide`'s lane types pick their
-    /// instructions when the crate is compiled, so the same code over them kept two SSE2 halves per value.
+    /// A function of a lane module of 256-bit values: the twins are the same code over `avx_type`
+    /// (`AvxF64x4`: the lane type's layout, AVX instructions), one compiled with AVX-512 (F and VL) and
+    /// one with AVX; the public functions hand their arguments and results over with `dispatch::recast`.
+    /// `wide`'s lane types pick their instructions when the crate is compiled, so the same code over them
+    /// kept two SSE2 halves per value.
     Lanes { avx_type: &'a str },
+}
+
+/// An instruction-set level a twin is compiled for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Level {
+    /// The twin module's suffix (`aba_avx`, `aba_avx512`), also the name of the `helpers::dispatch`
+    /// function that says whether the CPU has the level.
+    pub name: &'static str,
+    /// The `target_feature` list every function of the twin is compiled with.
+    pub features: &'static str,
+}
+
+/// AVX: three-operand encoding, 256-bit values, 16 vector registers.
+pub const AVX: Level = Level {
+    name: "avx",
+    features: "avx",
+};
+
+/// AVX-512 F and VL: the same 256-bit instructions with 32 vector registers, which long lane functions
+/// use to spill less. Measured (2026-12-03, 4 f64 lanes, one binary each, ns per call of 4 states): the
+/// Z1's `aba` 313 with AVX, 258 with AVX-512; `rnea` 178 against 164, `crba` 117 against 109; the floating
+/// ANYmal B's `aba` 843 against 826, `crba` 340 against 298. Neither the scalar functions (the same time)
+/// nor AVX2 and FMA (the ANYmal B's `rnea` 1.1× slower, the Z1's `aba` between the two) paid as well.
+/// Vector length 256 bits, so no 512-bit instruction runs and the CPU keeps its AVX2 clock.
+pub const AVX512: Level = Level {
+    name: "avx512",
+    features: "avx512f,avx512vl",
+};
+
+impl TwinOf<'_> {
+    /// The levels this function gets a twin for, the one to prefer first.
+    pub fn levels(self) -> &'static [Level] {
+        match self {
+            TwinOf::Scalar => &[AVX],
+            TwinOf::Lanes { .. } => &[AVX512, AVX],
+        }
+    }
 }
 
 /// The cfg under which twins exist: an x86-64 build that does not enable AVX itself.
@@ -118,15 +159,14 @@ fn twin_cfg() -> TokenStream {
     quote!(#[cfg(all(target_arch = "x86_64", not(target_feature = "avx")))])
 }
 
-/// `code` (the items of function `function`: its public functions and part modules) with an AVX twin:
-/// the items as they are, each public function first calling its twin where the CPU has AVX, and the
-/// items again in module `{function}_avx`, every function in them compiled with AVX. (The module is in
-/// the type namespace, where the scalar module holds only the part modules, `aba_parts_0`, and CamelCase
-/// types besides.)
+/// `code` (the items of function `function`: its public functions and part modules) with AVX twins:
+/// the items as they are, each public function first calling a twin where the CPU has its level, and
+/// the items again in module `{function}_{level}` per level (`aba_avx`), every function in it compiled
+/// for that level. (The modules are in the type namespace, where the scalar module holds only the part
+/// modules, `aba_parts_0`, and CamelCase types besides.)
 pub fn with_avx_twin(code: &Code, function: &str, helpers: &TokenStream, of: TwinOf) -> Code {
-    let twin_module = format!("{function}_avx");
     let twin = Twin {
-        module: &twin_module,
+        function,
         helpers,
         of,
     };
@@ -136,13 +176,13 @@ pub fn with_avx_twin(code: &Code, function: &str, helpers: &TokenStream, of: Twi
     }
 }
 
-/// How a function's code gets its twin.
+/// How a function's code gets its twins.
 struct Twin<'a> {
-    /// The twin's module (`aba_avx`).
-    module: &'a str,
+    /// The function's name (its twin modules are `{function}_{level}`).
+    function: &'a str,
     /// The helper module's path.
     helpers: &'a TokenStream,
-    /// What the twin copies.
+    /// What the twins copy.
     of: TwinOf<'a>,
 }
 
@@ -152,7 +192,17 @@ impl Twin<'_> {
         matches!(self.of, TwinOf::Lanes { .. })
     }
 
-    /// The items of the twin's module besides the copy, shadowing the enclosing module's names.
+    /// The levels, the one to prefer first.
+    fn levels(&self) -> &'static [Level] {
+        self.of.levels()
+    }
+
+    /// The twin module of `level`.
+    fn module(&self, level: Level) -> String {
+        format!("{}_{}", self.function, level.name)
+    }
+
+    /// The items of a twin's module besides the copy, shadowing the enclosing module's names.
     fn items(&self) -> TokenStream {
         twin_items(self.of, self.helpers)
     }
@@ -178,52 +228,63 @@ fn twin_items(of: TwinOf, helpers: &TokenStream) -> TokenStream {
     }
 }
 
-/// The statement a public function starts with: `return` its twin's result where the CPU has AVX.
+/// The statements a public function starts with: per level, the best first, `return` its twin's
+/// result where the CPU has that level.
 fn dispatch_statement(signature: &syn::Signature, twin: &Twin) -> TokenStream {
-    let module = format_ident!("{}", twin.module);
     let helpers = twin.helpers;
     let name = &signature.ident;
-    let arguments = signature.inputs.iter().map(|input| match input {
-        syn::FnArg::Typed(typed) => {
-            let pattern = &typed.pat;
-            if twin.recast() {
-                quote!(#helpers::dispatch::recast(#pattern))
-            } else {
-                quote!(#pattern)
+    let arguments: Vec<TokenStream> = signature
+        .inputs
+        .iter()
+        .map(|input| match input {
+            syn::FnArg::Typed(typed) => {
+                let pattern = &typed.pat;
+                if twin.recast() {
+                    quote!(#helpers::dispatch::recast(#pattern))
+                } else {
+                    quote!(#pattern)
+                }
+            }
+            syn::FnArg::Receiver(_) => unreachable!("generated functions are free functions"),
+        })
+        .collect();
+    let cfg = twin_cfg();
+    let statements = twin.levels().iter().map(|&level| {
+        let module = format_ident!("{}", twin.module(level));
+        let has = format_ident!("{}", level.name);
+        let call = quote!(#module::#name(#(#arguments),*));
+        let call = if twin.recast() {
+            quote!(#helpers::dispatch::recast(#call))
+        } else {
+            call
+        };
+        quote! {
+            #cfg
+            if #helpers::dispatch::#has() {
+                // SAFETY (not in the output: `quote` drops comments): the CPU has the level, the one
+                // requirement of the twin; a lane twin's type has the layout of the lane module's
+                // (`recast`).
+                return unsafe { #call };
             }
         }
-        syn::FnArg::Receiver(_) => unreachable!("generated functions are free functions"),
     });
-    let call = quote!(#module::#name(#(#arguments),*));
-    let call = if twin.recast() {
-        quote!(#helpers::dispatch::recast(#call))
-    } else {
-        call
-    };
-    let cfg = twin_cfg();
-    quote! {
-        #cfg
-        if #helpers::dispatch::avx() {
-            // SAFETY (not in the output: `quote` drops comments): the CPU has AVX, the one requirement
-            // of the twin; a lane twin's type has the layout of the lane module's (`recast`).
-            return unsafe { #call };
-        }
-    }
+    quote!(#(#statements)*)
 }
 
-/// The attribute every function of a twin carries.
-fn avx_attribute() -> syn::Attribute {
-    syn::parse_quote!(#[target_feature(enable = "avx")])
+/// The attribute every function of `level`'s twin carries.
+fn level_attribute(level: Level) -> syn::Attribute {
+    let features = level.features;
+    syn::parse_quote!(#[target_feature(enable = #features)])
 }
 
-/// Adds the AVX attribute to every function among `items`, in nested modules too.
-fn enable_avx(items: &mut [syn::Item]) {
+/// Adds `attribute` to every function among `items`, in nested modules too.
+fn add_to_functions(items: &mut [syn::Item], attribute: &syn::Attribute) {
     for item in items {
         match item {
-            syn::Item::Fn(function) => function.attrs.push(avx_attribute()),
+            syn::Item::Fn(function) => function.attrs.push(attribute.clone()),
             syn::Item::Mod(module) => {
                 if let Some((_, inner)) = &mut module.content {
-                    enable_avx(inner);
+                    add_to_functions(inner, attribute);
                 }
             }
             _ => {}
@@ -233,37 +294,45 @@ fn enable_avx(items: &mut [syn::Item]) {
 
 fn tokens_with_twin(tokens: TokenStream, twin: &Twin) -> TokenStream {
     let file: syn::File = syn::parse2(tokens).expect("generated code parses as items");
-    let mut copy = file.items.clone();
-    enable_avx(&mut copy);
+    let cfg = twin_cfg();
+    let twin_items = twin.items();
+    let modules: Vec<TokenStream> = twin
+        .levels()
+        .iter()
+        .map(|&level| {
+            let mut copy = file.items.clone();
+            add_to_functions(&mut copy, &level_attribute(level));
+            let module = format_ident!("{}", twin.module(level));
+            let doc = format!(
+                " The functions above compiled for `{}` (see `helpers::dispatch`).",
+                level.features
+            );
+            quote! {
+                #cfg
+                #[doc = #doc]
+                mod #module {
+                    #[allow(unused_imports)]
+                    use super::*;
+                    #twin_items
+                    #(#copy)*
+                }
+            }
+        })
+        .collect();
     let mut items = file.items;
     for item in &mut items {
         if let syn::Item::Fn(function) = item {
             if matches!(function.vis, syn::Visibility::Public(_)) {
                 let statement = dispatch_statement(&function.sig, twin);
-                let statement: syn::Stmt =
-                    syn::parse2(quote!({ #statement })).expect("the dispatch statement parses");
-                // `{ … }` parsed as one block statement: unwrap it to keep the `if` at the top level.
-                let statement = match statement {
-                    syn::Stmt::Expr(syn::Expr::Block(block), _) => block.block.stmts,
-                    other => vec![other],
-                };
-                function.block.stmts.splice(0..0, statement);
+                let block: syn::Block =
+                    syn::parse2(quote!({ #statement })).expect("the dispatch statements parse");
+                function.block.stmts.splice(0..0, block.stmts);
             }
         }
     }
-    let module = format_ident!("{}", twin.module);
-    let cfg = twin_cfg();
-    let twin_items = twin.items();
     quote! {
         #(#items)*
-        #cfg
-        /// The functions above compiled with AVX (see `helpers::dispatch`).
-        mod #module {
-            #[allow(unused_imports)]
-            use super::*;
-            #twin_items
-            #(#copy)*
-        }
+        #(#modules)*
     }
 }
 
@@ -280,6 +349,9 @@ fn starts_function(trimmed: &str) -> bool {
 fn text_with_twin(text: &str, twin_spec: &Twin) -> String {
     let lines: Vec<&str> = text.lines().collect();
     let mut portable = String::with_capacity(text.len() + 1024);
+    // The twin's text cut where a function starts: each piece is followed by that function's
+    // attribute at the indentation given (the last piece by none), the same for every level.
+    let mut pieces: Vec<(String, String)> = Vec::new();
     let mut twin = String::with_capacity(text.len() + 65_536);
     let twin_items = twin_spec.items();
     if !twin_items.is_empty() {
@@ -302,12 +374,10 @@ fn text_with_twin(text: &str, twin_spec: &Twin) -> String {
         let trimmed = line.trim_start();
         let indent = &line[..line.len() - trimmed.len()];
         if starts_function(trimmed) {
-            twin.push_str("    ");
-            twin.push_str(indent);
-            twin.push_str("#[target_feature(enable = \"avx\")]\n");
+            pieces.push((std::mem::take(&mut twin), format!("    {indent}")));
         }
         if trimmed.starts_with("pub fn ") && indent.len() == 4 {
-            // A public function: its whole signature, then the dispatch as its first statement.
+            // A public function: its whole signature, then the dispatch as its first statements.
             let start = i;
             while !(lines[i].starts_with("    ") && lines[i].trim_end().ends_with('{')) {
                 i += 1;
@@ -342,10 +412,23 @@ fn text_with_twin(text: &str, twin_spec: &Twin) -> String {
         push_line(&mut twin, line);
         i += 1;
     }
-    let twin_module = twin_spec.module;
-    format!(
-        "{portable}    #[cfg(all(target_arch = \"x86_64\", not(target_feature = \"avx\")))]\n    /// The functions above compiled with AVX (see `helpers::dispatch`).\n    mod {twin_module} {{\n        #[allow(unused_imports)]\n        use super::*;\n{twin}    }}\n"
-    )
+    let mut out = portable;
+    for &level in twin_spec.levels() {
+        let module = twin_spec.module(level);
+        let features = level.features;
+        out.push_str(&format!(
+            "    #[cfg(all(target_arch = \"x86_64\", not(target_feature = \"avx\")))]\n    /// The functions above compiled for `{features}` (see `helpers::dispatch`).\n    mod {module} {{\n        #[allow(unused_imports)]\n        use super::*;\n"
+        ));
+        for (piece, indent) in &pieces {
+            out.push_str(piece);
+            out.push_str(&format!(
+                "{indent}#[target_feature(enable = \"{features}\")]\n"
+            ));
+        }
+        out.push_str(&twin);
+        out.push_str("    }\n");
+    }
+    out
 }
 
 /// A line of the twin, indented once more (it sits in the twin's module).
@@ -421,5 +504,49 @@ mod tests {
         assert!(out.contains("return unsafe { g_avx::g(q, out) };"), "{out}");
         // Both copies parse as items.
         syn::parse_str::<syn::File>(&out).unwrap();
+    }
+
+    /// A lane function gets two twins, AVX-512 asked first, each with its level's attribute on every
+    /// function and the AVX lane type as its `S`; the arguments and result are recast for each.
+    #[test]
+    fn lane_functions_get_an_avx512_twin_then_an_avx_one() {
+        let text = "    mod h_parts_0 {\n        #[allow(unused_imports)]\n        use super::*;\n        #[inline(never)]\n        pub(super) fn h_part(q: &[S; 2], s: &mut [S; 1]) {\n            s[0] = q[0];\n        }\n    }\n    use self::h_parts_0::h_part;\n    /// Doc.\n    pub fn h(q: &[S; 2], out: &mut [S; 1]) {\n        h_part(q, out);\n    }\n";
+        let of = TwinOf::Lanes {
+            avx_type: "AvxF64x4",
+        };
+        let Code::Text(out) = with_avx_twin(&Code::Text(text.to_string()), "h", &helpers(), of)
+        else {
+            panic!("text stays text")
+        };
+        let tokens = quote! {
+            pub fn h(q: &[S; 2], out: &mut [S; 1]) { out[0] = q[0]; }
+        };
+        let Code::Tokens(from_tokens) = with_avx_twin(&Code::Tokens(tokens), "h", &helpers(), of)
+        else {
+            panic!("tokens stay tokens")
+        };
+        let from_tokens = crate::generate::format_tokens(&from_tokens).unwrap();
+        for (out, functions) in [(&out, 2), (&from_tokens, 1)] {
+            syn::parse_str::<syn::File>(out).unwrap();
+            let avx512 = out.find("if crate::helpers::dispatch::avx512() {").unwrap();
+            let avx = out.find("if crate::helpers::dispatch::avx() {").unwrap();
+            assert!(avx512 < avx, "{out}");
+            // Arguments (2) and result recast for each twin.
+            assert_eq!(out.matches("dispatch::recast(").count(), 2 * 3, "{out}");
+            // The twins follow the portable code, AVX-512 first.
+            let twin512 = out.find("mod h_avx512 {").unwrap();
+            let twin = out.find("mod h_avx {").unwrap();
+            assert!(avx < twin512 && twin512 < twin, "{out}");
+            for (module, features) in [
+                (&out[twin512..twin], "avx512f,avx512vl"),
+                (&out[twin..], "avx"),
+            ] {
+                assert!(module.contains("pub type S = crate::helpers::AvxF64x4;"));
+                let attribute = format!("#[target_feature(enable = \"{features}\")]");
+                assert_eq!(module.matches(&attribute).count(), functions, "{module}");
+                assert_eq!(module.matches("#[target_feature(").count(), functions);
+                assert!(!module.contains("dispatch::"), "{module}");
+            }
+        }
     }
 }

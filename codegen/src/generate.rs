@@ -713,9 +713,10 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
                         .as_ref()
                         .map_or(0.0, |_| function.compile_bytes / scalars.len() as f64)
                     + lane_function.as_ref().map_or(0.0, |f| {
-                        // The lane twin: part of one more lane copy, in the 256-bit lane module.
+                        // The lane twins (AVX and AVX-512): each part of one more lane copy, in the
+                        // 256-bit lane module.
                         let twin = if lane_twin.is_some() {
-                            size::LANE_TWIN_MEMORY_SHARE / scalars.len() as f64
+                            2.0 * size::LANE_TWIN_MEMORY_SHARE / scalars.len() as f64
                         } else {
                             0.0
                         };
@@ -1903,17 +1904,38 @@ mod tests {
         let text = generate_source(&loaded, &options(4, crate::AvxTwins::Large)).unwrap();
         assert!(!module(&text, "f64").contains("_avx"));
         let f64x4 = module(&text, "f64x4");
+        // Two twins: AVX-512 (F and VL), then AVX.
         assert_eq!(f64x4.matches("mod aba_avx {").count(), 1);
-        // `aba` and `aba_batch` dispatch; the twin's batch goes through the lanes.
+        assert_eq!(f64x4.matches("mod aba_avx512 {").count(), 1);
+        // `aba` and `aba_batch` dispatch, AVX-512 asked first; the twins' batch goes through the lanes.
         assert_eq!(f64x4.matches("dispatch::avx()").count(), 2, "{f64x4}");
+        assert_eq!(f64x4.matches("dispatch::avx512()").count(), 2, "{f64x4}");
+        let public = &f64x4[..f64x4.find("mod aba_avx").unwrap()];
+        let first = public.find("dispatch::avx512()").unwrap();
+        assert!(first < public.find("dispatch::avx()").unwrap(), "{public}");
         assert!(f64x4.contains("aba_avx::aba_batch("));
-        let twin = &f64x4[f64x4.find("mod aba_avx {").unwrap()..];
-        assert!(twin.contains("const PAIRED_BATCH_PER_STATE: bool = false;"));
-        assert!(twin.contains("::AvxF64x4;"), "{twin}");
-        // Arguments and results handed over to the twin's lane type.
+        assert!(f64x4.contains("aba_avx512::aba_batch("));
+        for (twin, features) in [("aba_avx", "avx"), ("aba_avx512", "avx512f,avx512vl")] {
+            let start = f64x4.find(&format!("mod {twin} {{")).unwrap();
+            let end = f64x4[start + 1..]
+                .find("    mod aba_avx")
+                .map_or(f64x4.len(), |e| start + 1 + e);
+            let twin = &f64x4[start..end];
+            assert!(twin.contains("const PAIRED_BATCH_PER_STATE: bool = false;"));
+            assert!(twin.contains("::AvxF64x4;"), "{twin}");
+            // Every function of the twin compiled for its level, and none dispatches again.
+            let attribute = format!("#[target_feature(enable = \"{features}\")]");
+            assert_eq!(
+                twin.matches("#[target_feature(").count(),
+                twin.matches(&attribute).count()
+            );
+            assert!(twin.matches(&attribute).count() >= 2, "{twin}");
+            assert!(!twin.contains("dispatch::avx"), "{twin}");
+        }
+        // Arguments and results handed over to the twins' lane type.
         assert_eq!(
             f64x4.matches("dispatch::recast(").count(),
-            2 * (1 + 4),
+            2 * 2 * (1 + 4),
             "{f64x4}"
         );
         assert!(!module(&text, "f32x4").contains("_avx"), "128-bit lanes");
@@ -1923,10 +1945,15 @@ mod tests {
         };
         let eight = generate_source(&loaded, &eight).unwrap();
         assert_eq!(module(&eight, "f32x8").matches("mod aba_avx {").count(), 1);
+        assert_eq!(
+            module(&eight, "f32x8").matches("mod aba_avx512 {").count(),
+            1
+        );
         let tokens = generate_tokens(&loaded, &options(4, crate::AvxTwins::Large))
             .unwrap()
             .to_string();
-        assert_eq!(tokens.matches("mod aba_avx").count(), 1);
+        assert_eq!(tokens.matches("mod aba_avx ").count(), 1);
+        assert_eq!(tokens.matches("mod aba_avx512 ").count(), 1);
         let none = generate_source(&loaded, &options(4, crate::AvxTwins::None)).unwrap();
         assert!(!none.contains("_avx"));
         #[cfg(feature = "standalone")]

@@ -266,7 +266,10 @@ pub fn crate_files(
         let gain = if *module == "f64" {
             "the same results, up to half the time"
         } else {
-            "the same results; there a lane value takes one instruction instead of two"
+            "the same results; there a lane value takes one instruction instead of two. They are also \
+             compiled with AVX-512 (F and VL: the same 256-bit instructions, 32 registers instead of 16), \
+             which runs where the CPU has it (`helpers::dispatch::use_avx512(false)` runs the AVX copy \
+             instead)"
         };
         readme.push_str(&format!(
             "On x86-64 the `{module}` module's {} also compiled with AVX, and run that copy where the CPU has AVX \

@@ -629,21 +629,38 @@ fn place_in_quadrant(n: u64, s: f64, c: f64) -> (f64, f64) {
 pub mod dispatch {
     use core::sync::atomic::{AtomicBool, AtomicU8, Ordering};
 
-    /// What `cpuid` said: 0 not asked yet, 1 no AVX, 2 AVX.
+    /// What `cpuid` said: 0 not asked yet, 1 no AVX, 2 AVX, 3 AVX and AVX-512 (F and VL).
     static DETECTED: AtomicU8 = AtomicU8::new(0);
     /// Whether the AVX copies may run (see [`use_avx`]).
     static ALLOWED: AtomicBool = AtomicBool::new(true);
+    /// Whether the AVX-512 copies may run (see [`use_avx512`]).
+    static ALLOWED_512: AtomicBool = AtomicBool::new(true);
+
+    /// The level `cpuid` found (see `DETECTED`), asked once.
+    #[inline(always)]
+    fn detected() -> u8 {
+        match DETECTED.load(Ordering::Relaxed) {
+            0 => detect(),
+            level => level,
+        }
+    }
 
     /// Whether a generated function with an AVX twin runs it now: the CPU has AVX and [`use_avx`] did
     /// not turn it off. One relaxed atomic load after the first call.
     #[inline(always)]
     pub fn avx() -> bool {
+        ALLOWED.load(Ordering::Relaxed) && detected() >= 2
+    }
+
+    /// Whether a lane function with an AVX-512 twin runs it now: the CPU has AVX-512 F and VL (and the
+    /// operating system saves their registers), and neither [`use_avx`] nor [`use_avx512`] turned the
+    /// twins off. The twin's instructions are 256 bits wide, as the AVX twin's; it has 32 vector
+    /// registers where AVX has 16 (docs/generated-code.md, "AVX where the CPU has it").
+    #[inline(always)]
+    pub fn avx512() -> bool {
         ALLOWED.load(Ordering::Relaxed)
-            && match DETECTED.load(Ordering::Relaxed) {
-                2 => true,
-                1 => false,
-                _ => detect(),
-            }
+            && ALLOWED_512.load(Ordering::Relaxed)
+            && detected() >= 3
     }
 
     /// Turns the AVX copies off (`false`: every function runs its baseline copy) or back on (`true`,
@@ -653,6 +670,12 @@ pub mod dispatch {
     /// that crate's functions (each has its own `helpers`).
     pub fn use_avx(allowed: bool) {
         ALLOWED.store(allowed, Ordering::Relaxed);
+    }
+
+    /// Turns the lane functions' AVX-512 twins off (`false`: they run their AVX twins, where the CPU has
+    /// AVX) or back on (`true`, the default). For comparing the two, as [`use_avx`].
+    pub fn use_avx512(allowed: bool) {
+        ALLOWED_512.store(allowed, Ordering::Relaxed);
     }
 
     /// `x` as a `U` of the same size: the arguments and result of a lane function handed to its AVX
@@ -672,19 +695,40 @@ pub mod dispatch {
     }
 
     #[cold]
-    fn detect() -> bool {
-        use core::arch::x86_64::__cpuid;
+    fn detect() -> u8 {
+        use core::arch::x86_64::{__cpuid, __cpuid_count};
         // CPUID leaf 1, ECX: bit 27 OSXSAVE (the OS uses XSAVE, so XGETBV may be read), bit 28 AVX.
         #[allow(unused_unsafe)]
         let ecx = unsafe { __cpuid(1) }.ecx;
-        let has = ecx & (1 << 27) != 0 && ecx & (1 << 28) != 0 && {
-            // XCR0 bits 1 and 2: the OS saves the SSE and AVX (upper YMM) state on context switches.
+        let level = if ecx & (1 << 27) != 0 && ecx & (1 << 28) != 0 {
+            // XCR0 bits 1 and 2: the OS saves the SSE and AVX (upper YMM) state on context switches;
+            // bits 5, 6 and 7: the AVX-512 mask registers and the upper ZMM and ZMM16–31 state.
             // SAFETY: XGETBV exists because OSXSAVE is set (checked just above).
             let xcr0 = unsafe { xcr0() };
-            xcr0 & 0b110 == 0b110
+            if xcr0 & 0b110 != 0b110 {
+                1
+            } else {
+                // Leaf 7 (if the CPU has it), EBX: bit 16 AVX512F, bit 31 AVX512VL.
+                #[allow(unused_unsafe)]
+                let max_leaf = unsafe { __cpuid(0) }.eax;
+                #[allow(unused_unsafe)]
+                let ebx = if max_leaf >= 7 {
+                    unsafe { __cpuid_count(7, 0) }.ebx
+                } else {
+                    0
+                };
+                let avx512 = ebx & (1 << 16) != 0 && ebx & (1 << 31) != 0;
+                if avx512 && xcr0 & 0b1110_0110 == 0b1110_0110 {
+                    3
+                } else {
+                    2
+                }
+            }
+        } else {
+            1
         };
-        DETECTED.store(if has { 2 } else { 1 }, Ordering::Relaxed);
-        has
+        DETECTED.store(level, Ordering::Relaxed);
+        level
     }
 
     /// `f()` compiled with AVX: the code of `f` (its closure, and what it calls inline) is inlined here,
