@@ -2,8 +2,8 @@
 # Issue 13's many-states-per-call targets in one session: Pinocchio 4.1's single-state aba, rnea and crba
 # (bench/peers/pinocchio_bench.cpp), its OpenMP abaInParallel over a batch (bench/peers/pinocchio_parallel.cpp)
 # and embedyn's generated scalar and lane functions (benches/lanes.rs),
-# built twice: for the baseline x86-64 target (timed as it runs, with the AVX twins the CPU allows, and with
-# its SSE2 copies alone) and with -C target-cpu=native (the host's widest SIMD). Each binary runs from COPIES fresh copies (bench/placement.py); then the table "Many states per
+# built twice: for the baseline x86-64 target (timed as it runs, with the twins the CPU allows, with its AVX
+# twins instead of the AVX-512 ones, and with its SSE2 copies alone) and with -C target-cpu=native (the host's widest SIMD). Each binary runs from COPIES fresh copies (bench/placement.py); then the table "Many states per
 # call" in BENCHMARKS.md (bench/lanes_table.py).
 # Usage: bench/lanes.sh [COPIES]
 set -euo pipefail
@@ -26,6 +26,9 @@ lanes_binary() {
 }
 baseline=$(lanes_binary target "")
 python3 bench/placement.py criterion "$baseline" "$copies" bench/results/lanes_baseline.json
+# The same binary with its AVX twins instead of the AVX-512 ones: `use_avx512(false)`.
+EMBEDYN_AVX_TWINS_ONLY=1 python3 bench/placement.py criterion "$baseline" "$copies" \
+  bench/results/lanes_avx_twins.json
 # The same binary with its baseline (SSE2) copies alone: `use_avx(false)`.
 EMBEDYN_BASELINE_COPIES=1 python3 bench/placement.py criterion "$baseline" "$copies" \
   bench/results/lanes_baseline_copies.json

@@ -20,7 +20,8 @@ def load(name):
 
 
 def main():
-    builds = [("baseline x86-64, AVX twins (default)", load("lanes_baseline.json")),
+    builds = [("baseline x86-64, twins (default: AVX-512 on this host)", load("lanes_baseline.json")),
+              ("baseline x86-64, AVX twins (`use_avx512(false)`)", load("lanes_avx_twins.json")),
               ("baseline x86-64, SSE2 copies (`use_avx(false)`)", load("lanes_baseline_copies.json")),
               ("`-C target-cpu=native`", load("lanes_native.json"))]
     copies = builds[0][1]["copies"]
@@ -31,10 +32,11 @@ def main():
         f"call, one per SIMD lane, lane by lane bit-identical to the scalar functions) against Pinocchio 4.1's "
         f"single-state calls, in one session ({datetime.date.today()}, {platform.machine()}, `bench/lanes.sh`), each "
         f"binary from {copies} fresh copies (medians). ns per state: a lane call's time divided by {LANES}. Two builds "
-        "of the same code: the baseline x86-64 target, as it runs (each lane function of the `f64x4` module has an AVX "
-        "twin, chosen at run time where the CPU has AVX: one 256-bit instruction per lane value, "
-        "docs/generated-code.md; the scalar functions here are below the size of a scalar twin) and again with its "
-        "baseline copies alone (`dispatch::use_avx(false)`: an `F64x4` is two 128-bit SSE2 registers), and "
+        "of the same code: the baseline x86-64 target, as it runs (each lane function of the `f64x4` module has two "
+        "twins, chosen at run time: one 256-bit instruction per lane value, compiled with AVX-512 F and VL (32 "
+        "registers) where the CPU has them, with AVX elsewhere, docs/generated-code.md; the scalar functions here are "
+        "below the size of a scalar twin), again with the AVX twins (`dispatch::use_avx512(false)`, what a CPU "
+        "without AVX-512 runs) and with its baseline copies alone (`dispatch::use_avx(false)`: an `F64x4` is two 128-bit SSE2 registers), and "
         "`-C target-cpu=native` (AVX-512 registers on this host; Pinocchio's wheel is built for the baseline).",
         "",
         "| robot | call | build | Pinocchio (ns) | generated (ns) | ratio | lanes (ns per state) | ratio | vs generated | `_batch` of 64 (ns per state) | target |",

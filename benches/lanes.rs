@@ -3,7 +3,8 @@
 //! the floating ANYmal B: `aba`, `rnea`, `crba`, and the floating ANYmal B's `aba_derivatives`.
 //!
 //! `cargo bench --bench lanes` (the baseline x86-64 target: the lane functions' AVX twins where the CPU
-//! has AVX; with `EMBEDYN_BASELINE_COPIES=1` their SSE2 copies, two f64 per instruction);
+//! has AVX, their AVX-512 twins where it has AVX-512 F and VL; with `EMBEDYN_AVX_TWINS_ONLY=1` the AVX
+//! twins; with `EMBEDYN_BASELINE_COPIES=1` their SSE2 copies, two f64 per instruction);
 //! `RUSTFLAGS="-C target-cpu=native" cargo bench --bench lanes` for the host's widest SIMD.
 //! `bench/lanes.sh` runs both beside Pinocchio and writes BENCHMARKS.md's table. Every call cycles
 //! through 64 pre-generated random states; a lane call's time is divided by its 4 states.
@@ -143,6 +144,9 @@ fn all(c: &mut Criterion) {
     // with its baseline copies alone.
     if std::env::var_os("EMBEDYN_BASELINE_COPIES").is_some() {
         embedyn::codegen_support::dispatch::use_avx(false);
+    }
+    if std::env::var_os("EMBEDYN_AVX_TWINS_ONLY").is_some() {
+        embedyn::codegen_support::dispatch::use_avx512(false);
     }
     bench_robot!(c, z1, "z1", "models/peers/z1.urdf", false);
     bench_robot!(
