@@ -201,7 +201,12 @@ fn add_gears(
                 small,
             )
             .unwrap();
-        let ratio = rng.uniform(2.0, 50.0) * if rng.next_u64() % 2 == 0 { 1.0 } else { -1.0 };
+        let ratio = rng.uniform(2.0, 50.0)
+            * if rng.next_u64().is_multiple_of(2) {
+                1.0
+            } else {
+                -1.0
+            };
         // rotor = ratio · source (+ an offset, as a <mimic> may carry).
         b.add_constraint(Constraint {
             name: format!("gear{tag}_{stage}"),
@@ -220,7 +225,7 @@ fn add_gears(
 /// at its own toggle), which the caller counts.
 fn random_model(rng: &mut Rng) -> Result<Model<f64>, embedyn::ModelError> {
     let n = 2 + (rng.next_u64() % 6) as usize;
-    let floating = rng.next_u64() % 3 == 0;
+    let floating = rng.next_u64().is_multiple_of(3);
     let tree = random_tree(rng, n, floating);
     let mut b = rebuild(&tree, "random_loops");
     let mut count = tree.nbodies();
