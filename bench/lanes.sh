@@ -12,9 +12,9 @@ copies="${1:-3}"
 mkdir -p bench/results target
 eval "$(bench/peers/build_pinocchio.sh)"
 python3 bench/placement.py command "$copies" bench/results/pinocchio_lanes_z1.jsonl "$PINOCCHIO_BENCH" \
-  models/peers/z1.urdf
+  --derivatives models/peers/z1.urdf
 python3 bench/placement.py command "$copies" bench/results/pinocchio_lanes_anymal.jsonl "$PINOCCHIO_BENCH" \
-  --floating models/peers/anymal_b.urdf
+  --floating --derivatives models/peers/anymal_b.urdf
 # Pinocchio's OpenMP abaInParallel over 1024 states, 1 and 2 threads.
 python3 bench/placement.py command "$copies" bench/results/pinocchio_parallel_z1.jsonl "$PINOCCHIO_PARALLEL" \
   --states 1024 models/peers/z1.urdf

@@ -10,7 +10,7 @@ ROBOTS = [("z1", "pinocchio_lanes_z1.jsonl", {"aba": 0.05}),
           ("anymal_b_floating", "pinocchio_lanes_anymal.jsonl", {"aba": 0.08})]
 PARALLEL = {"z1": "pinocchio_parallel_z1.jsonl", "anymal_b_floating": "pinocchio_parallel_anymal.jsonl"}
 BATCH = 1024
-CALLS = ["aba", "rnea", "crba"]
+CALLS = ["aba", "rnea", "crba", "aba_derivatives"]
 LANES = 4
 
 

@@ -1,6 +1,6 @@
 //! Many states per call (issue 13): the generated lane functions (`lanes = 4`: module `f64x4`, four
 //! states per call) against the scalar generated functions, per state, on the Z1 arm (fixed base) and
-//! the floating ANYmal B: `aba`, `rnea`, `crba`, and the floating ANYmal B's `aba_derivatives`.
+//! the floating ANYmal B: `aba`, `rnea`, `crba` and `aba_derivatives`.
 //!
 //! `cargo bench --bench lanes` (the baseline x86-64 target: the lane functions' AVX twins where the CPU
 //! has AVX, their AVX-512 twins where it has AVX-512 F and VL; with `EMBEDYN_AVX_TWINS_ONLY=1` the AVX
@@ -22,7 +22,7 @@ mod z1 {
     embedyn::robot!(
         "models/peers/z1.urdf",
         f64_only,
-        only(aba, rnea, crba),
+        only(aba, rnea, crba, aba_derivatives),
         lanes = 4
     );
 }
@@ -31,7 +31,7 @@ mod anymal {
         "models/peers/anymal_b.urdf",
         floating,
         f64_only,
-        only(aba, rnea, crba),
+        only(aba, rnea, crba, aba_derivatives),
         lanes = 4
     );
 }
@@ -134,6 +134,38 @@ macro_rules! bench_robot {
                 k = (k + 1) & 15;
                 $m::f64x4::crba(black_box(&ql[k]), &mut m4);
                 black_box(m4[0][0])
+            })
+        });
+        let (mut dq, mut dv, mut dt) = (m, m, m);
+        $c.bench_function(concat!("gen_aba_derivatives/", $name), |b| {
+            b.iter(|| {
+                k = (k + 1) & 63;
+                $m::f64::aba_derivatives(
+                    black_box(&q[k]),
+                    &v[k],
+                    &u[k],
+                    &mut out,
+                    &mut dq,
+                    &mut dv,
+                    &mut dt,
+                );
+                black_box(dq[0][0])
+            })
+        });
+        let (mut dq4, mut dv4, mut dt4) = (m4, m4, m4);
+        $c.bench_function(concat!("gen_aba_derivatives_x4/", $name), |b| {
+            b.iter(|| {
+                k = (k + 1) & 15;
+                $m::f64x4::aba_derivatives(
+                    black_box(&ql[k]),
+                    &vl[k],
+                    &ul[k],
+                    &mut out4,
+                    &mut dq4,
+                    &mut dv4,
+                    &mut dt4,
+                );
+                black_box(dq4[0][0])
             })
         });
     }};

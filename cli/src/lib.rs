@@ -922,7 +922,10 @@ pub fn run(cli: Cli) -> Result<Printed, CliError> {
             let options = options.with_requested(only, requested);
             let files = embedyn_codegen::standalone::write_crate(&loaded, &options, &out)?;
             Ok(Printed::Json(serde_json::json!({
-                "crate": embedyn_codegen::standalone::crate_name(&loaded.robot.name),
+                // The name written (`--name`, else the robot's), checked by `write_crate` above.
+                "crate": options.crate_name.clone().unwrap_or_else(|| {
+                    embedyn_codegen::standalone::crate_name(&loaded.robot.name)
+                }),
                 "out": out,
                 "files": files,
             })))

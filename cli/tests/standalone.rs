@@ -10,8 +10,9 @@ fn repo(rel: &str) -> PathBuf {
         .join(rel)
 }
 
-fn generate(model: &str, out: &Path, extra: &[&str]) {
-    let status = Command::new(env!("CARGO_BIN_EXE_embedyn"))
+/// Runs `embedyn generate` and returns what it printed (its JSON).
+fn generate(model: &str, out: &Path, extra: &[&str]) -> String {
+    let output = Command::new(env!("CARGO_BIN_EXE_embedyn"))
         .args([
             "generate",
             &repo(model).to_string_lossy(),
@@ -19,10 +20,11 @@ fn generate(model: &str, out: &Path, extra: &[&str]) {
             &out.to_string_lossy(),
         ])
         .args(extra)
-        .stdout(std::process::Stdio::null())
-        .status()
+        .stderr(std::process::Stdio::null())
+        .output()
         .unwrap();
-    assert!(status.success(), "embedyn generate {model} failed");
+    assert!(output.status.success(), "embedyn generate {model} failed");
+    String::from_utf8(output.stdout).unwrap()
 }
 
 fn tmp(name: &str) -> PathBuf {
@@ -118,7 +120,7 @@ fn standalone_crate_builds_as_no_std() {
 #[test]
 fn standalone_crate_with_lanes_checks_as_no_std() {
     let dir = tmp("lanes_crate");
-    generate(
+    let printed = generate(
         "models/arm7.urdf",
         &dir,
         &[
@@ -136,8 +138,17 @@ fn standalone_crate_with_lanes_checks_as_no_std() {
     assert!(src.contains("pub mod f64x4") && src.contains("pub type S = crate::helpers::F64x4;"));
     // The lane functions' AVX twin, over the AVX lane type (checked below with the rest).
     assert!(src.contains("pub type S = crate::helpers::AvxF64x4;"));
+    // Twins only where the target has SSE2: a soft-float target (`x86_64-unknown-none`) must not
+    // touch vector registers, and LLVM could not compile the lane twins there (attacker's trial).
+    assert!(!src.contains("target_arch = \"x86_64\", not(target_feature = \"avx\")"));
+    assert!(src.contains(
+        "#[cfg(all(target_arch = \"x86_64\", target_feature = \"sse2\", not(target_feature = \"avx\")))]"
+    ));
     let cargo = std::fs::read_to_string(dir.join("Cargo.toml")).unwrap();
     assert!(cargo.contains("name = \"arm7-lanes\""), "{cargo}");
+    // The JSON names the crate written (it gave the default name).
+    let printed: serde_json::Value = serde_json::from_str(&printed).unwrap();
+    assert_eq!(printed["crate"], "arm7-lanes", "{printed}");
     assert!(
         cargo.contains("[dependencies.wide]") && cargo.contains("default-features = false"),
         "{cargo}"

@@ -138,7 +138,10 @@ pub const AVX: Level = Level {
 /// Z1's `aba` 313 with AVX, 258 with AVX-512; `rnea` 178 against 164, `crba` 117 against 109; the floating
 /// ANYmal B's `aba` 843 against 826, `crba` 340 against 298. Neither the scalar functions (the same time)
 /// nor AVX2 and FMA (the ANYmal B's `rnea` 1.1× slower, the Z1's `aba` between the two) paid as well.
-/// Vector length 256 bits, so no 512-bit instruction runs and the CPU keeps its AVX2 clock.
+/// The lane values stay 256 bits wide, but LLVM is free to use 512-bit instructions where it finds
+/// them (an attacker's trial found some, in array copies and the batch of sines and cosines): on CPUs
+/// that lower their clock for those (Skylake-SP-class Xeons), `dispatch::use_avx512(false)` is the way
+/// to compare.
 pub const AVX512: Level = Level {
     name: "avx512",
     features: "avx512f,avx512vl",
@@ -154,9 +157,11 @@ impl TwinOf<'_> {
     }
 }
 
-/// The cfg under which twins exist: an x86-64 build that does not enable AVX itself.
+/// The cfg under which twins exist: an x86-64 build with SSE2 that does not enable AVX itself. (Not a
+/// soft-float target such as `x86_64-unknown-none`, for kernels and firmware: its code must not touch
+/// vector registers, and LLVM could not compile the lane twins' 256-bit values there.)
 fn twin_cfg() -> TokenStream {
-    quote!(#[cfg(all(target_arch = "x86_64", not(target_feature = "avx")))])
+    quote!(#[cfg(all(target_arch = "x86_64", target_feature = "sse2", not(target_feature = "avx")))])
 }
 
 /// `code` (the items of function `function`: its public functions and part modules) with AVX twins:
@@ -417,7 +422,7 @@ fn text_with_twin(text: &str, twin_spec: &Twin) -> String {
         let module = twin_spec.module(level);
         let features = level.features;
         out.push_str(&format!(
-            "    #[cfg(all(target_arch = \"x86_64\", not(target_feature = \"avx\")))]\n    /// The functions above compiled for `{features}` (see `helpers::dispatch`).\n    mod {module} {{\n        #[allow(unused_imports)]\n        use super::*;\n"
+            "    #[cfg(all(target_arch = \"x86_64\", target_feature = \"sse2\", not(target_feature = \"avx\")))]\n    /// The functions above compiled for `{features}` (see `helpers::dispatch`).\n    mod {module} {{\n        #[allow(unused_imports)]\n        use super::*;\n"
         ));
         for (piece, indent) in &pieces {
             out.push_str(piece);

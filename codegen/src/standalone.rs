@@ -267,7 +267,7 @@ pub fn crate_files(
             "the same results, up to half the time"
         } else {
             "the same results; there a lane value takes one instruction instead of two. They are also \
-             compiled with AVX-512 (F and VL: the same 256-bit instructions, 32 registers instead of 16), \
+             compiled with AVX-512 (F and VL: the same 256-bit lane values, 32 registers instead of 16), \
              which runs where the CPU has it (`helpers::dispatch::use_avx512(false)` runs the AVX copy \
              instead)"
         };

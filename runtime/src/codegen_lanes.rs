@@ -256,7 +256,7 @@ sincos_per_lane!(F32x8);
 /// Sound to use anywhere: a value is made only by `splat` and `new`, safe functions with AVX enabled, which
 /// code without AVX (that is, anything but an AVX twin) can call only in `unsafe`, promising that the CPU
 /// has AVX; the operations on a value, which are AVX instructions, then run where that promise holds.
-#[cfg(all(target_arch = "x86_64", not(target_feature = "avx")))]
+#[cfg(all(target_arch = "x86_64", target_feature = "sse2", not(target_feature = "avx")))]
 macro_rules! avx_lanes_type {
     ($name:ident, $plain:ident, $t:ident, $n:literal, $m:ident, $suffix:ident) => {
         #[doc = concat!("`", stringify!($plain), "` for AVX twins (see the module's AVX lane types).")]
@@ -395,9 +395,9 @@ macro_rules! avx_lanes_type {
     (@intrinsic cmp_gt, ps) => { _mm256_cmp_ps::<_CMP_GT_OQ> };
     (@intrinsic blendv, ps) => { _mm256_blendv_ps };
 }
-#[cfg(all(target_arch = "x86_64", not(target_feature = "avx")))]
+#[cfg(all(target_arch = "x86_64", target_feature = "sse2", not(target_feature = "avx")))]
 avx_lanes_type!(AvxF64x4, F64x4, f64, 4, __m256d, pd);
-#[cfg(all(target_arch = "x86_64", not(target_feature = "avx")))]
+#[cfg(all(target_arch = "x86_64", target_feature = "sse2", not(target_feature = "avx")))]
 avx_lanes_type!(AvxF32x8, F32x8, f32, 8, __m256, ps);
 
 /// The lane type of `N` lanes of a scalar, for the lane modules' `type S`.

@@ -47,7 +47,7 @@ pub fn minus_symmetric_times_sparse<S, const N: usize>(
 ) where
     S: Copy + core::ops::Add<Output = S> + core::ops::Mul<Output = S> + core::ops::Neg<Output = S>,
 {
-    #[cfg(all(target_arch = "x86_64", not(target_feature = "avx")))]
+    #[cfg(all(target_arch = "x86_64", target_feature = "sse2", not(target_feature = "avx")))]
     if dispatch::avx() {
         // SAFETY: the CPU has AVX (`dispatch::avx` asked it), the one requirement of the function.
         #[allow(unused_unsafe)]
@@ -473,7 +473,7 @@ pub fn sincos_batch_f64<const N: usize>(x: [f64; N]) -> ([f64; N], [f64; N]) {
     }
     // The same passes compiled with AVX where the CPU has it: four angles per instruction instead of two,
     // the same operations, so the same bits (32 angles: 132 → 78 ns, 2026-12-03; see [`dispatch`]).
-    #[cfg(all(target_arch = "x86_64", not(target_feature = "avx")))]
+    #[cfg(all(target_arch = "x86_64", target_feature = "sse2", not(target_feature = "avx")))]
     if N >= SINCOS_AVX_MIN && dispatch::avx() {
         // SAFETY: the CPU has AVX (`dispatch::avx` asked it), the one requirement of the function.
         #[allow(unused_unsafe)]
@@ -488,7 +488,7 @@ pub fn sincos_batch_f64<const N: usize>(x: [f64; N]) -> ([f64; N], [f64; N]) {
 /// stored with 256-bit instructions, it cost more than it saved at 12: a floating Go2's `crba` 1.27× the
 /// time (135 → 170 ns; its `rnea` the same), while the floating G1's (29 angles) took 0.97× (new user's and
 /// own trials, 2026-12-03). In an AVX twin the copy is inlined and the question does not arise.
-#[cfg(all(target_arch = "x86_64", not(target_feature = "avx")))]
+#[cfg(all(target_arch = "x86_64", target_feature = "sse2", not(target_feature = "avx")))]
 const SINCOS_AVX_MIN: usize = 24;
 
 
@@ -654,7 +654,7 @@ pub mod dispatch {
 
     /// Whether a lane function with an AVX-512 twin runs it now: the CPU has AVX-512 F and VL (and the
     /// operating system saves their registers), and neither [`use_avx`] nor [`use_avx512`] turned the
-    /// twins off. The twin's instructions are 256 bits wide, as the AVX twin's; it has 32 vector
+    /// twins off. The twin's lane values are 256 bits wide, as the AVX twin's; it has 32 vector
     /// registers where AVX has 16 (docs/generated-code.md, "AVX where the CPU has it").
     #[inline(always)]
     pub fn avx512() -> bool {
@@ -708,7 +708,9 @@ pub mod dispatch {
             if xcr0 & 0b110 != 0b110 {
                 1
             } else {
-                // Leaf 7 (if the CPU has it), EBX: bit 16 AVX512F, bit 31 AVX512VL.
+                // Leaf 7 (if the CPU has it), EBX: bit 5 AVX2, bit 16 AVX512F, bit 31 AVX512VL; leaf 1
+                // ECX bit 12 FMA. Rust's `avx512f` implies AVX2 and FMA, which the twin may then use
+                // (an AVX2 integer instruction, say), so a CPU (or a virtual machine) must report all four.
                 #[allow(unused_unsafe)]
                 let max_leaf = unsafe { __cpuid(0) }.eax;
                 #[allow(unused_unsafe)]
@@ -717,7 +719,10 @@ pub mod dispatch {
                 } else {
                     0
                 };
-                let avx512 = ebx & (1 << 16) != 0 && ebx & (1 << 31) != 0;
+                let avx512 = ebx & (1 << 5) != 0
+                    && ebx & (1 << 16) != 0
+                    && ebx & (1 << 31) != 0
+                    && ecx & (1 << 12) != 0;
                 if avx512 && xcr0 & 0b1110_0110 == 0b1110_0110 {
                     3
                 } else {
