@@ -364,8 +364,8 @@ fn threads_over_a_batch_equal_the_scalar_calls() {
 /// twins forbidden (`use_avx512`) and with all forbidden (`use_avx`), the floating ANYmal B's
 /// `aba`, `rnea`, `crba` and `aba_batch` (whose baseline copy goes state by state through the paired scalar
 /// function, its twin through the lanes), the four-bar's pivoting `aba` with its measure, and the Z1's `aba` in
-/// eight f32 lanes. (On a CPU without AVX both runs take the baseline copy; the CI machines have AVX, and the
-/// test says which ran.)
+/// eight f32 lanes. (On a CPU without AVX all three runs take the baseline copy, and without AVX-512 the first two
+/// take the AVX twin; the CI machines have AVX, and the test says what ran.)
 #[test]
 fn lane_twins_give_the_bits_of_the_baseline_copies() {
     use embedyn::codegen_support::dispatch::{avx, avx512, use_avx, use_avx512};

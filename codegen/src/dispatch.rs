@@ -157,11 +157,18 @@ impl TwinOf<'_> {
     }
 }
 
-/// The cfg under which twins exist: an x86-64 build with SSE2 that does not enable AVX itself. (Not a
-/// soft-float target such as `x86_64-unknown-none`, for kernels and firmware: its code must not touch
-/// vector registers, and LLVM could not compile the lane twins' 256-bit values there.)
+/// The cfg predicate under which twins exist: an x86-64 build with SSE2 that does not enable AVX
+/// itself. (Not a soft-float target such as `x86_64-unknown-none`, for kernels and firmware: its code
+/// must not touch vector registers, and LLVM could not compile the lane twins' 256-bit values there.)
+/// The runtime's helpers (runtime/src/codegen_support.rs, codegen_lanes.rs) repeat it in their own
+/// `#[cfg]`s, where a constant cannot go.
+const TWIN_CFG: &str =
+    r#"all(target_arch = "x86_64", target_feature = "sse2", not(target_feature = "avx"))"#;
+
+/// [`TWIN_CFG`] as an attribute.
 fn twin_cfg() -> TokenStream {
-    quote!(#[cfg(all(target_arch = "x86_64", target_feature = "sse2", not(target_feature = "avx")))])
+    let predicate: TokenStream = TWIN_CFG.parse().expect("the twin cfg parses");
+    quote!(#[cfg(#predicate)])
 }
 
 /// `code` (the items of function `function`: its public functions and part modules) with AVX twins:
@@ -422,7 +429,7 @@ fn text_with_twin(text: &str, twin_spec: &Twin) -> String {
         let module = twin_spec.module(level);
         let features = level.features;
         out.push_str(&format!(
-            "    #[cfg(all(target_arch = \"x86_64\", target_feature = \"sse2\", not(target_feature = \"avx\")))]\n    /// The functions above compiled for `{features}` (see `helpers::dispatch`).\n    mod {module} {{\n        #[allow(unused_imports)]\n        use super::*;\n"
+            "    #[cfg({TWIN_CFG})]\n    /// The functions above compiled for `{features}` (see `helpers::dispatch`).\n    mod {module} {{\n        #[allow(unused_imports)]\n        use super::*;\n"
         ));
         for (piece, indent) in &pieces {
             out.push_str(piece);

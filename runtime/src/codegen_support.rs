@@ -696,44 +696,46 @@ pub mod dispatch {
 
     #[cold]
     fn detect() -> u8 {
-        use core::arch::x86_64::{__cpuid, __cpuid_count};
+        use core::arch::x86_64::__cpuid;
         // CPUID leaf 1, ECX: bit 27 OSXSAVE (the OS uses XSAVE, so XGETBV may be read), bit 28 AVX.
         #[allow(unused_unsafe)]
         let ecx = unsafe { __cpuid(1) }.ecx;
-        let level = if ecx & (1 << 27) != 0 && ecx & (1 << 28) != 0 {
+        let level = if ecx & (1 << 27) == 0 || ecx & (1 << 28) == 0 {
+            1
+        } else {
             // XCR0 bits 1 and 2: the OS saves the SSE and AVX (upper YMM) state on context switches;
             // bits 5, 6 and 7: the AVX-512 mask registers and the upper ZMM and ZMM16–31 state.
             // SAFETY: XGETBV exists because OSXSAVE is set (checked just above).
             let xcr0 = unsafe { xcr0() };
             if xcr0 & 0b110 != 0b110 {
                 1
+            } else if avx512_reported(ecx) && xcr0 & 0b1110_0110 == 0b1110_0110 {
+                3
             } else {
-                // Leaf 7 (if the CPU has it), EBX: bit 5 AVX2, bit 16 AVX512F, bit 31 AVX512VL; leaf 1
-                // ECX bit 12 FMA. Rust's `avx512f` implies AVX2 and FMA, which the twin may then use
-                // (an AVX2 integer instruction, say), so a CPU (or a virtual machine) must report all four.
-                #[allow(unused_unsafe)]
-                let max_leaf = unsafe { __cpuid(0) }.eax;
-                #[allow(unused_unsafe)]
-                let ebx = if max_leaf >= 7 {
-                    unsafe { __cpuid_count(7, 0) }.ebx
-                } else {
-                    0
-                };
-                let avx512 = ebx & (1 << 5) != 0
-                    && ebx & (1 << 16) != 0
-                    && ebx & (1 << 31) != 0
-                    && ecx & (1 << 12) != 0;
-                if avx512 && xcr0 & 0b1110_0110 == 0b1110_0110 {
-                    3
-                } else {
-                    2
-                }
+                2
             }
-        } else {
-            1
         };
         DETECTED.store(level, Ordering::Relaxed);
         level
+    }
+
+    /// Whether `cpuid` reports AVX-512 F and VL, and AVX2 and FMA besides: Rust's `avx512f` implies
+    /// those two, which the twin may then use (an AVX2 integer instruction, say), so a CPU (or a virtual
+    /// machine) must report all four. `leaf1_ecx`: leaf 1's ECX (bit 12 FMA); leaf 7 (if the CPU has
+    /// it), EBX: bit 5 AVX2, bit 16 AVX512F, bit 31 AVX512VL.
+    fn avx512_reported(leaf1_ecx: u32) -> bool {
+        use core::arch::x86_64::{__cpuid, __cpuid_count};
+        #[allow(unused_unsafe)]
+        let max_leaf = unsafe { __cpuid(0) }.eax;
+        if max_leaf < 7 {
+            return false;
+        }
+        #[allow(unused_unsafe)]
+        let ebx = unsafe { __cpuid_count(7, 0) }.ebx;
+        leaf1_ecx & (1 << 12) != 0
+            && ebx & (1 << 5) != 0
+            && ebx & (1 << 16) != 0
+            && ebx & (1 << 31) != 0
     }
 
     /// `f()` compiled with AVX: the code of `f` (its closure, and what it calls inline) is inlined here,
