@@ -27,6 +27,7 @@ mod fuzz_corpus;
 mod fuzz_findings;
 mod generated_contact;
 mod gravity_nle;
+mod joint_axis_origins;
 mod loop_simulation;
 mod model_scale;
 mod pinocchio_reference;

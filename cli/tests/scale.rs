@@ -81,7 +81,8 @@ fn aba_source_grows_linearly_in_parts_of_bounded_size() {
     // Every part stays near 2,000 operations (nesting makes a statement one or more operations), so
     // rustc's work per part is bounded and the total linear.
     let parts = part_lengths(&large, "aba");
-    assert!(parts.len() >= 2 * 200, "{} parts", parts.len());
+    // (390 parts for both scalars since the bodies' origins sit on their joint axes, 400 before.)
+    assert!(parts.len() >= 2 * 150, "{} parts", parts.len());
     let longest = parts.iter().max().unwrap();
     assert!(*longest <= 2_600, "a part of {longest} statements");
 }

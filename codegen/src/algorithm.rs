@@ -1741,6 +1741,26 @@ const _: () = {
 };
 
 impl Algorithm {
+    /// Whether the function is traced on
+    /// [`Model::with_origins_on_joint_axes`](embedyn_runtime::Model::with_origins_on_joint_axes): the same
+    /// dynamics in body frames whose translations have more zeros. Only functions whose inputs and outputs
+    /// are joint-space quantities may be (poses, Jacobians, wrenches and the centre of mass are in body
+    /// frames), and of these the ones that carry inertias or columns of `M` across the joints, where the
+    /// zeros pay: `rnea`, `gravity` and `nle` carry only vectors (the G1's `rnea` lost 0.5 % of its
+    /// operations and ran 1.09× the time, its second part spilling twice as much; 2026-12-03).
+    pub(crate) fn traced_on_moved_origins(self) -> bool {
+        matches!(
+            self,
+            Algorithm::Aba
+                | Algorithm::Crba
+                | Algorithm::Minv
+                | Algorithm::AbaDerivatives
+                | Algorithm::RneaDerivatives
+                | Algorithm::Step
+                | Algorithm::StepDerivatives
+        )
+    }
+
     /// Whether the function is derivatives that two methods compute on a tree (analytical recursion,
     /// dual numbers; [`DerivativeTrace`]).
     pub(crate) fn has_derivative_methods(self) -> bool {

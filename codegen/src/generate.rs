@@ -1441,8 +1441,18 @@ fn generate_traced(
             },
         )
     };
+    // Some joint-space functions see body origins moved along their joint axes (fewer operations, the
+    // same dynamics; runtime/src/joint_axis_origins.rs). Names and owners below come from `model`: the two
+    // models have the same joints and bodies.
+    let moved;
+    let traced_model = if spec.algorithm.traced_on_moved_origins() {
+        moved = model.with_origins_on_joint_axes();
+        &moved
+    } else {
+        model
+    };
     let recorded = record_within(budget, || {
-        let mut ws = Workspace::new(model);
+        let mut ws = Workspace::new(traced_model);
         let inputs: Vec<Vec<Sym>> = (0u8..)
             .zip(spec.inputs)
             .map(|(arg, i)| {
@@ -1451,7 +1461,7 @@ fn generate_traced(
                     .collect()
             })
             .collect();
-        (spec.trace)(model, &mut ws, &inputs, links)
+        (spec.trace)(traced_model, &mut ws, &inputs, links)
     });
     let (traced, tape) = match recorded {
         Ok(recorded) => recorded,

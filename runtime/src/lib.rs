@@ -44,6 +44,8 @@ pub mod constraints;
 mod double_double;
 pub mod dual;
 #[cfg(feature = "alloc")]
+mod joint_axis_origins;
+#[cfg(feature = "alloc")]
 pub mod linalg;
 #[cfg(feature = "alloc")]
 mod model;

@@ -1,0 +1,126 @@
+//! `Model::with_origins_on_joint_axes`, which generated joint-space functions are traced on: the same
+//! dynamics and the same link poses as the file's frames, with more zeros in the joint translations where
+//! the recursions cross them most.
+
+use crate::common::*;
+use embedyn::{
+    aba, crba, forward_kinematics, frame_placement, mass_matrix_inverse, rnea, Model, Workspace,
+};
+
+fn relative(a: &[f64], b: &[f64]) -> f64 {
+    let scale = a.iter().fold(1.0f64, |m, x| m.max(x.abs()));
+    a.iter()
+        .zip(b)
+        .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()))
+        / scale
+}
+
+/// The moved model against the original: `aba`, `rnea`, `crba`, `M⁻¹` and every link's world pose.
+fn assert_equivalent(model: &Model<f64>, rng: &mut Rng) -> f64 {
+    let moved = model.with_origins_on_joint_axes();
+    assert!(moved.weighted_translation_zeros() >= model.weighted_translation_zeros());
+    let (mut a, mut b) = (Workspace::new(model), Workspace::new(&moved));
+    let mut worst = 0.0f64;
+    for _ in 0..3 {
+        let q = rng.configuration(model);
+        let v = rng.vec(model.nv(), -2.0, 2.0);
+        let tau = rng.vec(model.nv(), -5.0, 5.0);
+        let pairs = [
+            (
+                aba(model, &mut a, &q, &v, &tau).unwrap().to_vec(),
+                aba(&moved, &mut b, &q, &v, &tau).unwrap().to_vec(),
+            ),
+            (
+                rnea(model, &mut a, &q, &v, &tau).unwrap().to_vec(),
+                rnea(&moved, &mut b, &q, &v, &tau).unwrap().to_vec(),
+            ),
+            (
+                crba(model, &mut a, &q).unwrap().as_slice().to_vec(),
+                crba(&moved, &mut b, &q).unwrap().as_slice().to_vec(),
+            ),
+            (
+                mass_matrix_inverse(model, &mut a, &q)
+                    .unwrap()
+                    .as_slice()
+                    .to_vec(),
+                mass_matrix_inverse(&moved, &mut b, &q)
+                    .unwrap()
+                    .as_slice()
+                    .to_vec(),
+            ),
+        ];
+        for (x, y) in &pairs {
+            worst = worst.max(relative(x, y));
+        }
+        forward_kinematics(model, &mut a, &q, &v).unwrap();
+        forward_kinematics(&moved, &mut b, &q, &v).unwrap();
+        for frame in model.frames() {
+            let x = frame_placement(model, &a, frame).unwrap();
+            let y = frame_placement(&moved, &b, frame).unwrap();
+            let x: Vec<f64> = x
+                .rotation
+                .iter()
+                .chain(x.translation.iter())
+                .copied()
+                .collect();
+            let y: Vec<f64> = y
+                .rotation
+                .iter()
+                .chain(y.translation.iter())
+                .copied()
+                .collect();
+            worst = worst.max(relative(&x, &y));
+        }
+    }
+    worst
+}
+
+#[test]
+fn moved_origins_keep_the_dynamics_and_the_link_poses_of_random_trees() {
+    let mut rng = Rng::new(20261203);
+    let mut worst = 0.0f64;
+    for t in 0..120 {
+        let model = random_tree(&mut rng, 2 + t % 14, t % 3 == 0);
+        worst = worst.max(assert_equivalent(&model, &mut rng));
+    }
+    eprintln!("random trees: worst relative difference {worst:e}");
+    // The moves change the rounding only.
+    assert!(worst < 1e-13, "worst relative difference {worst:e}");
+}
+
+#[test]
+fn moved_origins_add_zeros_to_the_bundled_robots_and_keep_their_dynamics() {
+    let mut rng = Rng::new(7);
+    for (file, floating) in [
+        ("models/humanoid34.urdf", true),
+        ("models/quadruped.urdf", false),
+        ("models/arm7.urdf", false),
+        ("models/peers/anymal_b.urdf", true),
+        ("models/peers/z1.urdf", false),
+    ] {
+        let model = load_model::<f64>(file, floating);
+        let moved = model.with_origins_on_joint_axes();
+        let (before, after) = (
+            model.weighted_translation_zeros(),
+            moved.weighted_translation_zeros(),
+        );
+        assert!(after > before, "{file}: {before} → {after} zeros");
+        let worst = assert_equivalent(&model, &mut rng);
+        assert!(worst < 1e-12, "{file}: worst relative difference {worst:e}");
+        // A free flyer's body keeps its origin: the base velocity is measured there.
+        if floating {
+            assert_eq!(moved.joints[0].placement, model.joints[0].placement);
+            assert_eq!(moved.bodies[0].inertia, model.bodies[0].inertia);
+        }
+    }
+}
+
+#[test]
+fn a_model_with_constraints_keeps_its_frames() {
+    let model = load_model::<f64>("models/loops/four_bar_internal.urdf", false);
+    assert!(!model.constraints.is_empty());
+    let moved = model.with_origins_on_joint_axes();
+    for (a, b) in model.joints.iter().zip(&moved.joints) {
+        assert_eq!(a.placement, b.placement);
+    }
+}
