@@ -628,18 +628,40 @@ pub fn step<T: Real>(
     q_next: &mut [T],
     v_next: &mut [T],
 ) -> Result<(), DynamicsError> {
+    check_step(model, dt, q_next, v_next)?;
+    super::aba_ext(model, ws, q, v, tau, f_ext)?;
+    advance(model, (q, v), &mut ws.qdd, dt, q_next, v_next)
+}
+
+/// [`step`]'s checks of what is not an input of the dynamics: `dt` and the outputs' lengths.
+fn check_step<T: Real>(
+    model: &Model<T>,
+    dt: T,
+    q_next: &[T],
+    v_next: &[T],
+) -> Result<(), DynamicsError> {
     if let Some(value) = dt.value().filter(|x| !x.is_finite()) {
         return Err(DynamicsError::NonFiniteScalar { name: "dt", value });
     }
     check_len("q_next", q_next.len(), model.nq())?;
-    check_len("v_next", v_next.len(), model.nv())?;
-    super::aba_ext(model, ws, q, v, tau, f_ext)?;
+    check_len("v_next", v_next.len(), model.nv())
+}
+
+/// The step from `q̈`: `v' = v + dt q̈`, `q' = q ⊕ dt v'`; `qdd` is left holding `dt v'`.
+fn advance<T: Real>(
+    model: &Model<T>,
+    (q, v): (&[T], &[T]),
+    qdd: &mut [T],
+    dt: T,
+    q_next: &mut [T],
+    v_next: &mut [T],
+) -> Result<(), DynamicsError> {
     for i in 0..model.nv() {
-        v_next[i] = v[i] + dt * ws.qdd[i];
-        ws.qdd[i] = dt * v_next[i];
+        v_next[i] = v[i] + dt * qdd[i];
+        qdd[i] = dt * v_next[i];
         // A finite state can overflow in the step (a huge dt): name the step, not the input `v` that
         // `integrate` would see.
-        if let Some(value) = ws.qdd[i].value().filter(|x| !x.is_finite()) {
+        if let Some(value) = qdd[i].value().filter(|x| !x.is_finite()) {
             return Err(DynamicsError::NonFiniteInput {
                 name: "dt · v_next",
                 index: i,
@@ -647,7 +669,7 @@ pub fn step<T: Real>(
             });
         }
     }
-    crate::configuration::integrate(model, q, &ws.qdd, q_next)
+    crate::configuration::integrate(model, q, qdd, q_next)
 }
 
 /// [`step`]'s next state and its Jacobian with respect to `(q, v, τ)` (each block `nv × nv`; row and
@@ -725,6 +747,9 @@ pub fn step_derivatives<T: Real>(
         ],
         "StepDerivatives",
     )?;
+    if dws.analytical(model) {
+        return step_by_chain_rule(model, dws, (q, v, tau), dt, f_ext, out);
+    }
     step(
         model,
         &mut dws.plain,
@@ -739,9 +764,6 @@ pub fn step_derivatives<T: Real>(
     check_derivative_condition(model, &dws.plain)?;
     for (d, &x) in dws.next0.iter_mut().zip(out.q_next.iter()) {
         *d = Dual::constant(x);
-    }
-    if dws.analytical(model) {
-        return step_by_chain_rule(model, dws, (q, v, tau), dt, f_ext, out);
     }
     let StepDerivatives {
         dq_next_dq,
@@ -774,7 +796,8 @@ pub fn step_derivatives<T: Real>(
     )
 }
 
-/// [`step_derivatives`] on a tree by the chain rule through `v' = v + dt q̈` and `q' = integrate(q, s)`,
+/// [`step_derivatives`] on a tree by the chain rule through `v' = v + dt q̈` and `q' = integrate(q, s)`
+/// (the step's `q̈` is the recursion's, so `aba` runs once),
 /// `s = dt v'`: `∂q̈` by the analytical recursion, and the configuration's part, `∂q'/∂q` at a fixed `s`
 /// and `∂q'/∂s` (block diagonal: a joint's coordinates move only its own; the identity but for a free
 /// flyer), by dual numbers through `integrate` and `difference` alone. Then
@@ -788,6 +811,7 @@ fn step_by_chain_rule<T: Real>(
     out: &mut StepDerivatives<T>,
 ) -> Result<(), DynamicsError> {
     let nv = model.nv();
+    check_step(model, dt, out.q_next.as_slice(), out.v_next.as_slice())?;
     // ∂q̈/∂q, ∂q̈/∂v and M⁻¹ into the ∂v' blocks, then v' = v + dt q̈.
     let derivatives = [
         &mut out.dv_next_dq,
@@ -795,6 +819,18 @@ fn step_by_chain_rule<T: Real>(
         &mut out.dv_next_dtau,
     ];
     dws.forward_by_recursion(model, (q, v, tau), f_ext, derivatives)?;
+    // The step itself from the recursion's q̈ (the same `aba_ext`'s): `step` would run `aba` again.
+    advance(
+        model,
+        (q, v),
+        dws.qdd.as_mut_slice(),
+        dt,
+        out.q_next.as_mut_slice(),
+        out.v_next.as_mut_slice(),
+    )?;
+    for (d, &x) in dws.next0.iter_mut().zip(out.q_next.iter()) {
+        *d = Dual::constant(x);
+    }
     for m in [
         &mut out.dv_next_dq,
         &mut out.dv_next_dv,
