@@ -124,3 +124,45 @@ fn a_model_with_constraints_keeps_its_frames() {
         assert_eq!(a.placement, b.placement);
     }
 }
+
+/// A 10 kg body of 1e-6 kg·m² on a joint 1 km out along its own axis (an attacker's trial): moved along
+/// a tilted axis, its inertia about the axis came back as a difference of terms of size m·t², and `aba`
+/// lost 2.4e-4 relative. Tilted axes keep their origins; along a coordinate axis the move is exact.
+#[test]
+fn a_tilted_axis_keeps_its_origin_and_a_coordinate_axis_moves_exactly() {
+    use embedyn::nalgebra::{Matrix3, Vector3};
+    use embedyn::{JointType, SpatialInertia, Transform};
+    let pendulum = |axis: Vector3<f64>, xyz: [f64; 3]| {
+        let mut b = Model::<f64>::builder("far");
+        let inertia = SpatialInertia::from_com(10.0, Vector3::zeros(), Matrix3::identity() * 1e-6);
+        let placement = Transform::from_xyz_rpy(xyz, [0.0; 3]);
+        b.add_body(
+            None,
+            "j1",
+            JointType::Revolute,
+            axis,
+            placement,
+            "l1",
+            inertia,
+        )
+        .unwrap();
+        b.build().unwrap()
+    };
+    let tilted = pendulum(Vector3::new(0.6, 0.0, 0.8), [600.0, 0.0, 800.0]);
+    let moved = tilted.with_origins_on_joint_axes();
+    assert_eq!(moved.joints[0].placement, tilted.joints[0].placement);
+    let along_x = pendulum(Vector3::x(), [1000.0, 0.0, 0.5]);
+    let moved = along_x.with_origins_on_joint_axes();
+    assert_eq!(
+        moved.joints[0].placement.translation,
+        Vector3::new(0.0, 0.0, 0.5)
+    );
+    let (q, v, tau) = ([0.3], [0.7], [0.5]);
+    let mut a = Workspace::new(&along_x);
+    let mut b = Workspace::new(&moved);
+    let exact = aba(&along_x, &mut a, &q, &v, &tau).unwrap()[0];
+    let traced = aba(&moved, &mut b, &q, &v, &tau).unwrap()[0];
+    // q̈ = τ / I_xx = 0.5 / 1e-6.
+    assert_eq!(exact, 500_000.0);
+    assert_eq!(traced, exact);
+}
