@@ -640,6 +640,9 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
         let instance_algorithms: Vec<Algorithm> = instances.iter().map(|i| i.algorithm).collect();
         let mut sizes =
             check_size_before_tracing(loaded, &model64, &instance_algorithms, &scalars, options)?;
+        // The model some joint-space functions are traced on (fewer operations, the same dynamics;
+        // runtime/src/joint_axis_origins.rs), found once for all of them.
+        let moved_model = model.with_origins_on_joint_axes();
         for (k, instance) in instances.iter().enumerate() {
             let algo = instance.algorithm;
             let links = Links {
@@ -652,6 +655,7 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
             let request = FunctionRequest {
                 loaded,
                 model: &model,
+                moved_model: &moved_model,
                 instance,
                 links: &links,
                 wrench_names: &wrench_names,
@@ -1349,6 +1353,9 @@ impl FactorProduct {
 struct FunctionRequest<'a> {
     loaded: &'a Loaded,
     model: &'a Model<Sym>,
+    /// `model` with its body origins on the joint axes, which the functions of
+    /// `Algorithm::traced_on_moved_origins` are traced on (the same joints and bodies).
+    moved_model: &'a Model<Sym>,
     instance: &'a Instance<'a>,
     links: &'a Links<'a>,
     wrench_names: &'a [&'a str],
@@ -1381,6 +1388,7 @@ fn generate_traced(
     let FunctionRequest {
         loaded,
         model,
+        moved_model,
         instance,
         links,
         wrench_names,
@@ -1441,13 +1449,9 @@ fn generate_traced(
             },
         )
     };
-    // Some joint-space functions see body origins moved along their joint axes (fewer operations, the
-    // same dynamics; runtime/src/joint_axis_origins.rs). Names and owners below come from `model`: the two
-    // models have the same joints and bodies.
-    let moved;
+    // Names and owners below come from `model`: the two models have the same joints and bodies.
     let traced_model = if spec.algorithm.traced_on_moved_origins() {
-        moved = model.with_origins_on_joint_axes();
-        &moved
+        moved_model
     } else {
         model
     };

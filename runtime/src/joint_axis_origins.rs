@@ -91,9 +91,7 @@ impl<T: Real> Model<T> {
     /// How often the recursions cross joint `i`'s translation: once in a sweep over the bodies, and once
     /// for each column of `M` carried across it (`crba`), one per velocity coordinate of `i`'s subtree.
     pub fn crossings(&self, i: usize) -> usize {
-        1 + (i..self.subtree_end(i))
-            .map(|b| self.joints[b].nv())
-            .sum::<usize>()
+        1 + self.subtree_v_range(i).len()
     }
 
     /// Where [`Model::with_origins_on_joint_axes`] puts each body origin: `t·axis` in the body frame, one
@@ -102,12 +100,12 @@ impl<T: Real> Model<T> {
     /// Body `i`'s translation from its moved parent is `w = p − s_parent`; moving its origin by `t·axis`
     /// adds `t·R₀·axis` (`R₀` the joint placement's rotation) to it and takes `t·axis` from each child's.
     /// The moves worth trying are `t = 0` and, for a joint whose axis is an axis of its frame (x, y or
-    /// z), each `t` that cancels one component of `w` exactly, no longer than `|w|`. The
-    /// choice maximizes the zeros of all translations together, each weighted by how often the recursions
-    /// cross it ([`Model::weighted_translation_zeros`]), by a search over the tree that remembers each body's best for each move of its
-    /// parent. So a component is passed on toward the leaves, where fewer columns cross it. Among equals,
-    /// no move (the file's frame). A floating joint's
-    /// body stays put: its origin is where the base velocity is measured, so moving it would change `v`.
+    /// z), each `t` that cancels one component of `w` exactly, no longer than `|w|`. The choice maximizes
+    /// the zeros of all translations together, each weighted by how often the recursions cross it
+    /// ([`Model::weighted_translation_zeros`]), by a search over the tree that remembers each body's best
+    /// for each move of its parent. So a component is passed on toward the leaves, where fewer columns
+    /// cross it. Among equals, no move (the file's frame). A floating joint's body stays put: its origin
+    /// is where the base velocity is measured, so moving it would change `v`.
     pub fn joint_axis_origin_shifts(&self) -> Vec<Vector3<f64>> {
         let n = self.joints.len();
         let mut children: Vec<Vec<usize>> = vec![Vec::new(); n];
@@ -184,6 +182,9 @@ impl<T: Real> ShiftSearch<'_, T> {
             return *found;
         }
         let axis = self.model.joints[i].axis.map(|x| x.to_f64());
+        let weight = self.model.crossings(i);
+        // The list is borrowed for `'m`, not from `self`, so the recursion below may take `&mut self`.
+        let children = self.children;
         let mut best = (0, 0.0);
         for (k, (t, zeros)) in self
             .model
@@ -192,10 +193,8 @@ impl<T: Real> ShiftSearch<'_, T> {
             .enumerate()
         {
             let shift = axis * t;
-            let children = self.children[i].clone();
-            let weight = self.model.crossings(i);
             let total = zeros * weight
-                + children
+                + children[i]
                     .iter()
                     .map(|&c| self.best_move(c, &shift).0)
                     .sum::<usize>();
