@@ -578,12 +578,22 @@ const C5: f64 = 2.087_572_321_298_175e-9;
 #[allow(clippy::excessive_precision)]
 const C6: f64 = -1.135_964_755_778_819_5e-11;
 
-/// `x = k π/2 + r` with |r| ≤ π/4: returns the bits of k's shifted float (its low bits are k) and r.
+/// `x = k π/2 + r` with |r| ≤ π/4: returns k (two's complement, so its low two bits are the quadrant)
+/// and r.
+///
+/// k is converted from its float, not read from the low bits of `shifted` (which hold the same number):
+/// rustc 1.95 (LLVM 22.1.2) at opt-level 3 vectorized the bit reading of `shifted.to_bits()` across the
+/// angles of a batch and gave one angle another's quadrant (the arm7's generated `kinematics` in a
+/// release build: the cosine of joint 2 with the wrong sign, every link below it wrong by up to 2;
+/// opt-levels 1 and 2, debug builds and a newer LLVM were right). The conversion is exact: |k| < 2²⁰.
 #[inline(always)]
 fn reduce(x: f64) -> (u64, f64) {
     let shifted = x * TWO_OVER_PI + SHIFTER;
     let k = shifted - SHIFTER;
-    (shifted.to_bits(), (((x - k * PIO2_1) - k * PIO2_2) - k * PIO2_3) - k * PIO2_3T)
+    (
+        k as i64 as u64,
+        (((x - k * PIO2_1) - k * PIO2_2) - k * PIO2_3) - k * PIO2_3T,
+    )
 }
 
 /// sin r and cos r for |r| ≤ π/4.
@@ -610,7 +620,7 @@ fn place_in_quadrant(n: u64, s: f64, c: f64) -> (f64, f64) {
     let a = (sb & !swap) | (cb & swap);
     let b = (cb & !swap) | (sb & swap);
     let sin_sign = (n & 2) << 62;
-    let cos_sign = ((n + 1) & 2) << 62;
+    let cos_sign = (n.wrapping_add(1) & 2) << 62;
     (f64::from_bits(a ^ sin_sign), f64::from_bits(b ^ cos_sign))
 }
 
