@@ -509,8 +509,8 @@ fn avx_twins_give_the_bits_of_the_baseline_code() {
     }
 }
 
-/// The generated `step_derivatives` (semi-implicit Euler and its Jacobian) equals the interpreted one
-/// (the same dual-number passes, traced) on random UR5 states.
+/// The generated `step_derivatives` (semi-implicit Euler and its Jacobian) equals the interpreted one on
+/// random UR5 states.
 #[test]
 fn generated_step_matches_the_interpreted() {
     let model: Model<f64> = load_model("tests/data/pinocchio/ur5.urdf", false);
@@ -525,11 +525,13 @@ fn generated_step_matches_the_interpreted() {
         step_derivatives(&model, &mut dws, &q, &v, &tau, dt, &[], &mut d).unwrap();
         let (q1, v1, worst) = step_error(ur5_step::f64::step_derivatives, (&q, &v, &tau, dt), &d);
         assert!(worst < 1e-12, "{worst:e}");
-        // The plain step is the same next state.
+        // The plain step is the same next state, to rounding: the generator may take the derivatives'
+        // q̈ from the factorized mass matrix, the plain step's from the articulated-body pass.
         let (mut q2, mut v2) = ([0.0; N], [0.0; N]);
         let arr = |x: &[f64]| -> [f64; N] { std::array::from_fn(|i| x[i]) };
         ur5_step::f64::step(&arr(&q), &arr(&v), &arr(&tau), dt, &mut q2, &mut v2);
-        assert!(rel_vec(&q2, &q1) < 1e-15 && rel_vec(&v2, &v1) < 1e-15);
+        let (dq, dv) = (rel_vec(&q2, &q1), rel_vec(&v2, &v1));
+        assert!(dq < 1e-13 && dv < 1e-13, "q' {dq:e}, v' {dv:e}");
     }
 }
 

@@ -1582,8 +1582,9 @@ pub(crate) enum DerivativeTrace {
     /// The runtime's method, unrolled whole (for forward dynamics, `−M⁻¹ ∂τ` too).
     Method(DerivativeMethod),
     /// Forward dynamics' factors unrolled (`q̈`, `∂τ/∂q`, `∂τ/∂v`, `M⁻¹` in the places of `q̈`,
-    /// `∂q̈/∂q`, `∂q̈/∂v`, `∂q̈/∂τ`), the product `−M⁻¹ ∂τ` left to a loop after them.
-    Factors,
+    /// `∂q̈/∂q`, `∂q̈/∂v`, `∂q̈/∂τ`) by the runtime's method, the product `−M⁻¹ ∂τ` left to a loop after
+    /// them.
+    Factors(DerivativeMethod),
 }
 
 std::thread_local! {
@@ -1607,9 +1608,9 @@ pub(crate) fn with_derivative_trace<R>(way: DerivativeTrace, f: impl FnOnce() ->
 
 fn derivative_workspace(model: &Model<Sym>) -> DerivativeWorkspace<Sym> {
     let mut dws = DerivativeWorkspace::new(model);
-    if let DerivativeTrace::Method(method) = DERIVATIVE_TRACE.with(std::cell::Cell::get) {
-        dws.set_method(method);
-    }
+    let (DerivativeTrace::Method(method) | DerivativeTrace::Factors(method)) =
+        DERIVATIVE_TRACE.with(std::cell::Cell::get);
+    dws.set_method(method);
     dws
 }
 
@@ -1621,7 +1622,7 @@ fn traced_aba_derivatives(
 ) -> Result<Traced, DynamicsError> {
     let mut dws = derivative_workspace(model);
     let (q, v, tau) = (&inputs[0], &inputs[1], &inputs[2]);
-    if DERIVATIVE_TRACE.with(std::cell::Cell::get) == DerivativeTrace::Factors {
+    if let DerivativeTrace::Factors(_) = DERIVATIVE_TRACE.with(std::cell::Cell::get) {
         let mut f = AbaDerivativeFactors::new(model);
         aba_derivative_factors(model, &mut dws, q, v, tau, f_ext, &mut f)?;
         return Ok(Traced {
@@ -1941,13 +1942,16 @@ mod tests {
         let way = || DERIVATIVE_TRACE.with(std::cell::Cell::get);
         let before = way();
         let panicked = std::panic::catch_unwind(|| {
-            with_derivative_trace(DerivativeTrace::Factors, || panic!("a trace failed"))
+            with_derivative_trace(
+                DerivativeTrace::Factors(DerivativeMethod::Analytical),
+                || panic!("a trace failed"),
+            )
         });
         assert!(panicked.is_err());
         assert_eq!(way(), before);
         assert_eq!(
-            with_derivative_trace(DerivativeTrace::Factors, way),
-            DerivativeTrace::Factors
+            with_derivative_trace(DerivativeTrace::Factors(DerivativeMethod::Analytical), way),
+            DerivativeTrace::Factors(DerivativeMethod::Analytical)
         );
         assert_eq!(way(), before);
     }

@@ -1198,10 +1198,20 @@ fn generate_algorithm(
     let factors = algorithm.has_derivative_factors() && product > FACTOR_PRODUCT_MIN;
     let mut ways = Vec::new();
     if factors {
-        ways.push(DerivativeTrace::Factors);
+        ways.push(DerivativeTrace::Factors(DerivativeMethod::Analytical));
+        ways.push(DerivativeTrace::Factors(
+            DerivativeMethod::MassMatrixFactorization,
+        ));
     }
     if !factors || product <= UNROLLED_PRODUCT_MAX {
         ways.push(DerivativeTrace::Method(DerivativeMethod::Analytical));
+        // Forward dynamics' q̈ and M⁻¹ from the factorized mass matrix instead of ABA and the inverse's
+        // sweeps (inverse dynamics' derivatives are the same either way).
+        if algorithm.has_derivative_factors() || algorithm == Algorithm::StepDerivatives {
+            ways.push(DerivativeTrace::Method(
+                DerivativeMethod::MassMatrixFactorization,
+            ));
+        }
     }
     ways.push(DerivativeTrace::Method(DerivativeMethod::DualNumbers));
     let mut best: Option<(TracedFunction, usize, std::collections::HashSet<String>)> = None;
@@ -1372,7 +1382,12 @@ fn generate_one_way(
     match way {
         None => generate_traced(request, taken, emission, false),
         Some(way) => crate::algorithm::with_derivative_trace(way, || {
-            generate_traced(request, taken, emission, way == DerivativeTrace::Factors)
+            generate_traced(
+                request,
+                taken,
+                emission,
+                matches!(way, DerivativeTrace::Factors(_)),
+            )
         }),
     }
 }
