@@ -73,9 +73,11 @@ pub(crate) struct AnalyticalScratch<T: Real> {
     eta: Vec<Motion<T>>,
     alpha: Vec<Motion<T>>,
     beta: Vec<Motion<T>>,
-    /// [`mass_matrix_factorized`]'s `LᵀDL` factors and `L⁻¹`, and each coordinate's parent coordinate.
+    /// [`forward_factors_by_mass_matrix`]'s `LᵀDL` factors, `L⁻¹` and `D⁻¹`, and each coordinate's joint
+    /// and parent coordinate.
     factor: DMatrix<T>,
     factor_inverse: DMatrix<T>,
+    pivot_inverse: Vec<T>,
     coordinate_joint: Vec<usize>,
     coordinate_parent: Vec<Option<usize>>,
 }
@@ -104,6 +106,7 @@ impl<T: Real> AnalyticalScratch<T> {
             beta: vec![Motion::zero(); nv],
             factor: DMatrix::zeros(nv, nv),
             factor_inverse: DMatrix::zeros(nv, nv),
+            pivot_inverse: vec![T::zero(); nv],
             coordinate_joint,
             coordinate_parent,
         }
@@ -386,11 +389,17 @@ pub(crate) fn forward_factors_by_mass_matrix<T: Real>(
             qdd[r] = tau[r] - s.column[r].dot(&s.subtree_force[k]);
         }
     }
-    // Lᵀ D L in place, leaves first: row k's entries left of the diagonal become L, the diagonal D.
+    // Lᵀ D L in place, leaves first: row k's entries left of the diagonal become L, the diagonal D. Each
+    // pivot's reciprocal is taken once (a division costs several multiplications' time, and a tree has
+    // one per coordinate against one per related pair of coordinates for the quotients).
     for k in (0..nv).rev() {
+        // A singular M (a massless subtree) leaves no finite q̈; ABA's pivot check says the same.
+        super::aba::check_pivot(&model.joints[s.coordinate_joint[k]], h[(k, k)])?;
+        let d_inv = T::one() / h[(k, k)];
+        s.pivot_inverse[k] = d_inv;
         let mut i = s.coordinate_parent[k];
         while let Some(ii) = i {
-            let a = h[(k, ii)] / h[(k, k)];
+            let a = h[(k, ii)] * d_inv;
             let mut j = Some(ii);
             while let Some(jj) = j {
                 let update = h[(ii, jj)] - a * h[(k, jj)];
@@ -400,10 +409,6 @@ pub(crate) fn forward_factors_by_mass_matrix<T: Real>(
             h[(k, ii)] = a;
             i = s.coordinate_parent[ii];
         }
-    }
-    for k in 0..nv {
-        // A singular M (a massless subtree) leaves no finite q̈; ABA's pivot check says the same.
-        super::aba::check_pivot(&model.joints[s.coordinate_joint[k]], h[(k, k)])?;
     }
     // q̈ = L⁻¹ D⁻¹ L⁻ᵀ (τ − bias).
     for i in (0..nv).rev() {
@@ -415,7 +420,7 @@ pub(crate) fn forward_factors_by_mass_matrix<T: Real>(
         }
     }
     for i in 0..nv {
-        qdd[i] /= h[(i, i)];
+        qdd[i] *= s.pivot_inverse[i];
     }
     for i in 0..nv {
         let mut j = s.coordinate_parent[i];
@@ -453,7 +458,7 @@ pub(crate) fn forward_factors_by_mass_matrix<T: Real>(
             let mut sum = T::zero();
             let mut k = Some(c);
             while let Some(kk) = k {
-                sum += x[(r, kk)] * (x[(c, kk)] / h[(kk, kk)]);
+                sum += x[(r, kk)] * (x[(c, kk)] * s.pivot_inverse[kk]);
                 k = s.coordinate_parent[kk];
             }
             minv[(r, c)] = sum;
