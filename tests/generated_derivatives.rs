@@ -16,6 +16,10 @@ use embedyn::{
 };
 use serde_json::Value;
 
+mod z1_both_scalars {
+    // f64 and f32 from one trace: forward dynamics' q̈ and M⁻¹ stay on aba (see the test below).
+    embedyn::robot!("models/peers/z1.urdf", only(aba_derivatives));
+}
 mod ur5 {
     embedyn::robot!(
         "tests/data/pinocchio/ur5.urdf",
@@ -261,6 +265,18 @@ fn generated_derivatives_match_pinocchio_on_the_ur5() {
         assert!(
             errors32.iter().all(|&e| e < 1e-3),
             "sample {k}, f32: {errors32:?}"
+        );
+        // q̈ and M⁻¹ in f32 keep aba's digits: with f32 code the generator does not take them from the
+        // factorized mass matrix, whose rounding grows as cond(M) ε (attacker's trial: the Z1's f32 M⁻¹
+        // 1.2e-7 by aba, 4.1e-5 by the factorization).
+        let qdd_reference = numbers(&reference["qdd"]);
+        let accurate = [
+            rel_vec(&qdd32.map(f64::from), &ours(qdd_reference)),
+            rel(&widen(&dt32), &matrix(&reference["dqdd_dtau"], &map)),
+        ];
+        assert!(
+            accurate.iter().all(|&e| e < 1e-5),
+            "sample {k}, f32 q̈ and M⁻¹: {accurate:?}"
         );
 
         // With the sample's wrenches on the links generated for (the one on the fixed base_link moves
@@ -556,4 +572,57 @@ fn generated_step_of_a_floating_base_matches_the_interpreted() {
         let (_, _, worst) = step_error(generated, (&q, &v, &tau, dt), &d);
         assert!(worst < 1e-12, "{worst:e}");
     }
+}
+
+/// Generated f32 `aba_derivatives` keeps `aba`'s digits in `q̈` and `M⁻¹` (attacker's trial, 2026-12-04:
+/// with `q̈` and `M⁻¹` from the factorized mass matrix, traced once for both scalar modules, the Z1's f32
+/// `q̈` was off by 6.0e-5 and its `M⁻¹` by 4.1e-5, against 2.1e-7 and 1.2e-7 by `aba`), and its
+/// derivatives stay within f32's reach, against the interpreted f64 solver on random states.
+#[test]
+fn generated_f32_forward_derivatives_keep_their_digits() {
+    use z1_both_scalars as z1;
+    const N: usize = z1::NV;
+    let model: Model<f64> = load_model("models/peers/z1.urdf", false);
+    let mut dws = DerivativeWorkspace::new(&model);
+    let mut d = AbaDerivatives::new(&model);
+    let mut rng = Rng::new(99);
+    let mut worst = [0.0f64; 4];
+    for _ in 0..20 {
+        let q: [f64; N] = rng.vec(N, -3.0, 3.0).try_into().unwrap();
+        let v: [f64; N] = rng.vec(N, -2.0, 2.0).try_into().unwrap();
+        let tau: [f64; N] = rng.vec(N, -5.0, 5.0).try_into().unwrap();
+        // The reference at the f32 inputs, so that only the arithmetic differs.
+        let (q32, v32, t32) = (
+            q.map(|x| x as f32),
+            v.map(|x| x as f32),
+            tau.map(|x| x as f32),
+        );
+        let wide = |x: [f32; N]| x.map(f64::from);
+        aba_derivatives(
+            &model,
+            &mut dws,
+            &wide(q32),
+            &wide(v32),
+            &wide(t32),
+            &[],
+            &mut d,
+        )
+        .unwrap();
+        let mut qdd = [0.0f32; N];
+        let (mut dq, mut dv, mut dt) = ([[0.0f32; N]; N], [[0.0f32; N]; N], [[0.0f32; N]; N]);
+        z1::f32::aba_derivatives(&q32, &v32, &t32, &mut qdd, &mut dq, &mut dv, &mut dt);
+        let errors = [
+            rel_vec(&wide(qdd), d.qdd.as_slice()),
+            rel(&widen(&dt), &d.dqdd_dtau),
+            rel(&widen(&dq), &d.dqdd_dq),
+            rel(&widen(&dv), &d.dqdd_dv),
+        ];
+        for (w, e) in worst.iter_mut().zip(errors) {
+            *w = crate::common::worse(*w, e);
+        }
+    }
+    assert!(
+        worst[0] < 2e-6 && worst[1] < 2e-6 && worst[2] < 1e-3 && worst[3] < 1e-3,
+        "f32 q̈, M⁻¹, ∂q̈/∂q, ∂q̈/∂v: {worst:?}"
+    );
 }

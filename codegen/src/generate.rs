@@ -659,6 +659,7 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
                 instance,
                 links: &links,
                 wrench_names: &wrench_names,
+                single_precision: options.f32,
             };
             let (function, lane_function) = match generate_algorithm(
                 &request,
@@ -1197,17 +1198,25 @@ fn generate_algorithm(
     let product = FactorProduct::structural_operations(model);
     let factors = algorithm.has_derivative_factors() && product > FACTOR_PRODUCT_MIN;
     let mut ways = Vec::new();
+    // Forward dynamics' q̈ and M⁻¹ from the factorized mass matrix instead of ABA and the inverse's sweeps
+    // (inverse dynamics' derivatives are the same either way), only where no f32 code is written from the
+    // same trace: the factorization's rounding grows as cond(M) ε, which f32 cannot spare (attacker's
+    // trial, 2026-12-04, generated f32 against interpreted f64: the Z1's q̈ 2.1e-7 by `aba`, 6.0e-5 by the
+    // factorization, M⁻¹ 1.2e-7 against 4.1e-5; a 20-link chain's q̈ 7.2e-6 against 1.6e-4; in f64 the Z1's
+    // q̈ 3.3e-16 against 1.5e-13).
+    let factorized = !request.single_precision
+        && (algorithm.has_derivative_factors() || algorithm == Algorithm::StepDerivatives);
     if factors {
         ways.push(DerivativeTrace::Factors(DerivativeMethod::Analytical));
-        ways.push(DerivativeTrace::Factors(
-            DerivativeMethod::MassMatrixFactorization,
-        ));
+        if factorized {
+            ways.push(DerivativeTrace::Factors(
+                DerivativeMethod::MassMatrixFactorization,
+            ));
+        }
     }
     if !factors || product <= UNROLLED_PRODUCT_MAX {
         ways.push(DerivativeTrace::Method(DerivativeMethod::Analytical));
-        // Forward dynamics' q̈ and M⁻¹ from the factorized mass matrix instead of ABA and the inverse's
-        // sweeps (inverse dynamics' derivatives are the same either way).
-        if algorithm.has_derivative_factors() || algorithm == Algorithm::StepDerivatives {
+        if factorized {
             ways.push(DerivativeTrace::Method(
                 DerivativeMethod::MassMatrixFactorization,
             ));
@@ -1369,6 +1378,9 @@ struct FunctionRequest<'a> {
     instance: &'a Instance<'a>,
     links: &'a Links<'a>,
     wrench_names: &'a [&'a str],
+    /// Whether an `f32` module (or lane module) is written from the same traced code: forward dynamics'
+    /// derivatives then keep `aba`'s `q̈` and `M⁻¹` (see `generate_algorithm`).
+    single_precision: bool,
 }
 
 /// One function traced (derivatives `way`, where they have ways) and written.
@@ -1407,6 +1419,7 @@ fn generate_traced(
         instance,
         links,
         wrench_names,
+        single_precision: _,
     } = *request;
     let Emission {
         helpers,
