@@ -498,7 +498,7 @@ const SINCOS_AVX_MIN: usize = 24;
 /// `sincos_kernel`). For |x| < [`REDUCTION_LIMIT`] only.
 #[inline(always)]
 fn sincos_passes<const N: usize>(x: [f64; N]) -> ([f64; N], [f64; N]) {
-    let mut quadrant = [0u64; N];
+    let mut quadrant = [0.0; N];
     let mut reduced = [0.0; N];
     for ((v, n), r) in x.iter().zip(quadrant.iter_mut()).zip(reduced.iter_mut()) {
         (*n, *r) = reduce(*v);
@@ -578,22 +578,21 @@ const C5: f64 = 2.087_572_321_298_175e-9;
 #[allow(clippy::excessive_precision)]
 const C6: f64 = -1.135_964_755_778_819_5e-11;
 
-/// `x = k π/2 + r` with |r| ≤ π/4: returns k (two's complement, so its low two bits are the quadrant)
-/// and r.
+/// `x = k π/2 + r` with |r| ≤ π/4: returns k's residue `m = k − 4 round(k/4)` ∈ {−2, −1, 0, 1, 2} (the
+/// quadrant, 2 and −2 alike) and r. Every step is exact: k and k/4 round by the same shifted addition.
 ///
-/// k is converted from its float, not read from the low bits of `shifted` (which hold the same number):
-/// rustc 1.95 (LLVM 22.1.2) at opt-level 3 vectorized the bit reading of `shifted.to_bits()` across the
-/// angles of a batch and gave one angle another's quadrant (the arm7's generated `kinematics` in a
-/// release build: the cosine of joint 2 with the wrong sign, every link below it wrong by up to 2;
-/// opt-levels 1 and 2, debug builds and a newer LLVM were right). The conversion is exact: |k| < 2²⁰.
+/// The quadrant stays a float: the bits of `shifted` (whose low bits are k) were read as an integer until
+/// rustc 1.95 (LLVM 22.1.2) at opt-level 3 vectorized that reading across the angles of a batch and gave
+/// one angle another's quadrant (the arm7's generated `kinematics` in a release build: the cosine of joint 2
+/// with the wrong sign, every link below it wrong by up to 2; opt-levels 1 and 2, debug builds and a newer
+/// LLVM were right). Converting k to an integer instead (`k as i64`) was right but cost the floating G1's
+/// `crba` 3.5 % (a scalar conversion per angle); floats keep the passes vectorized.
 #[inline(always)]
-fn reduce(x: f64) -> (u64, f64) {
+fn reduce(x: f64) -> (f64, f64) {
     let shifted = x * TWO_OVER_PI + SHIFTER;
     let k = shifted - SHIFTER;
-    (
-        k as i64 as u64,
-        (((x - k * PIO2_1) - k * PIO2_2) - k * PIO2_3) - k * PIO2_3T,
-    )
+    let m = k - ((k * 0.25 + SHIFTER) - SHIFTER) * 4.0;
+    (m, (((x - k * PIO2_1) - k * PIO2_2) - k * PIO2_3) - k * PIO2_3T)
 }
 
 /// sin r and cos r for |r| ≤ π/4.
@@ -610,18 +609,20 @@ fn polynomials(r: f64) -> (f64, f64) {
     (s, c)
 }
 
-/// sin x and cos x from sin r and cos r and the quadrant n: (s, c), (c, −s), (−s, −c), (−c, s). Selected
-/// and signed with bit operations: the quadrant of a joint angle is unpredictable, and a mispredicted
-/// branch costs more than the kernels.
+/// sin x and cos x from sin r and cos r and the quadrant's residue m ([`reduce`]): (s, c), (c, −s),
+/// (−s, −c), (−c, s) for m = 0, 1, ±2, −1. Selected without branches (the quadrant of a joint angle is
+/// unpredictable, and a mispredicted branch costs more than the kernels); a negation flips the sign bit
+/// only, so the results are the bits of the lanes' version, which selects with bit masks.
 #[inline(always)]
-fn place_in_quadrant(n: u64, s: f64, c: f64) -> (f64, f64) {
-    let swap = (n & 1).wrapping_neg();
-    let (sb, cb) = (s.to_bits(), c.to_bits());
-    let a = (sb & !swap) | (cb & swap);
-    let b = (cb & !swap) | (sb & swap);
-    let sin_sign = (n & 2) << 62;
-    let cos_sign = (n.wrapping_add(1) & 2) << 62;
-    (f64::from_bits(a ^ sin_sign), f64::from_bits(b ^ cos_sign))
+fn place_in_quadrant(m: f64, s: f64, c: f64) -> (f64, f64) {
+    let odd = m == 1.0 || m == -1.0;
+    let (a, b) = if odd { (c, s) } else { (s, c) };
+    let sin_negative = m < 0.0 || m == 2.0;
+    let cos_negative = m > 0.0 || m == -2.0;
+    (
+        if sin_negative { -a } else { a },
+        if cos_negative { -b } else { b },
+    )
 }
 
 /// Whether the generated functions that have an AVX twin run it (x86-64 only; see `use_avx`).
