@@ -48,7 +48,7 @@ use crate::spatial::{Force, Motion, SpatialInertia, Transform};
 use crate::Real;
 use nalgebra::{DMatrix, Matrix3, Vector3};
 
-/// The world-frame quantities of the recursion: per body (placements, velocities, accelerations and
+/// The root-frame quantities of the recursion: per body (placements, velocities, accelerations and
 /// the subtree sums) and per velocity coordinate (the subspace column and the three motions of its
 /// derivative terms). Made once per model; the calls do not allocate.
 #[derive(Clone, Debug)]
@@ -132,17 +132,28 @@ pub(crate) fn rnea_partials<T: Real>(
     f_ext: &[LinkWrench<T>],
     out: InverseDynamicsPartials<'_, T>,
 ) -> Result<(), DynamicsError> {
-    debug_assert!(!model.has_constraints());
-    super::check_configuration(model, q)?;
-    super::check_input("v", v, model.nv())?;
-    super::check_input("qdd", qdd, model.nv())?;
-    super::wrenches::check_wrenches(model, f_ext)?;
+    check_inputs(model, q, v, ("qdd", qdd), f_ext)?;
     let s = scratch;
     outward_velocities(model, s, q, v);
     outward_accelerations(model, s, qdd, f_ext);
     subtree_sums(model, s);
     pair_terms(model, s, qdd, out, &mut plain.tau);
     Ok(())
+}
+
+/// The inputs of either entry point: `q`, `v`, the third input (`q̈` or `τ`, by name) and the wrenches.
+fn check_inputs<T: Real>(
+    model: &Model<T>,
+    q: &[T],
+    v: &[T],
+    (name, u): (&'static str, &[T]),
+    f_ext: &[LinkWrench<T>],
+) -> Result<(), DynamicsError> {
+    debug_assert!(!model.has_constraints());
+    super::check_configuration(model, q)?;
+    super::check_input("v", v, model.nv())?;
+    super::check_input(name, u, model.nv())?;
+    super::wrenches::check_wrenches(model, f_ext)
 }
 
 /// Outward, from `q` and `v`: placements in the root's frame, velocities, the subspace columns `ξ`, the
@@ -214,10 +225,9 @@ fn outward_accelerations<T: Real>(
         s.acceleration[i] = acc;
     }
     for w in f_ext {
-        let Some(b) = w.frame.body else { continue };
-        let in_body =
-            model.bodies[b].link_placements[w.frame.link].act_force(&Force::new(w.torque, w.force));
-        s.force[b] -= s.placement[b].act_force(&in_body);
+        if let Some((b, in_body)) = super::wrenches::wrench_in_body(model, w) {
+            s.force[b] -= s.placement[b].act_force(&in_body);
+        }
     }
 }
 
@@ -360,12 +370,8 @@ pub(crate) fn forward_factors_by_mass_matrix<T: Real>(
         &mut DMatrix<T>,
     ),
 ) -> Result<(), DynamicsError> {
-    debug_assert!(!model.has_constraints());
+    check_inputs(model, q, v, ("tau", tau), f_ext)?;
     let nv = model.nv();
-    super::check_configuration(model, q)?;
-    super::check_input("v", v, nv)?;
-    super::check_input("tau", tau, nv)?;
-    super::wrenches::check_wrenches(model, f_ext)?;
     outward_velocities(model, s, q, v);
     // The bias C(q, v) v + g(q) − Jᵀ f: the recursion's forces at q̈ = 0.
     qdd.fill(T::zero());

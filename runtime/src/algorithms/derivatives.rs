@@ -43,14 +43,14 @@ type D<T> = Dual<T, DIRECTIONS>;
 /// mimic joints (a model with them always takes dual numbers).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum DerivativeMethod {
-    /// The world-frame recursion over related pairs of coordinates (`O(nv · depth)`), and
+    /// The recursion over related pairs of coordinates, in each root body's frame (`O(nv · depth)`), and
     /// `∂q̈ = −M⁻¹ ∂τ` for forward dynamics.
     #[default]
     Analytical,
     /// Forward-mode dual numbers through `aba` and `rnea` (`O(nv²)` tangent work): the other method,
     /// exact to rounding as well, for cross-checks.
     DualNumbers,
-    /// The world-frame recursion as [`DerivativeMethod::Analytical`], but forward dynamics takes `q̈` and
+    /// The recursion of [`DerivativeMethod::Analytical`], but forward dynamics takes `q̈` and
     /// `M⁻¹` from the mass matrix's sparse factorization `M = Lᵀ D L` (from the recursion's composite
     /// inertias) instead of `aba` and the inverse's sweeps: fewer operations on small trees, digits lost
     /// as `cond(M) ε` (which grows as the cube of a chain's length). Generated code takes it where it
@@ -77,7 +77,7 @@ pub struct DerivativeWorkspace<T: Real> {
     next: Vec<D<T>>,
     out: Vec<D<T>>,
     method: DerivativeMethod,
-    /// The analytical recursion's world-frame quantities, and `∂τ` on the way to `∂q̈`.
+    /// The analytical recursion's root-frame quantities, and `∂τ` on the way to `∂q̈`.
     analytical: AnalyticalScratch<T>,
     dtau_dq: DMatrix<T>,
     dtau_dv: DMatrix<T>,

@@ -74,11 +74,21 @@ pub(crate) fn subtract_wrenches<T: Real>(
     f_ext: &[LinkWrench<T>],
 ) {
     for w in f_ext {
-        let Some(b) = w.frame.body else { continue };
-        let x = &model.bodies[b].link_placements[w.frame.link];
-        let f = Force::new(w.torque, w.force);
-        ws.force[b] -= x.act_force(&f);
+        if let Some((b, f)) = wrench_in_body(model, w) {
+            ws.force[b] -= f;
+        }
     }
+}
+
+/// A wrench's body and the wrench in that body's frame, about its origin; `None` for a link fixed to the
+/// world (it acts on nothing that moves).
+pub(crate) fn wrench_in_body<T: Real>(
+    model: &Model<T>,
+    w: &LinkWrench<T>,
+) -> Option<(usize, Force<T>)> {
+    let b = w.frame.body?;
+    let x = &model.bodies[b].link_placements[w.frame.link];
+    Some((b, x.act_force(&Force::new(w.torque, w.force))))
 }
 
 /// Forward dynamics with external wrenches: `qdd = M⁻¹ (τ + Σ Jᵀ f − C(q, v) − g(q))`, each `f` a
