@@ -209,7 +209,8 @@ fn only_writes_exactly_the_functions_named() {
     generate(
         "models/loops/slider_crank.urdf",
         &dir,
-        &["--only", "aba,kinematics"],
+        // Without AVX twins, whose modules repeat the functions' signatures.
+        &["--only", "aba,kinematics", "--avx-twins", "none"],
     );
     let src = std::fs::read_to_string(dir.join("src/lib.rs")).unwrap();
     let readme = std::fs::read_to_string(dir.join("README.md")).unwrap();

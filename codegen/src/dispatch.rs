@@ -13,9 +13,10 @@
 //! The choice is made at run time (`helpers::dispatch::avx()`: `cpuid` once, then one atomic load), so
 //! the generated crate still runs on any x86-64 CPU and needs no build flag; a build that enables AVX
 //! itself (`-C target-cpu=native`) compiles the twin out. Other architectures never see it. The twin
-//! costs compile time (its code is optimized twice), so only functions of at least
-//! `TWIN_MIN_STATEMENTS` statements get one: below that the measured gain was nil (the Z1's `aba`,
-//! 1.8k operations, the same time either way).
+//! costs compile time (its code is optimized twice), so functions of at least `TWIN_MIN_STATEMENTS`
+//! statements get one, and smaller ones only under a budget shared by the module
+//! (`TWIN_BUDGET_STATEMENTS`, largest first): their gain depends on the CPU (nil for the Z1's `aba`,
+//! 1.8k operations, on one Xeon; 0.67× the time for the floating ANYmal B's, 2.3k, on an AMD EPYC).
 //!
 //! A lane module of 256-bit values gives its functions two twins (`TwinOf::Lanes`, [`AVX512`] then
 //! [`AVX`]): the one compiled with AVX-512 F and VL runs where the CPU has them, the AVX one elsewhere.
@@ -37,13 +38,27 @@ pub const TWIN_MIN_STATEMENTS: usize = 4_000;
 /// compiler's memory, already near the default limit.
 pub const TWIN_MAX_STATEMENTS: usize = 25_000;
 
+/// Statements of the twins a module's functions below [`TWIN_MIN_STATEMENTS`] may share under
+/// `AvxTwins::Large` ([`AvxTwins::small_twins`]): such functions gain from a twin too (2026-12-04, an AMD
+/// EPYC host, the same code with and without its twin in one binary: the floating ANYmal B's `aba`, 2.3k
+/// statements, 0.67× the time, `rnea` 0.78×, `crba` 0.80×; the Z1's `aba` 0.94×, `crba` 0.88×; the
+/// floating G1's `crba` 0.82× and `rnea` 0.76×), but each twin costs compile time, and with AVX more
+/// than the baseline copy (LLVM's SLP vectorizer, which buys those twins nothing, takes 0.57 of their
+/// compile time there: G1 `crba` and `rnea` 3.9 s of user time with it off, 6.7 s on). A robot with a
+/// few thousand statements per function gets every function twinned at about a second's compile time;
+/// the humanoids' `crba` and `rnea` (2.2k to 3.8k each, beside a twinned 6.3k `aba`) would take the
+/// crates over issue 13's 10 s budget and keep their one copy.
+pub const TWIN_BUDGET_STATEMENTS: usize = 8_000;
+
 /// Which generated functions get an AVX twin (macro `avx_twins = none|large|all`, `embedyn generate
 /// --avx-twins none|large|all`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum AvxTwins {
     /// None: one copy of every function, half the compile time of the large ones.
     None,
-    /// The `f64` functions of `TWIN_MIN_STATEMENTS` to `TWIN_MAX_STATEMENTS` statements (the default).
+    /// The `f64` functions of `TWIN_MIN_STATEMENTS` to `TWIN_MAX_STATEMENTS` statements, and smaller
+    /// ones, largest first, while the module's twins total at most `TWIN_BUDGET_STATEMENTS` (the
+    /// default; [`AvxTwins::small_twins`]).
     #[default]
     Large,
     /// Every `f64` function (each costs about twice its compile time more; the gain below
@@ -69,6 +84,36 @@ impl AvxTwins {
             AvxTwins::Large => (TWIN_MIN_STATEMENTS..=TWIN_MAX_STATEMENTS).contains(&statements),
             AvxTwins::All => true,
         }
+    }
+
+    /// The functions below [`TWIN_MIN_STATEMENTS`] that also get a twin (`Large` only), by index: given
+    /// every f64 function's `statements` and whether it has a twin by [`AvxTwins::twins`], the others
+    /// largest first, each while the module's twins (the large ones included) stay within
+    /// [`TWIN_BUDGET_STATEMENTS`]: the larger a function, the more its twin saves per call.
+    pub fn small_twins(self, statements: &[usize], twinned: &[bool]) -> Vec<usize> {
+        if self != AvxTwins::Large {
+            return Vec::new();
+        }
+        let mut total: usize = statements
+            .iter()
+            .zip(twinned)
+            .filter(|(_, &t)| t)
+            .map(|(&s, _)| s)
+            .sum();
+        let mut candidates: Vec<usize> = (0..statements.len())
+            .filter(|&k| !twinned[k] && statements[k] < TWIN_MIN_STATEMENTS)
+            .collect();
+        // Largest first; equal sizes in the module's order.
+        candidates.sort_by_key(|&k| (core::cmp::Reverse(statements[k]), k));
+        let mut chosen = Vec::new();
+        for k in candidates {
+            if total + statements[k] <= TWIN_BUDGET_STATEMENTS {
+                total += statements[k];
+                chosen.push(k);
+            }
+        }
+        chosen.sort_unstable();
+        chosen
     }
 
     /// Whether a lane function of `statements` statements gets a twin in a lane module of 256-bit values
@@ -458,6 +503,48 @@ mod tests {
 
     fn helpers() -> TokenStream {
         quote!(crate::helpers)
+    }
+
+    /// Below `TWIN_MIN_STATEMENTS`, twins go to the largest functions first while the module's twins
+    /// (the large ones counted) fit the budget; a function too large for what is left is skipped for
+    /// smaller ones; only `Large` gives them.
+    #[test]
+    fn small_functions_share_a_budget_of_twins_largest_first() {
+        let large = TWIN_MIN_STATEMENTS + 1;
+        // A robot with 2.3k, 1.3k, 600 and 400 statements: all of them.
+        let quadruped = [400, 2_300, 1_300, 600];
+        assert_eq!(
+            AvxTwins::Large.small_twins(&quadruped, &[false; 4]),
+            vec![0, 1, 2, 3]
+        );
+        assert!(AvxTwins::None
+            .small_twins(&quadruped, &[false; 4])
+            .is_empty());
+        assert!(AvxTwins::All
+            .small_twins(&quadruped, &[false; 4])
+            .is_empty());
+        // A humanoid: a twinned `aba` of 6.3k leaves 1.7k, which `rnea` (3.4k) and `crba` (2.4k) do not
+        // fit and `kinematics` (800) does.
+        let humanoid = [800, 6_300, 3_400, 2_400];
+        assert_eq!(
+            AvxTwins::Large.small_twins(&humanoid, &[false, true, false, false]),
+            vec![0]
+        );
+        // Largest first, skipping what no longer fits: of 3.5k, 3k, 1.6k and 300 under 8k, the 1.6k
+        // does not fit after the first two, the 300 does.
+        assert_eq!(TWIN_BUDGET_STATEMENTS, 8_000);
+        assert_eq!(
+            AvxTwins::Large.small_twins(&[3_000, 3_500, 1_600, 300], &[false; 4]),
+            vec![0, 1, 3]
+        );
+        // A large function alone over the budget leaves nothing; one twinned by size is not chosen again.
+        assert!(AvxTwins::Large
+            .small_twins(&[TWIN_BUDGET_STATEMENTS + 1, 10], &[true, false])
+            .is_empty());
+        assert_eq!(
+            AvxTwins::Large.small_twins(&[large, 10], &[true, false]),
+            vec![1]
+        );
     }
 
     #[test]

@@ -88,6 +88,16 @@ pub mod f64 {
     /// Bodies it computes, in the model's order: `l_thigh`, `l_shin`, `r_thigh`, `r_shin`.
     #[allow(unused_variables, clippy::all)]
     pub fn kinematics(q: &[S; 4], frames: &mut [[S; 12]; 4]) {
+        #[cfg(
+            all(
+                target_arch = "x86_64",
+                target_feature = "sse2",
+                not(target_feature = "avx")
+            )
+        )]
+        if ::embedyn::codegen_support::dispatch::avx() {
+            return unsafe { kinematics_avx::kinematics(q, frames) };
+        }
         type P = <S as ::embedyn::codegen_support::Float>::Pair;
         let l_hip_q: S = q[0];
         let l_knee_q: S = q[1];
@@ -184,11 +194,135 @@ pub mod f64 {
         frames[3][1] = 0.0;
         frames[3][9] = 0.0;
     }
+    #[cfg(
+        all(target_arch = "x86_64", target_feature = "sse2", not(target_feature = "avx"))
+    )]
+    /// The functions above compiled for `avx` (see `helpers::dispatch`).
+    mod kinematics_avx {
+        #[allow(unused_imports)]
+        use super::*;
+        /// Forward kinematics: the world pose of every link on a moving body, in the order of `FRAMES`, as `[r00, r01, r02, r10, r11, r12, r20, r21, r22, x, y, z]` (the rotation row-major: its columns are the link's axes in world coordinates; then the link origin in the world).
+        ///
+        /// Bodies it computes, in the model's order: `l_thigh`, `l_shin`, `r_thigh`, `r_shin`.
+        #[allow(unused_variables, clippy::all)]
+        #[target_feature(enable = "avx")]
+        pub fn kinematics(q: &[S; 4], frames: &mut [[S; 12]; 4]) {
+            type P = <S as ::embedyn::codegen_support::Float>::Pair;
+            let l_hip_q: S = q[0];
+            let l_knee_q: S = q[1];
+            let r_hip_q: S = q[2];
+            let r_knee_q: S = q[3];
+            let (sin_batch, cos_batch) = ::embedyn::codegen_support::sincos_batch([
+                l_hip_q,
+                l_knee_q,
+                r_hip_q,
+                r_knee_q,
+            ]);
+            let l_hip_q_sin: S = sin_batch[0];
+            let l_hip_q_cos: S = cos_batch[0];
+            let l_knee_q_sin: S = sin_batch[1];
+            let l_knee_q_cos: S = cos_batch[1];
+            let r_hip_q_sin: S = sin_batch[2];
+            let r_hip_q_cos: S = cos_batch[2];
+            let r_knee_q_sin: S = sin_batch[3];
+            let r_knee_q_cos: S = cos_batch[3];
+            frames[0][7] = l_hip_q_sin;
+            frames[1][7] = l_hip_q_sin;
+            frames[0][4] = l_hip_q_cos;
+            frames[0][8] = l_hip_q_cos;
+            frames[1][4] = l_hip_q_cos;
+            frames[1][2] = l_knee_q_sin;
+            frames[1][0] = l_knee_q_cos;
+            frames[2][7] = r_hip_q_sin;
+            frames[3][7] = r_hip_q_sin;
+            frames[2][4] = r_hip_q_cos;
+            frames[2][8] = r_hip_q_cos;
+            frames[3][4] = r_hip_q_cos;
+            frames[3][2] = r_knee_q_sin;
+            frames[3][0] = r_knee_q_cos;
+            let p2: P = ::embedyn::codegen_support::pair::<S>(l_hip_q_sin, r_hip_q_sin);
+            let p3: P = ::embedyn::codegen_support::pair::<S>(l_hip_q_cos, r_hip_q_cos);
+            let p5: P = ::embedyn::codegen_support::pair::<
+                S,
+            >(l_knee_q_sin, r_knee_q_sin);
+            let p6: P = ::embedyn::codegen_support::pair::<
+                S,
+            >(l_knee_q_cos, r_knee_q_cos);
+            let p4: P = -p2;
+            let l_hip_x_r12: S = ::embedyn::codegen_support::first::<S>(p4);
+            let r_hip_x_r12: S = ::embedyn::codegen_support::second::<S>(p4);
+            frames[0][5] = l_hip_x_r12;
+            frames[2][5] = r_hip_x_r12;
+            let p7: P = -p5;
+            let p8: P = p2 * p5;
+            let l_shin_pose_r10: S = ::embedyn::codegen_support::first::<S>(p8);
+            let r_shin_pose_r10: S = ::embedyn::codegen_support::second::<S>(p8);
+            frames[1][3] = l_shin_pose_r10;
+            frames[3][3] = r_shin_pose_r10;
+            let p9: P = p3 * p7;
+            let l_shin_pose_r20: S = ::embedyn::codegen_support::first::<S>(p9);
+            let r_shin_pose_r20: S = ::embedyn::codegen_support::second::<S>(p9);
+            frames[1][6] = l_shin_pose_r20;
+            frames[3][6] = r_shin_pose_r20;
+            let p10: P = p4 * p6;
+            let l_shin_pose_r12: S = ::embedyn::codegen_support::first::<S>(p10);
+            let r_shin_pose_r12: S = ::embedyn::codegen_support::second::<S>(p10);
+            frames[1][5] = l_shin_pose_r12;
+            frames[3][5] = r_shin_pose_r12;
+            let p11: P = p3 * p6;
+            let l_shin_pose_r22: S = ::embedyn::codegen_support::first::<S>(p11);
+            let r_shin_pose_r22: S = ::embedyn::codegen_support::second::<S>(p11);
+            frames[1][8] = l_shin_pose_r22;
+            frames[3][8] = r_shin_pose_r22;
+            let p12: P = ::embedyn::codegen_support::splat::<S>(0.4) * p2;
+            let p13: P = ::embedyn::codegen_support::splat::<S>((-0.4)) * p3;
+            let p14: P = ::embedyn::codegen_support::pair::<S>(0.1, (-0.1)) + p12;
+            let l_shin_pose_py: S = ::embedyn::codegen_support::first::<S>(p14);
+            let r_shin_pose_py: S = ::embedyn::codegen_support::second::<S>(p14);
+            frames[1][10] = l_shin_pose_py;
+            frames[3][10] = r_shin_pose_py;
+            let p15: P = ::embedyn::codegen_support::splat::<S>((-0.05)) + p13;
+            let l_shin_pose_pz: S = ::embedyn::codegen_support::first::<S>(p15);
+            let r_shin_pose_pz: S = ::embedyn::codegen_support::second::<S>(p15);
+            frames[1][11] = l_shin_pose_pz;
+            frames[3][11] = r_shin_pose_pz;
+            frames[0][0] = 1.0;
+            frames[0][1] = 0.0;
+            frames[0][2] = 0.0;
+            frames[0][3] = 0.0;
+            frames[0][6] = 0.0;
+            frames[0][9] = 0.0;
+            frames[0][10] = 0.1;
+            frames[0][11] = (-0.05);
+            frames[1][1] = 0.0;
+            frames[1][9] = 0.0;
+            frames[2][0] = 1.0;
+            frames[2][1] = 0.0;
+            frames[2][2] = 0.0;
+            frames[2][3] = 0.0;
+            frames[2][6] = 0.0;
+            frames[2][9] = 0.0;
+            frames[2][10] = (-0.1);
+            frames[2][11] = (-0.05);
+            frames[3][1] = 0.0;
+            frames[3][9] = 0.0;
+        }
+    }
     /// Forward dynamics: `qdd = M(q)⁻¹ (τ − C(q, v) − g(q))` (the O(N) articulated-body algorithm, unrolled).
     ///
     /// Bodies it computes, in the model's order: `l_thigh`, `l_shin`, `r_thigh`, `r_shin`.
     #[allow(unused_variables, clippy::all)]
     pub fn aba(q: &[S; 4], v: &[S; 4], tau: &[S; 4], qdd: &mut [S; 4]) {
+        #[cfg(
+            all(
+                target_arch = "x86_64",
+                target_feature = "sse2",
+                not(target_feature = "avx")
+            )
+        )]
+        if ::embedyn::codegen_support::dispatch::avx() {
+            return unsafe { aba_avx::aba(q, v, tau, qdd) };
+        }
         type P = <S as ::embedyn::codegen_support::Float>::Pair;
         let l_hip_q: S = q[0];
         let l_knee_q: S = q[1];
@@ -322,11 +456,178 @@ pub mod f64 {
         qdd[1] = l_knee_qdd;
         qdd[3] = r_knee_qdd;
     }
+    #[cfg(
+        all(target_arch = "x86_64", target_feature = "sse2", not(target_feature = "avx"))
+    )]
+    /// The functions above compiled for `avx` (see `helpers::dispatch`).
+    mod aba_avx {
+        #[allow(unused_imports)]
+        use super::*;
+        /// Forward dynamics: `qdd = M(q)⁻¹ (τ − C(q, v) − g(q))` (the O(N) articulated-body algorithm, unrolled).
+        ///
+        /// Bodies it computes, in the model's order: `l_thigh`, `l_shin`, `r_thigh`, `r_shin`.
+        #[allow(unused_variables, clippy::all)]
+        #[target_feature(enable = "avx")]
+        pub fn aba(q: &[S; 4], v: &[S; 4], tau: &[S; 4], qdd: &mut [S; 4]) {
+            type P = <S as ::embedyn::codegen_support::Float>::Pair;
+            let l_hip_q: S = q[0];
+            let l_knee_q: S = q[1];
+            let r_hip_q: S = q[2];
+            let r_knee_q: S = q[3];
+            let l_hip_v: S = v[0];
+            let l_knee_v: S = v[1];
+            let r_hip_v: S = v[2];
+            let r_knee_v: S = v[3];
+            let l_hip_tau: S = tau[0];
+            let l_knee_tau: S = tau[1];
+            let r_hip_tau: S = tau[2];
+            let r_knee_tau: S = tau[3];
+            let (sin_batch, cos_batch) = ::embedyn::codegen_support::sincos_batch([
+                l_hip_q,
+                l_knee_q,
+                r_hip_q,
+                r_knee_q,
+            ]);
+            let l_hip_q_sin: S = sin_batch[0];
+            let l_hip_q_cos: S = cos_batch[0];
+            let l_knee_q_sin: S = sin_batch[1];
+            let l_knee_q_cos: S = cos_batch[1];
+            let r_hip_q_sin: S = sin_batch[2];
+            let r_hip_q_cos: S = cos_batch[2];
+            let r_knee_q_sin: S = sin_batch[3];
+            let r_knee_q_cos: S = cos_batch[3];
+            let p2: P = ::embedyn::codegen_support::pair::<S>(l_hip_v, r_hip_v);
+            let p3: P = ::embedyn::codegen_support::pair::<S>(l_knee_v, r_knee_v);
+            let p4: P = ::embedyn::codegen_support::pair::<S>(l_hip_tau, r_hip_tau);
+            let p5: P = ::embedyn::codegen_support::pair::<S>(l_knee_tau, r_knee_tau);
+            let p6: P = ::embedyn::codegen_support::pair::<S>(l_hip_q_sin, r_hip_q_sin);
+            let p7: P = ::embedyn::codegen_support::pair::<S>(l_hip_q_cos, r_hip_q_cos);
+            let p8: P = ::embedyn::codegen_support::pair::<
+                S,
+            >(l_knee_q_sin, r_knee_q_sin);
+            let p9: P = ::embedyn::codegen_support::pair::<
+                S,
+            >(l_knee_q_cos, r_knee_q_cos);
+            let p10: P = -p8;
+            let p11: P = ::embedyn::codegen_support::splat::<S>(0.4) * p2;
+            let p12: P = p2 * p9;
+            let p13: P = p2 * p8;
+            let p14: P = p3 * p13;
+            let p15: P = p3 * p12;
+            let p16: P = ::embedyn::codegen_support::splat::<S>(0.0948) * p12;
+            let p17: P = ::embedyn::codegen_support::splat::<S>(0.0036) * p12;
+            let p18: P = ::embedyn::codegen_support::splat::<S>(0.095) * p3;
+            let p19: P = ::embedyn::codegen_support::splat::<S>(0.0036) * p13;
+            let p20: P = p16 + p19;
+            let p21: P = ::embedyn::codegen_support::splat::<S>(0.004199999999999995)
+                * p13;
+            let p22: P = p17 + p21;
+            let p23: P = ::embedyn::codegen_support::splat::<S>(0.36) * p11;
+            let p24: P = ::embedyn::codegen_support::splat::<S>(0.02) * p11;
+            let p25: P = p20 + p23;
+            let p26: P = p22 + p24;
+            let p27: P = ::embedyn::codegen_support::splat::<S>((-0.36)) * p3;
+            let p28: P = ::embedyn::codegen_support::splat::<S>((-0.02)) * p3;
+            let p29: P = p3 * p26;
+            let p30: P = p13 * p18;
+            let p31: P = p29 - p30;
+            let p32: P = p13 * p25;
+            let p33: P = p12 * p26;
+            let p34: P = p32 - p33;
+            let p35: P = p12 * p18;
+            let p36: P = p3 * p25;
+            let p37: P = p35 - p36;
+            let p38: P = p11 * p28;
+            let p39: P = p11 * p27;
+            let p40: P = p31 + p38;
+            let p41: P = p37 - p39;
+            let p42: P = p13 * p27;
+            let p43: P = p12 * p28;
+            let p44: P = p42 - p43;
+            let p45: P = p5 - p34;
+            let p46: P = ::embedyn::codegen_support::splat::<S>((-0.0948)) * p14;
+            let p47: P = ::embedyn::codegen_support::splat::<S>((-0.0036)) * p14;
+            let p48: P = ::embedyn::codegen_support::splat::<S>(0.0036) * p15;
+            let p49: P = p46 + p48;
+            let p50: P = ::embedyn::codegen_support::splat::<S>(0.004199999999999995)
+                * p15;
+            let p51: P = p47 + p50;
+            let p52: P = ::embedyn::codegen_support::splat::<S>((-0.36)) * p14;
+            let p53: P = ::embedyn::codegen_support::splat::<S>(0.02) * p15;
+            let p54: P = p52 + p53;
+            let p55: P = p40 + p49;
+            let p56: P = p41 + p51;
+            let p57: P = p44 + p54;
+            let p58: P = p9 * p9;
+            let p59: P = p8 * p8;
+            let p60: P = p58 - p59;
+            let p61: P = p8 * p9;
+            let p62: P = p61 + p61;
+            let p63: P = ::embedyn::codegen_support::splat::<S>((-0.0453)) * p60;
+            let p64: P = ::embedyn::codegen_support::splat::<S>(0.0036) * p62;
+            let p65: P = p63 - p64;
+            let p66: P = ::embedyn::codegen_support::splat::<S>(0.049499999999999995)
+                - p65;
+            let p67: P = ::embedyn::codegen_support::splat::<S>(0.36) * p9;
+            let p68: P = ::embedyn::codegen_support::splat::<S>(0.02) * p8;
+            let p69: P = p67 + p68;
+            let p70: P = ::embedyn::codegen_support::splat::<S>((-0.4)) * p69;
+            let p71: P = p66 - p70;
+            let p72: P = p71 - p70;
+            let p73: P = p72
+                - ::embedyn::codegen_support::splat::<S>((-0.32000000000000006));
+            let p74: P = ::embedyn::codegen_support::splat::<S>(0.8) + p69;
+            let p75: P = ::embedyn::codegen_support::splat::<S>(0.17030000000000003)
+                + p73;
+            let p76: P = ::embedyn::codegen_support::splat::<S>(0.6000000000000001)
+                + p74;
+            let p77: P = p9 * p55;
+            let p78: P = p8 * p56;
+            let p79: P = p77 + p78;
+            let p80: P = ::embedyn::codegen_support::splat::<S>(0.4) * p57;
+            let p81: P = p79 + p80;
+            let p82: P = ::embedyn::codegen_support::splat::<S>(1.0) / p75;
+            let p83: P = p4 - p81;
+            let p84: P = ::embedyn::codegen_support::splat::<S>(9.81) * p6;
+            let p85: P = ::embedyn::codegen_support::splat::<S>(9.81) * p7;
+            let p86: P = p76 * p84;
+            let p87: P = ::embedyn::codegen_support::pair::<S>(0.03, (-0.03)) * p85;
+            let p88: P = p86 + p87;
+            let p89: P = p83 - p88;
+            let p90: P = p82 * p89;
+            let l_hip_qdd: S = ::embedyn::codegen_support::first::<S>(p90);
+            let r_hip_qdd: S = ::embedyn::codegen_support::second::<S>(p90);
+            qdd[0] = l_hip_qdd;
+            qdd[2] = r_hip_qdd;
+            let p91: P = p10 * p85;
+            let p92: P = p9 * p85;
+            let p93: P = ::embedyn::codegen_support::splat::<S>((-0.36)) * p91;
+            let p94: P = ::embedyn::codegen_support::splat::<S>((-0.02)) * p92;
+            let p95: P = p93 + p94;
+            let p96: P = p45 - p95;
+            let p97: P = ::embedyn::codegen_support::splat::<S>(10.526315789473685)
+                * p96;
+            let l_knee_qdd: S = ::embedyn::codegen_support::first::<S>(p97);
+            let r_knee_qdd: S = ::embedyn::codegen_support::second::<S>(p97);
+            qdd[1] = l_knee_qdd;
+            qdd[3] = r_knee_qdd;
+        }
+    }
     /// Inverse dynamics: `τ = M(q) qdd + C(q, v) + g(q)` (recursive Newton–Euler, unrolled).
     ///
     /// Bodies it computes, in the model's order: `l_thigh`, `l_shin`, `r_thigh`, `r_shin`.
     #[allow(unused_variables, clippy::all)]
     pub fn rnea(q: &[S; 4], v: &[S; 4], qdd: &[S; 4], tau: &mut [S; 4]) {
+        #[cfg(
+            all(
+                target_arch = "x86_64",
+                target_feature = "sse2",
+                not(target_feature = "avx")
+            )
+        )]
+        if ::embedyn::codegen_support::dispatch::avx() {
+            return unsafe { rnea_avx::rnea(q, v, qdd, tau) };
+        }
         type P = <S as ::embedyn::codegen_support::Float>::Pair;
         let l_hip_q: S = q[0];
         let l_knee_q: S = q[1];
@@ -451,11 +752,167 @@ pub mod f64 {
         tau[0] = l_thigh_f_ang_x;
         tau[2] = r_thigh_f_ang_x;
     }
+    #[cfg(
+        all(target_arch = "x86_64", target_feature = "sse2", not(target_feature = "avx"))
+    )]
+    /// The functions above compiled for `avx` (see `helpers::dispatch`).
+    mod rnea_avx {
+        #[allow(unused_imports)]
+        use super::*;
+        /// Inverse dynamics: `τ = M(q) qdd + C(q, v) + g(q)` (recursive Newton–Euler, unrolled).
+        ///
+        /// Bodies it computes, in the model's order: `l_thigh`, `l_shin`, `r_thigh`, `r_shin`.
+        #[allow(unused_variables, clippy::all)]
+        #[target_feature(enable = "avx")]
+        pub fn rnea(q: &[S; 4], v: &[S; 4], qdd: &[S; 4], tau: &mut [S; 4]) {
+            type P = <S as ::embedyn::codegen_support::Float>::Pair;
+            let l_hip_q: S = q[0];
+            let l_knee_q: S = q[1];
+            let r_hip_q: S = q[2];
+            let r_knee_q: S = q[3];
+            let l_hip_v: S = v[0];
+            let l_knee_v: S = v[1];
+            let r_hip_v: S = v[2];
+            let r_knee_v: S = v[3];
+            let l_hip_qdd: S = qdd[0];
+            let l_knee_qdd: S = qdd[1];
+            let r_hip_qdd: S = qdd[2];
+            let r_knee_qdd: S = qdd[3];
+            let (sin_batch, cos_batch) = ::embedyn::codegen_support::sincos_batch([
+                l_hip_q,
+                l_knee_q,
+                r_hip_q,
+                r_knee_q,
+            ]);
+            let l_hip_q_sin: S = sin_batch[0];
+            let l_hip_q_cos: S = cos_batch[0];
+            let l_knee_q_sin: S = sin_batch[1];
+            let l_knee_q_cos: S = cos_batch[1];
+            let r_hip_q_sin: S = sin_batch[2];
+            let r_hip_q_cos: S = cos_batch[2];
+            let r_knee_q_sin: S = sin_batch[3];
+            let r_knee_q_cos: S = cos_batch[3];
+            let p2: P = ::embedyn::codegen_support::pair::<S>(l_hip_v, r_hip_v);
+            let p3: P = ::embedyn::codegen_support::pair::<S>(l_knee_v, r_knee_v);
+            let p4: P = ::embedyn::codegen_support::pair::<S>(l_hip_qdd, r_hip_qdd);
+            let p5: P = ::embedyn::codegen_support::pair::<S>(l_knee_qdd, r_knee_qdd);
+            let p6: P = ::embedyn::codegen_support::pair::<S>(l_hip_q_sin, r_hip_q_sin);
+            let p7: P = ::embedyn::codegen_support::pair::<S>(l_hip_q_cos, r_hip_q_cos);
+            let p8: P = ::embedyn::codegen_support::pair::<
+                S,
+            >(l_knee_q_sin, r_knee_q_sin);
+            let p9: P = ::embedyn::codegen_support::pair::<
+                S,
+            >(l_knee_q_cos, r_knee_q_cos);
+            let p10: P = -p8;
+            let p11: P = ::embedyn::codegen_support::splat::<S>(0.4) * p2;
+            let p12: P = p2 * p9;
+            let p13: P = p2 * p8;
+            let p14: P = p3 * p13;
+            let p15: P = p3 * p12;
+            let p16: P = ::embedyn::codegen_support::splat::<S>(9.81) * p6;
+            let p17: P = ::embedyn::codegen_support::splat::<S>(9.81) * p7;
+            let p18: P = ::embedyn::codegen_support::splat::<S>(0.17030000000000003)
+                * p4;
+            let p19: P = ::embedyn::codegen_support::pair::<S>(0.03, (-0.03)) * p17;
+            let p20: P = ::embedyn::codegen_support::splat::<S>((-0.6000000000000001))
+                * p16;
+            let p21: P = p19 - p20;
+            let p22: P = p18 + p21;
+            let p23: P = ::embedyn::codegen_support::splat::<S>((-0.4)) * p4;
+            let p24: P = p16 - p23;
+            let p25: P = p4 * p9;
+            let p26: P = p4 * p8;
+            let p27: P = p10 * p17;
+            let p28: P = p9 * p17;
+            let p29: P = p25 - p14;
+            let p30: P = p15 + p26;
+            let p31: P = ::embedyn::codegen_support::splat::<S>(0.0948) * p29;
+            let p32: P = ::embedyn::codegen_support::splat::<S>(0.0036) * p29;
+            let p33: P = ::embedyn::codegen_support::splat::<S>(0.095) * p5;
+            let p34: P = ::embedyn::codegen_support::splat::<S>(0.0036) * p30;
+            let p35: P = p31 + p34;
+            let p36: P = ::embedyn::codegen_support::splat::<S>(0.004199999999999995)
+                * p30;
+            let p37: P = p32 + p36;
+            let p38: P = ::embedyn::codegen_support::splat::<S>(0.36) * p24;
+            let p39: P = ::embedyn::codegen_support::splat::<S>((-0.36)) * p27;
+            let p40: P = ::embedyn::codegen_support::splat::<S>(0.02) * p28;
+            let p41: P = p39 - p40;
+            let p42: P = ::embedyn::codegen_support::splat::<S>(0.02) * p24;
+            let p43: P = p35 + p38;
+            let p44: P = p33 + p41;
+            let p45: P = p37 + p42;
+            let p46: P = ::embedyn::codegen_support::splat::<S>(2.0) * p24;
+            let p47: P = ::embedyn::codegen_support::splat::<S>((-0.36)) * p29;
+            let p48: P = ::embedyn::codegen_support::splat::<S>(0.02) * p30;
+            let p49: P = p47 - p48;
+            let p50: P = p46 - p49;
+            let p51: P = ::embedyn::codegen_support::splat::<S>(0.0948) * p12;
+            let p52: P = ::embedyn::codegen_support::splat::<S>(0.0036) * p12;
+            let p53: P = ::embedyn::codegen_support::splat::<S>(0.095) * p3;
+            let p54: P = ::embedyn::codegen_support::splat::<S>(0.0036) * p13;
+            let p55: P = p51 + p54;
+            let p56: P = ::embedyn::codegen_support::splat::<S>(0.004199999999999995)
+                * p13;
+            let p57: P = p52 + p56;
+            let p58: P = ::embedyn::codegen_support::splat::<S>(0.36) * p11;
+            let p59: P = ::embedyn::codegen_support::splat::<S>(0.02) * p11;
+            let p60: P = p55 + p58;
+            let p61: P = p57 + p59;
+            let p62: P = ::embedyn::codegen_support::splat::<S>((-0.36)) * p3;
+            let p63: P = ::embedyn::codegen_support::splat::<S>((-0.02)) * p3;
+            let p64: P = p3 * p61;
+            let p65: P = p13 * p53;
+            let p66: P = p64 - p65;
+            let p67: P = p13 * p60;
+            let p68: P = p12 * p61;
+            let p69: P = p67 - p68;
+            let p70: P = p12 * p53;
+            let p71: P = p3 * p60;
+            let p72: P = p70 - p71;
+            let p73: P = p11 * p63;
+            let p74: P = p11 * p62;
+            let p75: P = p66 + p73;
+            let p76: P = p72 - p74;
+            let p77: P = p13 * p62;
+            let p78: P = p12 * p63;
+            let p79: P = p77 - p78;
+            let p80: P = p43 + p75;
+            let p81: P = p44 + p69;
+            let l_shin_f_ang_y: S = ::embedyn::codegen_support::first::<S>(p81);
+            let r_shin_f_ang_y: S = ::embedyn::codegen_support::second::<S>(p81);
+            tau[1] = l_shin_f_ang_y;
+            tau[3] = r_shin_f_ang_y;
+            let p82: P = p45 + p76;
+            let p83: P = p50 + p79;
+            let p84: P = p9 * p80;
+            let p85: P = p8 * p82;
+            let p86: P = p84 + p85;
+            let p87: P = ::embedyn::codegen_support::splat::<S>(0.4) * p83;
+            let p88: P = p86 + p87;
+            let p89: P = p22 + p88;
+            let l_thigh_f_ang_x: S = ::embedyn::codegen_support::first::<S>(p89);
+            let r_thigh_f_ang_x: S = ::embedyn::codegen_support::second::<S>(p89);
+            tau[0] = l_thigh_f_ang_x;
+            tau[2] = r_thigh_f_ang_x;
+        }
+    }
     /// The joint-space mass matrix `M(q)` (composite-rigid-body algorithm, unrolled).
     ///
     /// Bodies it computes, in the model's order: `l_thigh`, `r_thigh`.
     #[allow(unused_variables, clippy::all)]
     pub fn crba(q: &[S; 4], m: &mut [[S; 4]; 4]) {
+        #[cfg(
+            all(
+                target_arch = "x86_64",
+                target_feature = "sse2",
+                not(target_feature = "avx")
+            )
+        )]
+        if ::embedyn::codegen_support::dispatch::avx() {
+            return unsafe { crba_avx::crba(q, m) };
+        }
         type P = <S as ::embedyn::codegen_support::Float>::Pair;
         let l_knee_q: S = q[1];
         let r_knee_q: S = q[3];
@@ -504,5 +961,74 @@ pub mod f64 {
         m[3][1] = 0.0;
         m[3][2] = 0.0;
         m[3][3] = 0.095;
+    }
+    #[cfg(
+        all(target_arch = "x86_64", target_feature = "sse2", not(target_feature = "avx"))
+    )]
+    /// The functions above compiled for `avx` (see `helpers::dispatch`).
+    mod crba_avx {
+        #[allow(unused_imports)]
+        use super::*;
+        /// The joint-space mass matrix `M(q)` (composite-rigid-body algorithm, unrolled).
+        ///
+        /// Bodies it computes, in the model's order: `l_thigh`, `r_thigh`.
+        #[allow(unused_variables, clippy::all)]
+        #[target_feature(enable = "avx")]
+        pub fn crba(q: &[S; 4], m: &mut [[S; 4]; 4]) {
+            type P = <S as ::embedyn::codegen_support::Float>::Pair;
+            let l_knee_q: S = q[1];
+            let r_knee_q: S = q[3];
+            let (sin_batch, cos_batch) = ::embedyn::codegen_support::sincos_batch([
+                l_knee_q,
+                r_knee_q,
+            ]);
+            let l_knee_q_sin: S = sin_batch[0];
+            let l_knee_q_cos: S = cos_batch[0];
+            let r_knee_q_sin: S = sin_batch[1];
+            let r_knee_q_cos: S = cos_batch[1];
+            let p1: P = ::embedyn::codegen_support::pair::<
+                S,
+            >(l_knee_q_sin, r_knee_q_sin);
+            let p2: P = ::embedyn::codegen_support::pair::<
+                S,
+            >(l_knee_q_cos, r_knee_q_cos);
+            let p3: P = ::embedyn::codegen_support::splat::<S>((-0.02)) * p1;
+            let p4: P = ::embedyn::codegen_support::splat::<S>((-0.36)) * p2;
+            let p5: P = p3 + p4;
+            let p6: P = p5 + p5;
+            let p7: P = ::embedyn::codegen_support::splat::<S>((-0.8)) + p6;
+            let p8: P = ::embedyn::codegen_support::splat::<S>((-0.4)) * p7;
+            let p9: P = p2 * p2;
+            let p10: P = p1 * p1;
+            let p11: P = p9 - p10;
+            let p12: P = p1 * p2;
+            let p13: P = p12 + p12;
+            let p14: P = ::embedyn::codegen_support::splat::<S>((-0.0453)) * p11;
+            let p15: P = ::embedyn::codegen_support::splat::<S>(0.0036) * p13;
+            let p16: P = p14 - p15;
+            let p17: P = ::embedyn::codegen_support::splat::<S>(0.049499999999999995)
+                - p16;
+            let p18: P = p8 + p17;
+            let p19: P = ::embedyn::codegen_support::splat::<S>(0.17030000000000003)
+                + p18;
+            let l_thigh_ic_i00: S = ::embedyn::codegen_support::first::<S>(p19);
+            let r_thigh_ic_i00: S = ::embedyn::codegen_support::second::<S>(p19);
+            m[0][0] = l_thigh_ic_i00;
+            m[2][2] = r_thigh_ic_i00;
+            m[0][1] = 0.0;
+            m[0][2] = 0.0;
+            m[0][3] = 0.0;
+            m[1][0] = 0.0;
+            m[1][1] = 0.095;
+            m[1][2] = 0.0;
+            m[1][3] = 0.0;
+            m[2][0] = 0.0;
+            m[2][1] = 0.0;
+            m[2][3] = 0.0;
+            m[3][0] = 0.0;
+            m[3][1] = 0.0;
+            m[3][2] = 0.0;
+            m[3][3] = 0.095;
+        }
     }
 }

@@ -103,6 +103,16 @@ pub mod f64 {
     /// Bodies it computes, in the model's order: `crank`, `coupler`, `tip`, `rocker`.
     #[allow(unused_variables, clippy::all)]
     pub fn kinematics(q: &[S; 4], frames: &mut [[S; 12]; 4]) {
+        #[cfg(
+            all(
+                target_arch = "x86_64",
+                target_feature = "sse2",
+                not(target_feature = "avx")
+            )
+        )]
+        if ::embedyn::codegen_support::dispatch::avx() {
+            return unsafe { kinematics_avx::kinematics(q, frames) };
+        }
         *frames = [[0.0; 12]; 4];
         let crank_joint_q: S = q[0];
         let coupler_joint_q: S = q[1];
@@ -210,12 +220,143 @@ pub mod f64 {
         frames[3][9] = 0.3;
         frames[3][11] = 0.05;
     }
+    #[cfg(
+        all(target_arch = "x86_64", target_feature = "sse2", not(target_feature = "avx"))
+    )]
+    /// The functions above compiled for `avx` (see `helpers::dispatch`).
+    mod kinematics_avx {
+        #[allow(unused_imports)]
+        use super::*;
+        /// Forward kinematics: the world pose of every link on a moving body, in the order of `FRAMES`, as `[r00, r01, r02, r10, r11, r12, r20, r21, r22, x, y, z]` (the rotation row-major: its columns are the link's axes in world coordinates; then the link origin in the world).
+        ///
+        /// Bodies it computes, in the model's order: `crank`, `coupler`, `tip`, `rocker`.
+        #[allow(unused_variables, clippy::all)]
+        #[target_feature(enable = "avx")]
+        pub fn kinematics(q: &[S; 4], frames: &mut [[S; 12]; 4]) {
+            *frames = [[0.0; 12]; 4];
+            let crank_joint_q: S = q[0];
+            let coupler_joint_q: S = q[1];
+            let tip_joint_q: S = q[2];
+            let rocker_joint_q: S = q[3];
+            let (sin_batch, cos_batch) = ::embedyn::codegen_support::sincos_batch([
+                crank_joint_q,
+                coupler_joint_q,
+                tip_joint_q,
+                rocker_joint_q,
+            ]);
+            let crank_joint_q_sin: S = sin_batch[0];
+            let crank_joint_q_cos: S = cos_batch[0];
+            let coupler_joint_q_sin: S = sin_batch[1];
+            let coupler_joint_q_cos: S = cos_batch[1];
+            let tip_joint_q_sin: S = sin_batch[2];
+            let tip_joint_q_cos: S = cos_batch[2];
+            let rocker_joint_q_sin: S = sin_batch[3];
+            let rocker_joint_q_cos: S = cos_batch[3];
+            let t7: S = 0.4535961214255773 * crank_joint_q_cos;
+            let t8: S = 0.8912073600614354 * crank_joint_q_cos;
+            let t9: S = 0.8912073600614354 * crank_joint_q_sin;
+            let t11: S = (-0.4535961214255773) * crank_joint_q_sin;
+            let t13: S = 0.4535961214255773 * crank_joint_q_sin;
+            let t14: S = (-0.8912073600614354) * crank_joint_q_cos;
+            let t19: S = 0.8400996941839247 * coupler_joint_q_cos;
+            let t20: S = (-0.5424320269232599) * coupler_joint_q_cos;
+            let t21: S = (-0.5424320269232599) * coupler_joint_q_sin;
+            let t23: S = (-0.8400996941839247) * coupler_joint_q_sin;
+            let t25: S = 0.8400996941839247 * coupler_joint_q_sin;
+            let t26: S = 0.5424320269232599 * coupler_joint_q_cos;
+            let crank_joint_x_r00: S = t7 + t9;
+            frames[0][0] = crank_joint_x_r00;
+            frames[0][8] = crank_joint_x_r00;
+            let crank_joint_x_r20: S = t8 + t11;
+            frames[0][6] = crank_joint_x_r20;
+            let crank_joint_x_r02: S = t13 + t14;
+            frames[0][2] = crank_joint_x_r02;
+            let coupler_joint_x_r00: S = t19 + t21;
+            let coupler_joint_x_r20: S = t20 + t23;
+            let coupler_joint_x_r02: S = t25 + t26;
+            let t43: S = crank_joint_x_r00 * coupler_joint_x_r00;
+            let t44: S = crank_joint_x_r20 * coupler_joint_x_r00;
+            let t45: S = crank_joint_x_r02 * coupler_joint_x_r20;
+            let t47: S = crank_joint_x_r00 * coupler_joint_x_r20;
+            let t49: S = crank_joint_x_r00 * coupler_joint_x_r02;
+            let t50: S = crank_joint_x_r20 * coupler_joint_x_r02;
+            let t51: S = crank_joint_x_r02 * coupler_joint_x_r00;
+            let coupler_pose_r00: S = t43 + t45;
+            frames[1][0] = coupler_pose_r00;
+            let coupler_pose_r20: S = t44 + t47;
+            frames[1][6] = coupler_pose_r20;
+            let coupler_pose_r02: S = t49 + t51;
+            frames[1][2] = coupler_pose_r02;
+            let coupler_pose_r22: S = t43 + t50;
+            frames[1][8] = coupler_pose_r22;
+            let tip_joint_x_r20: S = -tip_joint_q_sin;
+            let t68: S = 0.16 * coupler_pose_r00;
+            let t69: S = 0.16 * coupler_pose_r20;
+            let t70: S = (-0.03) * coupler_pose_r02;
+            let t72: S = (-0.03) * coupler_pose_r22;
+            let t34: S = 0.14121297913350594 * rocker_joint_q_cos;
+            let t35: S = 0.98997923944103 * rocker_joint_q_cos;
+            let t36: S = 0.98997923944103 * rocker_joint_q_sin;
+            let t38: S = (-0.14121297913350594) * rocker_joint_q_sin;
+            let t40: S = 0.14121297913350594 * rocker_joint_q_sin;
+            let t41: S = (-0.98997923944103) * rocker_joint_q_cos;
+            let coupler_pose_px: S = 0.12 * crank_joint_x_r00;
+            frames[1][9] = coupler_pose_px;
+            let coupler_pose_pz: S = 0.12 * crank_joint_x_r20;
+            frames[1][11] = coupler_pose_pz;
+            let t56: S = tip_joint_q_cos * coupler_pose_r00;
+            let t57: S = tip_joint_q_cos * coupler_pose_r20;
+            let t58: S = tip_joint_x_r20 * coupler_pose_r02;
+            let t60: S = tip_joint_x_r20 * coupler_pose_r22;
+            let t62: S = tip_joint_q_sin * coupler_pose_r00;
+            let t63: S = tip_joint_q_sin * coupler_pose_r20;
+            let t64: S = tip_joint_q_cos * coupler_pose_r02;
+            let t66: S = tip_joint_q_cos * coupler_pose_r22;
+            let t71: S = t68 + t70;
+            let t73: S = t69 + t72;
+            let rocker_joint_x_r00: S = t34 + t36;
+            frames[3][0] = rocker_joint_x_r00;
+            frames[3][8] = rocker_joint_x_r00;
+            let rocker_joint_x_r20: S = t35 + t38;
+            frames[3][6] = rocker_joint_x_r20;
+            let rocker_joint_x_r02: S = t40 + t41;
+            frames[3][2] = rocker_joint_x_r02;
+            let tip_pose_r00: S = t56 + t58;
+            frames[2][0] = tip_pose_r00;
+            let tip_pose_r20: S = t57 + t60;
+            frames[2][6] = tip_pose_r20;
+            let tip_pose_r02: S = t62 + t64;
+            frames[2][2] = tip_pose_r02;
+            let tip_pose_r22: S = t63 + t66;
+            frames[2][8] = tip_pose_r22;
+            let tip_pose_px: S = coupler_pose_px + t71;
+            frames[2][9] = tip_pose_px;
+            let tip_pose_pz: S = coupler_pose_pz + t73;
+            frames[2][11] = tip_pose_pz;
+            frames[0][4] = 1.0;
+            frames[1][4] = 1.0;
+            frames[2][4] = 1.0;
+            frames[3][4] = 1.0;
+            frames[3][9] = 0.3;
+            frames[3][11] = 0.05;
+        }
+    }
     /// Forward dynamics with constraint embedding: `qdd` over all spanning coordinates (the O(N) articulated-body algorithm with each aggregate link inline, unrolled); only `Xᵀ τ` acts. Returns the singularity measure, the largest condition number cond₁(Y1) over the loops: where it is not below `SINGULARITY_THRESHOLD` (`!(cond < SINGULARITY_THRESHOLD)`, which also catches NaN) the configuration is at or too near a singular one (a toggle) and `qdd` is meaningless — the interpreted solver refuses there.
     ///
     /// Bodies it computes, in the model's order: `crank`, `coupler`, `tip`, `rocker`.
     #[must_use = "the returned measure says whether the outputs can be used (see the function's documentation)"]
     #[allow(unused_variables, clippy::all)]
     pub fn aba(q: &[S; 4], v: &[S; 4], tau: &[S; 4], qdd: &mut [S; 4]) -> S {
+        #[cfg(
+            all(
+                target_arch = "x86_64",
+                target_feature = "sse2",
+                not(target_feature = "avx")
+            )
+        )]
+        if ::embedyn::codegen_support::dispatch::avx() {
+            return unsafe { aba_avx::aba(q, v, tau, qdd) };
+        }
         let crank_joint_q: S = q[0];
         let coupler_joint_q: S = q[1];
         let tip_joint_q: S = q[2];
@@ -640,11 +781,460 @@ pub mod f64 {
         let t677: S = if t298 > 1.0 { t298 } else { 1.0 };
         t677
     }
+    #[cfg(
+        all(target_arch = "x86_64", target_feature = "sse2", not(target_feature = "avx"))
+    )]
+    /// The functions above compiled for `avx` (see `helpers::dispatch`).
+    mod aba_avx {
+        #[allow(unused_imports)]
+        use super::*;
+        /// Forward dynamics with constraint embedding: `qdd` over all spanning coordinates (the O(N) articulated-body algorithm with each aggregate link inline, unrolled); only `Xᵀ τ` acts. Returns the singularity measure, the largest condition number cond₁(Y1) over the loops: where it is not below `SINGULARITY_THRESHOLD` (`!(cond < SINGULARITY_THRESHOLD)`, which also catches NaN) the configuration is at or too near a singular one (a toggle) and `qdd` is meaningless — the interpreted solver refuses there.
+        ///
+        /// Bodies it computes, in the model's order: `crank`, `coupler`, `tip`, `rocker`.
+        #[must_use = "the returned measure says whether the outputs can be used (see the function's documentation)"]
+        #[allow(unused_variables, clippy::all)]
+        #[target_feature(enable = "avx")]
+        pub fn aba(q: &[S; 4], v: &[S; 4], tau: &[S; 4], qdd: &mut [S; 4]) -> S {
+            let crank_joint_q: S = q[0];
+            let coupler_joint_q: S = q[1];
+            let tip_joint_q: S = q[2];
+            let rocker_joint_q: S = q[3];
+            let crank_joint_v: S = v[0];
+            let coupler_joint_v: S = v[1];
+            let tip_joint_v: S = v[2];
+            let rocker_joint_v: S = v[3];
+            let crank_joint_tau: S = tau[0];
+            let coupler_joint_tau: S = tau[1];
+            let tip_joint_tau: S = tau[2];
+            let rocker_joint_tau: S = tau[3];
+            let (sin_batch, cos_batch) = ::embedyn::codegen_support::sincos_batch([
+                crank_joint_q,
+                coupler_joint_q,
+                tip_joint_q,
+                rocker_joint_q,
+            ]);
+            let crank_joint_q_sin: S = sin_batch[0];
+            let crank_joint_q_cos: S = cos_batch[0];
+            let coupler_joint_q_sin: S = sin_batch[1];
+            let coupler_joint_q_cos: S = cos_batch[1];
+            let tip_joint_q_sin: S = sin_batch[2];
+            let tip_joint_q_cos: S = cos_batch[2];
+            let rocker_joint_q_sin: S = sin_batch[3];
+            let rocker_joint_q_cos: S = cos_batch[3];
+            let t15: S = 0.4535961214255773 * crank_joint_q_cos;
+            let t16: S = 0.8912073600614354 * crank_joint_q_cos;
+            let t17: S = 0.8912073600614354 * crank_joint_q_sin;
+            let t19: S = (-0.4535961214255773) * crank_joint_q_sin;
+            let t21: S = 0.4535961214255773 * crank_joint_q_sin;
+            let t22: S = (-0.8912073600614354) * crank_joint_q_cos;
+            let t27: S = 0.8400996941839247 * coupler_joint_q_cos;
+            let t28: S = (-0.5424320269232599) * coupler_joint_q_cos;
+            let t29: S = (-0.5424320269232599) * coupler_joint_q_sin;
+            let t31: S = (-0.8400996941839247) * coupler_joint_q_sin;
+            let t33: S = 0.8400996941839247 * coupler_joint_q_sin;
+            let t34: S = 0.5424320269232599 * coupler_joint_q_cos;
+            let crank_joint_x_r00: S = t15 + t17;
+            let crank_joint_x_r20: S = t16 + t19;
+            let crank_joint_x_r02: S = t21 + t22;
+            let coupler_joint_x_r00: S = t27 + t29;
+            let coupler_joint_x_r20: S = t28 + t31;
+            let coupler_joint_x_r02: S = t33 + t34;
+            let t65: S = 0.14121297913350594 * rocker_joint_q_cos;
+            let t66: S = 0.98997923944103 * rocker_joint_q_cos;
+            let t67: S = 0.98997923944103 * rocker_joint_q_sin;
+            let t69: S = (-0.14121297913350594) * rocker_joint_q_sin;
+            let t74: S = crank_joint_x_r00 * coupler_joint_x_r00;
+            let t75: S = crank_joint_x_r20 * coupler_joint_x_r00;
+            let t76: S = crank_joint_x_r02 * coupler_joint_x_r20;
+            let t78: S = crank_joint_x_r00 * coupler_joint_x_r20;
+            let t80: S = crank_joint_x_r00 * coupler_joint_x_r02;
+            let t81: S = crank_joint_x_r20 * coupler_joint_x_r02;
+            let t82: S = crank_joint_x_r02 * coupler_joint_x_r00;
+            let rocker_joint_x_r00: S = t65 + t67;
+            let rocker_joint_x_r20: S = t66 + t69;
+            let coupler_pose_r00: S = t74 + t76;
+            let coupler_pose_r20: S = t75 + t78;
+            let coupler_pose_r02: S = t80 + t82;
+            let coupler_pose_r22: S = t74 + t81;
+            let t142: S = 0.22 * rocker_joint_x_r00;
+            let t143: S = 0.22 * rocker_joint_x_r20;
+            let coupler_pose_px: S = 0.12 * crank_joint_x_r00;
+            let t115: S = 0.8644853776196937 * coupler_pose_r00;
+            let t116: S = 0.8644853776196937 * coupler_pose_r20;
+            let t117: S = (-0.5026579670926699) * coupler_pose_r02;
+            let t119: S = (-0.5026579670926699) * coupler_pose_r22;
+            let t121: S = 0.5026579670926699 * coupler_pose_r00;
+            let t122: S = 0.5026579670926699 * coupler_pose_r20;
+            let t123: S = 0.8644853776196937 * coupler_pose_r02;
+            let t125: S = 0.8644853776196937 * coupler_pose_r22;
+            let t155: S = (-0.12) * crank_joint_x_r20;
+            let t144: S = 0.3 + t142;
+            let t145: S = 0.05 + t143;
+            let t118: S = t115 + t117;
+            let t120: S = t116 + t119;
+            let t124: S = t121 + t123;
+            let t126: S = t122 + t125;
+            let t156: S = t145 + t155;
+            let t157: S = coupler_pose_px - t144;
+            let t158: S = t118 * t156;
+            let t159: S = t120 * t157;
+            let t161: S = t124 * t156;
+            let t162: S = t126 * t157;
+            let t160: S = t158 + t159;
+            let t163: S = t161 + t162;
+            let t164: S = -t160;
+            let t165: S = -t163;
+            let t37: S = (-0.12) * crank_joint_v;
+            let coupler_v_ang_y: S = crank_joint_v + coupler_joint_v;
+            let t229: S = ::embedyn::codegen_support::abs(t164);
+            let t233: S = ::embedyn::codegen_support::abs(t165);
+            let coupler_v_lin_z: S = coupler_joint_x_r00 * t37;
+            let t175: S = (-0.32) * coupler_v_ang_y;
+            let t237: S = if t233 > t229 { t165 } else { t164 };
+            let coupler_v_lin_x: S = coupler_joint_x_r20 * t37;
+            let t248: S = 1.0 / t237;
+            let t176: S = coupler_v_lin_z + t175;
+            let t71: S = 0.14121297913350594 * rocker_joint_q_sin;
+            let t72: S = (-0.98997923944103) * rocker_joint_q_cos;
+            let coupler_pose_pz: S = 0.12 * crank_joint_x_r20;
+            let t127: S = 0.32 * coupler_pose_r00;
+            let t128: S = 0.32 * coupler_pose_r20;
+            let t41: S = coupler_joint_v * coupler_v_lin_z;
+            let t43: S = coupler_joint_v * coupler_v_lin_x;
+            let t183: S = coupler_v_ang_y * t176;
+            let t184: S = coupler_v_lin_x * coupler_v_ang_y;
+            let t147: S = (-0.05) + t145;
+            let t148: S = 0.3 - t144;
+            let t195: S = (-0.22) * rocker_joint_v;
+            let rocker_joint_x_r02: S = t71 + t72;
+            let t129: S = coupler_pose_px + t127;
+            let t130: S = coupler_pose_pz + t128;
+            let t177: S = coupler_v_lin_x * coupler_pose_r00;
+            let t178: S = coupler_v_lin_x * coupler_pose_r20;
+            let t179: S = coupler_pose_r02 * t176;
+            let t181: S = coupler_pose_r22 * t176;
+            let t149: S = t118 * t147;
+            let t150: S = t120 * t148;
+            let t152: S = t124 * t147;
+            let t153: S = t126 * t148;
+            let t186: S = t183 - t41;
+            let t187: S = t43 - t184;
+            let t48: S = 0.03 * coupler_v_ang_y;
+            let t49: S = 0.16 * coupler_v_ang_y;
+            let t196: S = rocker_joint_x_r02 * t195;
+            let t197: S = rocker_joint_x_r00 * t195;
+            let t198: S = rocker_joint_v * t195;
+            let t201: S = t144 - t129;
+            let t202: S = t145 - t130;
+            let t180: S = t177 + t179;
+            let t182: S = t178 + t181;
+            let t188: S = coupler_pose_r00 * t186;
+            let t189: S = coupler_pose_r20 * t186;
+            let t190: S = coupler_pose_r02 * t187;
+            let t192: S = coupler_pose_r22 * t187;
+            let t238: S = if t233 > t229 { t164 } else { t165 };
+            let t151: S = t149 + t150;
+            let t154: S = t152 + t153;
+            let t206: S = coupler_v_ang_y * t202;
+            let t207: S = coupler_v_ang_y * t201;
+            let tip_joint_x_r20: S = -tip_joint_q_sin;
+            let t50: S = coupler_v_lin_x - t48;
+            let t51: S = coupler_v_lin_z - t49;
+            let t199: S = rocker_joint_x_r00 * t198;
+            let t200: S = rocker_joint_x_r20 * t198;
+            let t203: S = t196 - t180;
+            let t204: S = t197 - t182;
+            let t249: S = t238 * t248;
+            let t191: S = t188 + t190;
+            let t193: S = t189 + t192;
+            let t239: S = if t233 > t229 { t154 } else { t151 };
+            let t146: S = -t144;
+            let t52: S = tip_joint_q_cos * t50;
+            let t53: S = tip_joint_x_r20 * t51;
+            let t209: S = t203 - t206;
+            let t210: S = t204 + t207;
+            let t213: S = coupler_v_ang_y * t204;
+            let t214: S = coupler_v_ang_y * t203;
+            let t211: S = t199 - t191;
+            let t212: S = t200 - t193;
+            let t250: S = t239 * t249;
+            let t166: S = t118 * t145;
+            let t167: S = t120 * t146;
+            let t169: S = t124 * t145;
+            let t170: S = t126 * t146;
+            let t240: S = if t233 > t229 { t151 } else { t154 };
+            let t55: S = tip_joint_q_sin * t50;
+            let t56: S = tip_joint_q_cos * t51;
+            let t218: S = coupler_v_ang_y * t210;
+            let t219: S = coupler_v_ang_y * t209;
+            let tip_v_lin_x: S = t52 + t53;
+            let tip_v_ang_y: S = tip_joint_v + coupler_v_ang_y;
+            let t216: S = t211 - t213;
+            let t217: S = t212 + t214;
+            let t251: S = t240 - t250;
+            let t168: S = t166 + t167;
+            let t171: S = t169 + t170;
+            let tip_v_lin_z: S = t55 + t56;
+            let t221: S = t216 - t218;
+            let t222: S = t217 + t219;
+            let t349: S = 0.2 * tip_v_lin_x;
+            let t352: S = 0.020000000000000004 * tip_v_ang_y;
+            let t262: S = 1.0 / t251;
+            let t172: S = -t168;
+            let t173: S = -t171;
+            let t223: S = t118 * t221;
+            let t224: S = t120 * t222;
+            let t226: S = t124 * t221;
+            let t227: S = t126 * t222;
+            let t350: S = 0.2 * tip_v_lin_z;
+            let t353: S = t349 - t352;
+            let t241: S = if t233 > t229 { t173 } else { t172 };
+            let t394: S = tip_joint_q_cos * tip_joint_q_cos;
+            let t395: S = tip_joint_q_sin * tip_joint_q_sin;
+            let t225: S = t223 + t224;
+            let t228: S = t226 + t227;
+            let t357: S = tip_v_lin_z * t353;
+            let t358: S = tip_v_lin_x * t350;
+            let t252: S = t241 * t249;
+            let t397: S = tip_joint_q_sin * tip_joint_q_cos;
+            let t242: S = if t233 > t229 { t172 } else { t173 };
+            let t396: S = t394 - t395;
+            let t243: S = if t233 > t229 { t228 } else { t225 };
+            let tip_z_ang_y: S = t357 - t358;
+            let t253: S = t242 - t252;
+            let t398: S = t397 + t397;
+            let t418: S = 0.09837678307919333 * t396;
+            let t254: S = t243 * t249;
+            let t59: S = tip_joint_v * tip_v_lin_z;
+            let t244: S = if t233 > t229 { t225 } else { t228 };
+            let tip_joint_eps: S = tip_joint_tau - tip_z_ang_y;
+            let t263: S = t253 * t262;
+            let t421: S = 0.09837678307919333 * t398;
+            let t419: S = 0.10162321692080668 + t418;
+            let t420: S = 0.10162321692080668 - t418;
+            let t61: S = tip_joint_v * tip_v_lin_x;
+            let t255: S = t244 - t254;
+            let t377: S = 491.8839153959664 * tip_joint_eps;
+            let tip_z_lin_x: S = tip_v_ang_y * t350;
+            let t384: S = (-0.0032464338416133554) * t59;
+            let t264: S = t239 * t263;
+            let t422: S = (-0.03) * t420;
+            let t423: S = (-0.16) * t421;
+            let t425: S = (-0.03) * t421;
+            let t426: S = (-0.16) * t419;
+            let t267: S = t255 * t262;
+            let t361: S = tip_v_ang_y * t353;
+            let t381: S = (-0.020000000000000004) * t377;
+            let t385: S = 0.2 * t61;
+            let t388: S = tip_z_lin_x + t384;
+            let t265: S = t241 - t264;
+            let t424: S = t422 + t423;
+            let t427: S = t425 + t426;
+            let t268: S = t239 * t267;
+            let t389: S = t385 - t361;
+            let t393: S = t381 + t388;
+            let t266: S = t248 * t265;
+            let t445: S = 0.03 * t424;
+            let t446: S = 0.16 * t427;
+            let t502: S = (-0.12) * coupler_joint_x_r20;
+            let t503: S = (-0.12) * coupler_joint_x_r00;
+            let t467: S = 0.8 + t420;
+            let t468: S = 0.8 + t419;
+            let t269: S = t243 - t268;
+            let t469: S = tip_joint_q_cos * t393;
+            let t470: S = tip_joint_x_r20 * t393;
+            let t471: S = tip_joint_q_sin * t389;
+            let t473: S = tip_joint_q_cos * t389;
+            let t447: S = t445 + t446;
+            let t461: S = (-0.0032) + t424;
+            let t466: S = (-0.128) + t427;
+            let t504: S = 1.0 - t266;
+            let t560: S = t467 * t502;
+            let t561: S = t421 * t502;
+            let t562: S = t421 * t503;
+            let t564: S = t468 * t503;
+            let t270: S = t248 * t269;
+            let t328: S = 0.8 * coupler_v_lin_x;
+            let t329: S = 0.8 * coupler_v_lin_z;
+            let t331: S = 0.0032 * coupler_v_ang_y;
+            let t332: S = 0.128 * coupler_v_ang_y;
+            let t42: S = -t41;
+            let t472: S = t469 + t471;
+            let t474: S = t470 + t473;
+            let t458: S = 0.027392800000000002 - t447;
+            let t547: S = t461 * t502;
+            let t551: S = t466 * t503;
+            let t558: S = t461 * t504;
+            let t559: S = t466 * t504;
+            let t563: S = t560 + t562;
+            let t565: S = t561 + t564;
+            let t300: S = -t270;
+            let t333: S = t328 - t331;
+            let t334: S = t329 - t332;
+            let t481: S = (-0.03) * t472;
+            let t482: S = 0.16 * t474;
+            let t522: S = t42 * t467;
+            let t523: S = t42 * t421;
+            let t524: S = t43 * t421;
+            let t526: S = t43 * t468;
+            let t544: S = t458 * t504;
+            let t552: S = t547 + t551;
+            let t566: S = t558 + t563;
+            let t567: S = t559 + t565;
+            let t338: S = coupler_v_lin_z * t333;
+            let t339: S = coupler_v_lin_x * t334;
+            let t341: S = coupler_v_ang_y * t334;
+            let t342: S = coupler_v_ang_y * t333;
+            let t509: S = t42 * t461;
+            let t513: S = t43 * t466;
+            let t520: S = t300 * t461;
+            let t521: S = t300 * t466;
+            let t483: S = t481 - t482;
+            let t525: S = t522 + t524;
+            let t527: S = t523 + t526;
+            let t556: S = t544 + t552;
+            let t569: S = t502 * t566;
+            let t570: S = t503 * t567;
+            let t506: S = t300 * t458;
+            let t340: S = t338 - t339;
+            let t484: S = tip_joint_tau + t483;
+            let t488: S = t341 + t472;
+            let t489: S = t474 - t342;
+            let t514: S = t509 + t513;
+            let t528: S = t520 + t525;
+            let t529: S = t521 + t527;
+            let t568: S = t504 * t556;
+            let t571: S = t569 + t570;
+            let t486: S = t340 + t484;
+            let t518: S = t506 + t514;
+            let t533: S = t488 + t528;
+            let t534: S = t489 + t529;
+            let t609: S = (-0.009709599999999999) * t263;
+            let t301: S = -t263;
+            let t572: S = t568 + t571;
+            let t531: S = t486 + t518;
+            let t537: S = t502 * t533;
+            let t538: S = t503 * t534;
+            let t611: S = (-0.0024) * t263;
+            let t612: S = 0.066 * t263;
+            let t613: S = t301 * t609;
+            let t491: S = 0.0012000000000000001 * crank_joint_x_r20;
+            let t494: S = (-0.024) * crank_joint_x_r00;
+            let t573: S = 0.0019336 + t572;
+            let t575: S = coupler_pose_r20 * t566;
+            let t578: S = coupler_pose_r22 * t567;
+            let t299: S = -t266;
+            let t536: S = t504 * t531;
+            let t539: S = t537 + t538;
+            let t596: S = (-0.009709599999999999) * t267;
+            let t614: S = t573 + t613;
+            let t616: S = rocker_joint_x_r20 * t611;
+            let t619: S = rocker_joint_x_r00 * t612;
+            let t495: S = t491 + t494;
+            let t535: S = coupler_joint_tau * t299;
+            let t579: S = t575 + t578;
+            let t540: S = t536 + t539;
+            let t636: S = 1.0 / t614;
+            let t594: S = t495 + t579;
+            let t604: S = rocker_joint_tau * t301;
+            let t605: S = t301 * t596;
+            let t620: S = t616 + t619;
+            let t541: S = t535 - t540;
+            let t245: S = if t233 > t229 { 0.0 } else { 1.0 };
+            let t635: S = t594 + t620;
+            let t542: S = crank_joint_tau + t541;
+            let t606: S = t604 - t605;
+            let t256: S = t245 * t249;
+            let t246: S = if t233 > t229 { 1.0 } else { 0.0 };
+            let t637: S = 9.81 * t635;
+            let t607: S = t542 + t606;
+            let t257: S = t246 - t256;
+            let t638: S = t607 - t637;
+            let t258: S = t246 * t249;
+            let t271: S = t257 * t262;
+            let t639: S = t636 * t638;
+            qdd[0] = t639;
+            let t259: S = t245 - t258;
+            let t272: S = t239 * t271;
+            let t646: S = t504 * t639;
+            let t275: S = t259 * t262;
+            let t642: S = 9.81 * coupler_pose_r20;
+            let t643: S = 9.81 * coupler_pose_r22;
+            let t273: S = t245 - t272;
+            let t647: S = t502 * t639;
+            let t648: S = t503 * t639;
+            let t649: S = t646 - t270;
+            let t276: S = t239 * t275;
+            let t644: S = t642 - t41;
+            let t645: S = t43 + t643;
+            let t274: S = t248 * t273;
+            let t659: S = 0.03 * t649;
+            let t660: S = 0.16 * t649;
+            let t650: S = t644 + t647;
+            let t651: S = t645 + t648;
+            let t277: S = t246 - t276;
+            let t281: S = ::embedyn::codegen_support::abs(t274);
+            let t282: S = ::embedyn::codegen_support::abs(t271);
+            let t661: S = t650 - t659;
+            let t662: S = t651 - t660;
+            let t278: S = t248 * t277;
+            let t283: S = t281 + t282;
+            let t291: S = t229 + t233;
+            let t663: S = tip_joint_q_cos * t661;
+            let t664: S = tip_joint_x_r20 * t662;
+            let t231: S = ::embedyn::codegen_support::abs(t151);
+            let t235: S = ::embedyn::codegen_support::abs(t154);
+            let t284: S = if t283 > 0.0 { t283 } else { 0.0 };
+            let t286: S = ::embedyn::codegen_support::abs(t278);
+            let t287: S = ::embedyn::codegen_support::abs(t275);
+            let t292: S = if t291 > 0.0 { t291 } else { 0.0 };
+            let t665: S = t663 + t664;
+            let t285: S = if t283 > (-1.0) { t284 } else { t283 };
+            let t288: S = t286 + t287;
+            let t293: S = if t291 > (-1.0) { t292 } else { t291 };
+            let t294: S = t231 + t235;
+            let tip_a_lin_x: S = t665 - t59;
+            let t289: S = if t288 > t285 { t288 } else { t285 };
+            let t295: S = if t294 > t293 { t294 } else { t293 };
+            let t671: S = 0.0020330000000000005 * t649;
+            let t672: S = (-0.020000000000000004) * tip_a_lin_x;
+            let t290: S = if t288 > (-1.0) { t289 } else { t288 };
+            let t296: S = if t294 > (-1.0) { t295 } else { t294 };
+            let t297: S = t290 * t296;
+            let t673: S = t671 + t672;
+            let t652: S = t299 * t639;
+            let t656: S = t301 * t639;
+            let t674: S = tip_joint_eps - t673;
+            let t298: S = if 1000000000000000000000000000000.0 > t297 {
+                t297
+            } else {
+                1000000000000000000000000000000.0
+            };
+            let tip_joint_qdd: S = 491.8839153959664 * t674;
+            qdd[2] = tip_joint_qdd;
+            let t653: S = t652 - t270;
+            qdd[1] = t653;
+            let t657: S = t656 - t267;
+            qdd[3] = t657;
+            let t677: S = if t298 > 1.0 { t298 } else { 1.0 };
+            t677
+        }
+    }
     /// Inverse dynamics: `τ = M(q) qdd + C(q, v) + g(q)` (recursive Newton–Euler, unrolled).
     ///
     /// Bodies it computes, in the model's order: `crank`, `coupler`, `tip`, `rocker`.
     #[allow(unused_variables, clippy::all)]
     pub fn rnea(q: &[S; 4], v: &[S; 4], qdd: &[S; 4], tau: &mut [S; 4]) {
+        #[cfg(
+            all(
+                target_arch = "x86_64",
+                target_feature = "sse2",
+                not(target_feature = "avx")
+            )
+        )]
+        if ::embedyn::codegen_support::dispatch::avx() {
+            return unsafe { rnea_avx::rnea(q, v, qdd, tau) };
+        }
         let crank_joint_q: S = q[0];
         let coupler_joint_q: S = q[1];
         let tip_joint_q: S = q[2];
@@ -817,11 +1407,207 @@ pub mod f64 {
         let crank_f_ang_y: S = t84 + t290;
         tau[0] = crank_f_ang_y;
     }
+    #[cfg(
+        all(target_arch = "x86_64", target_feature = "sse2", not(target_feature = "avx"))
+    )]
+    /// The functions above compiled for `avx` (see `helpers::dispatch`).
+    mod rnea_avx {
+        #[allow(unused_imports)]
+        use super::*;
+        /// Inverse dynamics: `τ = M(q) qdd + C(q, v) + g(q)` (recursive Newton–Euler, unrolled).
+        ///
+        /// Bodies it computes, in the model's order: `crank`, `coupler`, `tip`, `rocker`.
+        #[allow(unused_variables, clippy::all)]
+        #[target_feature(enable = "avx")]
+        pub fn rnea(q: &[S; 4], v: &[S; 4], qdd: &[S; 4], tau: &mut [S; 4]) {
+            let crank_joint_q: S = q[0];
+            let coupler_joint_q: S = q[1];
+            let tip_joint_q: S = q[2];
+            let rocker_joint_q: S = q[3];
+            let crank_joint_v: S = v[0];
+            let coupler_joint_v: S = v[1];
+            let tip_joint_v: S = v[2];
+            let crank_joint_qdd: S = qdd[0];
+            let coupler_joint_qdd: S = qdd[1];
+            let tip_joint_qdd: S = qdd[2];
+            let rocker_joint_qdd: S = qdd[3];
+            let (sin_batch, cos_batch) = ::embedyn::codegen_support::sincos_batch([
+                crank_joint_q,
+                coupler_joint_q,
+                tip_joint_q,
+                rocker_joint_q,
+            ]);
+            let crank_joint_q_sin: S = sin_batch[0];
+            let crank_joint_q_cos: S = cos_batch[0];
+            let coupler_joint_q_sin: S = sin_batch[1];
+            let coupler_joint_q_cos: S = cos_batch[1];
+            let tip_joint_q_sin: S = sin_batch[2];
+            let tip_joint_q_cos: S = cos_batch[2];
+            let rocker_joint_q_sin: S = sin_batch[3];
+            let rocker_joint_q_cos: S = cos_batch[3];
+            let t15: S = 0.4535961214255773 * crank_joint_q_cos;
+            let t17: S = 0.8912073600614354 * crank_joint_q_sin;
+            let t16: S = 0.8912073600614354 * crank_joint_q_cos;
+            let t19: S = (-0.4535961214255773) * crank_joint_q_sin;
+            let crank_joint_x_r00: S = t15 + t17;
+            let t27: S = 0.8400996941839247 * coupler_joint_q_cos;
+            let t28: S = (-0.5424320269232599) * coupler_joint_q_cos;
+            let t29: S = (-0.5424320269232599) * coupler_joint_q_sin;
+            let t31: S = (-0.8400996941839247) * coupler_joint_q_sin;
+            let crank_joint_x_r20: S = t16 + t19;
+            let t33: S = 0.8400996941839247 * coupler_joint_q_sin;
+            let t34: S = 0.5424320269232599 * coupler_joint_q_cos;
+            let crank_a_lin_z: S = 9.81 * crank_joint_x_r00;
+            let t109: S = 0.12 * crank_joint_qdd;
+            let t37: S = (-0.12) * crank_joint_v;
+            let coupler_joint_x_r00: S = t27 + t29;
+            let coupler_joint_x_r20: S = t28 + t31;
+            let crank_a_lin_x: S = 9.81 * crank_joint_x_r20;
+            let coupler_joint_x_r02: S = t33 + t34;
+            let t110: S = crank_a_lin_z - t109;
+            let coupler_v_lin_x: S = coupler_joint_x_r20 * t37;
+            let coupler_v_lin_z: S = coupler_joint_x_r00 * t37;
+            let coupler_v_ang_y: S = crank_joint_v + coupler_joint_v;
+            let t111: S = coupler_joint_x_r00 * crank_a_lin_x;
+            let t112: S = coupler_joint_x_r20 * t110;
+            let t114: S = coupler_joint_x_r02 * crank_a_lin_x;
+            let t115: S = coupler_joint_x_r00 * t110;
+            let t48: S = 0.03 * coupler_v_ang_y;
+            let t49: S = 0.16 * coupler_v_ang_y;
+            let t41: S = coupler_joint_v * coupler_v_lin_z;
+            let t43: S = coupler_joint_v * coupler_v_lin_x;
+            let coupler_a_ang_y: S = crank_joint_qdd + coupler_joint_qdd;
+            let t113: S = t111 + t112;
+            let t116: S = t114 + t115;
+            let t50: S = coupler_v_lin_x - t48;
+            let t51: S = coupler_v_lin_z - t49;
+            let t173: S = 0.03 * coupler_a_ang_y;
+            let t174: S = 0.16 * coupler_a_ang_y;
+            let coupler_a_lin_x: S = t113 - t41;
+            let coupler_a_lin_z: S = t43 + t116;
+            let tip_joint_x_r20: S = -tip_joint_q_sin;
+            let t55: S = tip_joint_q_sin * t50;
+            let t56: S = tip_joint_q_cos * t51;
+            let t175: S = coupler_a_lin_x - t173;
+            let t176: S = coupler_a_lin_z - t174;
+            let t52: S = tip_joint_q_cos * t50;
+            let t53: S = tip_joint_x_r20 * t51;
+            let tip_v_lin_z: S = t55 + t56;
+            let t177: S = tip_joint_q_cos * t175;
+            let t178: S = tip_joint_x_r20 * t176;
+            let tip_v_lin_x: S = t52 + t53;
+            let tip_v_ang_y: S = tip_joint_v + coupler_v_ang_y;
+            let t59: S = tip_joint_v * tip_v_lin_z;
+            let t180: S = tip_joint_q_sin * t175;
+            let t181: S = tip_joint_q_cos * t176;
+            let t179: S = t177 + t178;
+            let t61: S = tip_joint_v * tip_v_lin_x;
+            let t201: S = 0.2 * tip_v_lin_x;
+            let t204: S = 0.020000000000000004 * tip_v_ang_y;
+            let t182: S = t180 + t181;
+            let tip_a_ang_y: S = tip_joint_qdd + coupler_a_ang_y;
+            let tip_a_lin_x: S = t179 - t59;
+            let t202: S = 0.2 * tip_v_lin_z;
+            let tip_a_lin_z: S = t61 + t182;
+            let t191: S = 0.2 * tip_a_lin_x;
+            let t194: S = 0.020000000000000004 * tip_a_ang_y;
+            let t205: S = t201 - t204;
+            let t151: S = 0.8 * coupler_v_lin_x;
+            let t152: S = 0.8 * coupler_v_lin_z;
+            let t154: S = 0.0032 * coupler_v_ang_y;
+            let t155: S = 0.128 * coupler_v_ang_y;
+            let t192: S = 0.2 * tip_a_lin_z;
+            let t212: S = tip_v_ang_y * t202;
+            let t213: S = tip_v_ang_y * t205;
+            let t195: S = t191 - t194;
+            let t132: S = 0.8 * coupler_a_lin_x;
+            let t133: S = 0.8 * coupler_a_lin_z;
+            let t135: S = 0.0032 * coupler_a_ang_y;
+            let t136: S = 0.128 * coupler_a_ang_y;
+            let t156: S = t151 - t154;
+            let t157: S = t152 - t155;
+            let tip_f_lin_x: S = t195 + t212;
+            let tip_f_lin_z: S = t192 - t213;
+            let t164: S = coupler_v_ang_y * t157;
+            let t165: S = coupler_v_ang_y * t156;
+            let t255: S = tip_joint_q_cos * tip_f_lin_x;
+            let t256: S = tip_joint_x_r20 * tip_f_lin_x;
+            let t257: S = tip_joint_q_sin * tip_f_lin_z;
+            let t259: S = tip_joint_q_cos * tip_f_lin_z;
+            let t137: S = t132 - t135;
+            let t138: S = t133 - t136;
+            let t170: S = t137 + t164;
+            let t171: S = t138 - t165;
+            let t258: S = t255 + t257;
+            let t260: S = t256 + t259;
+            let t124: S = (-0.0032) * coupler_a_lin_x;
+            let t125: S = 0.128 * coupler_a_lin_z;
+            let t187: S = 0.0020330000000000005 * tip_a_ang_y;
+            let t189: S = (-0.020000000000000004) * tip_a_lin_x;
+            let t209: S = tip_v_lin_z * t205;
+            let t210: S = tip_v_lin_x * t202;
+            let t65: S = 0.14121297913350594 * rocker_joint_q_cos;
+            let t66: S = 0.98997923944103 * rocker_joint_q_cos;
+            let t67: S = 0.98997923944103 * rocker_joint_q_sin;
+            let t69: S = (-0.14121297913350594) * rocker_joint_q_sin;
+            let coupler_f_lin_x: S = t170 + t258;
+            let coupler_f_lin_z: S = t171 + t260;
+            let t121: S = 0.027392800000000002 * coupler_a_ang_y;
+            let t161: S = coupler_v_lin_z * t156;
+            let t162: S = coupler_v_lin_x * t157;
+            let t267: S = (-0.03) * t258;
+            let t268: S = 0.16 * t260;
+            let t126: S = t124 - t125;
+            let t190: S = t187 + t189;
+            let t211: S = t209 - t210;
+            let rocker_joint_x_r00: S = t65 + t67;
+            let rocker_joint_x_r20: S = t66 + t69;
+            let t277: S = coupler_joint_x_r20 * coupler_f_lin_x;
+            let t280: S = coupler_joint_x_r00 * coupler_f_lin_z;
+            let t130: S = t121 + t126;
+            let t163: S = t161 - t162;
+            let tip_f_ang_y: S = t190 + t211;
+            tau[2] = tip_f_ang_y;
+            let t269: S = t267 - t268;
+            let rocker_a_lin_x: S = 9.81 * rocker_joint_x_r20;
+            let rocker_a_lin_z: S = 9.81 * rocker_joint_x_r00;
+            let t81: S = 0.0012000000000000001 * crank_a_lin_x;
+            let t82: S = 0.024 * crank_a_lin_z;
+            let t281: S = t277 + t280;
+            let t168: S = t130 + t163;
+            let t270: S = tip_f_ang_y + t269;
+            let t79: S = 0.0019336 * crank_joint_qdd;
+            let t227: S = 0.0024 * rocker_a_lin_x;
+            let t228: S = 0.066 * rocker_a_lin_z;
+            let t289: S = (-0.12) * t281;
+            let t83: S = t81 - t82;
+            let coupler_f_ang_y: S = t168 + t270;
+            tau[1] = coupler_f_ang_y;
+            let t225: S = 0.009709599999999999 * rocker_joint_qdd;
+            let t84: S = t79 + t83;
+            let t229: S = t227 - t228;
+            let t290: S = coupler_f_ang_y + t289;
+            let rocker_f_ang_y: S = t225 + t229;
+            tau[3] = rocker_f_ang_y;
+            let crank_f_ang_y: S = t84 + t290;
+            tau[0] = crank_f_ang_y;
+        }
+    }
     /// The joint-space mass matrix `M(q)` (composite-rigid-body algorithm, unrolled).
     ///
     /// Bodies it computes, in the model's order: `crank`, `coupler`.
     #[allow(unused_variables, clippy::all)]
     pub fn crba(q: &[S; 4], m: &mut [[S; 4]; 4]) {
+        #[cfg(
+            all(
+                target_arch = "x86_64",
+                target_feature = "sse2",
+                not(target_feature = "avx")
+            )
+        )]
+        if ::embedyn::codegen_support::dispatch::avx() {
+            return unsafe { crba_avx::crba(q, m) };
+        }
         let coupler_joint_q: S = q[1];
         let tip_joint_q: S = q[2];
         let (sin_batch, cos_batch) = ::embedyn::codegen_support::sincos_batch([
@@ -897,12 +1683,111 @@ pub mod f64 {
         m[3][2] = 0.0;
         m[3][3] = 0.009709599999999999;
     }
+    #[cfg(
+        all(target_arch = "x86_64", target_feature = "sse2", not(target_feature = "avx"))
+    )]
+    /// The functions above compiled for `avx` (see `helpers::dispatch`).
+    mod crba_avx {
+        #[allow(unused_imports)]
+        use super::*;
+        /// The joint-space mass matrix `M(q)` (composite-rigid-body algorithm, unrolled).
+        ///
+        /// Bodies it computes, in the model's order: `crank`, `coupler`.
+        #[allow(unused_variables, clippy::all)]
+        #[target_feature(enable = "avx")]
+        pub fn crba(q: &[S; 4], m: &mut [[S; 4]; 4]) {
+            let coupler_joint_q: S = q[1];
+            let tip_joint_q: S = q[2];
+            let (sin_batch, cos_batch) = ::embedyn::codegen_support::sincos_batch([
+                coupler_joint_q,
+                tip_joint_q,
+            ]);
+            let coupler_joint_q_sin: S = sin_batch[0];
+            let coupler_joint_q_cos: S = cos_batch[0];
+            let tip_joint_q_sin: S = sin_batch[1];
+            let tip_joint_q_cos: S = cos_batch[1];
+            let t43: S = (-0.020000000000000004) * tip_joint_q_sin;
+            let t44: S = (-0.020000000000000004) * tip_joint_q_cos;
+            let t19: S = 0.8400996941839247 * coupler_joint_q_cos;
+            let t21: S = (-0.5424320269232599) * coupler_joint_q_sin;
+            let t25: S = 0.8400996941839247 * coupler_joint_q_sin;
+            let t26: S = 0.5424320269232599 * coupler_joint_q_cos;
+            let t76: S = 0.032 + t43;
+            let t77: S = (-0.006) + t44;
+            let t22: S = t19 + t21;
+            let t27: S = t25 + t26;
+            let coupler_ic_hx: S = 0.128 + t76;
+            let coupler_ic_hz: S = (-0.0032) + t77;
+            let t45: S = t43 + t43;
+            let t48: S = t44 + t44;
+            let t107: S = t22 * coupler_ic_hx;
+            let t109: S = t27 * coupler_ic_hz;
+            let t46: S = 0.032 + t45;
+            let t49: S = (-0.006) + t48;
+            let t20: S = (-0.5424320269232599) * coupler_joint_q_cos;
+            let t23: S = (-0.8400996941839247) * coupler_joint_q_sin;
+            let t47: S = 0.16 * t46;
+            let t50: S = (-0.03) * t49;
+            let t110: S = t107 + t109;
+            let t86: S = 0.020000000000000004 * tip_joint_q_sin;
+            let t24: S = t20 + t23;
+            let coupler_ic_hx_neg: S = -coupler_ic_hx;
+            let t113: S = t110 + t110;
+            let t56: S = t47 + t50;
+            let t93: S = t24 * t44;
+            let t96: S = t22 * t86;
+            let t157: S = t24 * coupler_ic_hz;
+            let t160: S = t22 * coupler_ic_hx_neg;
+            let t88: S = (-0.03) * t44;
+            let t89: S = 0.16 * t86;
+            let t114: S = 0.12 + t113;
+            let t74: S = 0.0020330000000000005 + t56;
+            let t97: S = t93 + t96;
+            let t115: S = 0.12 * t114;
+            let t161: S = t157 + t160;
+            let coupler_ic_i11: S = 0.027392800000000002 + t74;
+            m[1][1] = coupler_ic_i11;
+            let t90: S = t88 - t89;
+            let t105: S = (-0.12) * t97;
+            let t165: S = (-0.12) * t161;
+            let t91: S = 0.0020330000000000005 + t90;
+            m[1][2] = t91;
+            m[2][1] = t91;
+            let t144: S = coupler_ic_i11 + t115;
+            let t106: S = t91 + t105;
+            m[0][2] = t106;
+            m[2][0] = t106;
+            let crank_ic_i11: S = 0.0019336 + t144;
+            m[0][0] = crank_ic_i11;
+            let t166: S = coupler_ic_i11 + t165;
+            m[0][1] = t166;
+            m[1][0] = t166;
+            m[0][3] = 0.0;
+            m[1][3] = 0.0;
+            m[2][2] = 0.0020330000000000005;
+            m[2][3] = 0.0;
+            m[3][0] = 0.0;
+            m[3][1] = 0.0;
+            m[3][2] = 0.0;
+            m[3][3] = 0.009709599999999999;
+        }
+    }
     /// One Newton step of the position completion: `q_out` is `q` with its dependent coordinates moved towards the solution of the loop, gear and mimic equations (loop coordinates by at most 0.5 rad or m). Returns the largest residual at `q`, relative to the magnitudes in each equation (`complete` iterates this).
     ///
     /// Bodies it computes, in the model's order: `crank`, `coupler`, `rocker`.
     #[must_use = "the returned measure says whether the outputs can be used (see the function's documentation)"]
     #[allow(unused_variables, clippy::all)]
     pub fn complete_step(q: &[S; 4], q_out: &mut [S; 4]) -> S {
+        #[cfg(
+            all(
+                target_arch = "x86_64",
+                target_feature = "sse2",
+                not(target_feature = "avx")
+            )
+        )]
+        if ::embedyn::codegen_support::dispatch::avx() {
+            return unsafe { complete_step_avx::complete_step(q, q_out) };
+        }
         let crank_joint_q: S = q[0];
         let coupler_joint_q: S = q[1];
         let rocker_joint_q: S = q[3];
@@ -1066,6 +1951,16 @@ pub mod f64 {
     /// check it — a guess outside the mechanism's range does not converge (or gives NaN).
     #[must_use = "the returned measure says whether the outputs can be used (see the function's documentation)"]
     pub fn complete(q: &[S; super::NQ], q_out: &mut [S; super::NQ]) -> S {
+        #[cfg(
+            all(
+                target_arch = "x86_64",
+                target_feature = "sse2",
+                not(target_feature = "avx")
+            )
+        )]
+        if ::embedyn::codegen_support::dispatch::avx() {
+            return unsafe { complete_step_avx::complete(q, q_out) };
+        }
         let tolerance: S = 64.0 * S::EPSILON;
         *q_out = *q;
         let mut next = *q;
@@ -1080,12 +1975,215 @@ pub mod f64 {
     }
     /// Newton steps `complete` takes at most.
     pub const COMPLETION_MAX_STEPS: usize = 50;
+    #[cfg(
+        all(target_arch = "x86_64", target_feature = "sse2", not(target_feature = "avx"))
+    )]
+    /// The functions above compiled for `avx` (see `helpers::dispatch`).
+    mod complete_step_avx {
+        #[allow(unused_imports)]
+        use super::*;
+        /// One Newton step of the position completion: `q_out` is `q` with its dependent coordinates moved towards the solution of the loop, gear and mimic equations (loop coordinates by at most 0.5 rad or m). Returns the largest residual at `q`, relative to the magnitudes in each equation (`complete` iterates this).
+        ///
+        /// Bodies it computes, in the model's order: `crank`, `coupler`, `rocker`.
+        #[must_use = "the returned measure says whether the outputs can be used (see the function's documentation)"]
+        #[allow(unused_variables, clippy::all)]
+        #[target_feature(enable = "avx")]
+        pub fn complete_step(q: &[S; 4], q_out: &mut [S; 4]) -> S {
+            let crank_joint_q: S = q[0];
+            let coupler_joint_q: S = q[1];
+            let rocker_joint_q: S = q[3];
+            let (sin_batch, cos_batch) = ::embedyn::codegen_support::sincos_batch([
+                crank_joint_q,
+                coupler_joint_q,
+                rocker_joint_q,
+            ]);
+            let crank_joint_q_sin: S = sin_batch[0];
+            let crank_joint_q_cos: S = cos_batch[0];
+            let coupler_joint_q_sin: S = sin_batch[1];
+            let coupler_joint_q_cos: S = cos_batch[1];
+            let rocker_joint_q_sin: S = sin_batch[2];
+            let rocker_joint_q_cos: S = cos_batch[2];
+            let t7: S = 0.4535961214255773 * crank_joint_q_cos;
+            let t8: S = 0.8912073600614354 * crank_joint_q_cos;
+            let t9: S = 0.8912073600614354 * crank_joint_q_sin;
+            let t11: S = (-0.4535961214255773) * crank_joint_q_sin;
+            let t13: S = 0.4535961214255773 * crank_joint_q_sin;
+            let t14: S = (-0.8912073600614354) * crank_joint_q_cos;
+            let t19: S = 0.8400996941839247 * coupler_joint_q_cos;
+            let t20: S = (-0.5424320269232599) * coupler_joint_q_cos;
+            let t21: S = (-0.5424320269232599) * coupler_joint_q_sin;
+            let t23: S = (-0.8400996941839247) * coupler_joint_q_sin;
+            let t25: S = 0.8400996941839247 * coupler_joint_q_sin;
+            let t26: S = 0.5424320269232599 * coupler_joint_q_cos;
+            let crank_joint_x_r00: S = t7 + t9;
+            let crank_joint_x_r20: S = t8 + t11;
+            let crank_joint_x_r02: S = t13 + t14;
+            let coupler_joint_x_r00: S = t19 + t21;
+            let coupler_joint_x_r20: S = t20 + t23;
+            let coupler_joint_x_r02: S = t25 + t26;
+            let t34: S = 0.14121297913350594 * rocker_joint_q_cos;
+            let t35: S = 0.98997923944103 * rocker_joint_q_cos;
+            let t36: S = 0.98997923944103 * rocker_joint_q_sin;
+            let t38: S = (-0.14121297913350594) * rocker_joint_q_sin;
+            let t43: S = crank_joint_x_r00 * coupler_joint_x_r00;
+            let t44: S = crank_joint_x_r20 * coupler_joint_x_r00;
+            let t45: S = crank_joint_x_r02 * coupler_joint_x_r20;
+            let t47: S = crank_joint_x_r00 * coupler_joint_x_r20;
+            let t49: S = crank_joint_x_r00 * coupler_joint_x_r02;
+            let t50: S = crank_joint_x_r20 * coupler_joint_x_r02;
+            let t51: S = crank_joint_x_r02 * coupler_joint_x_r00;
+            let rocker_joint_x_r00: S = t34 + t36;
+            let rocker_joint_x_r20: S = t35 + t38;
+            let coupler_pose_r00: S = t43 + t45;
+            let coupler_pose_r20: S = t44 + t47;
+            let coupler_pose_r02: S = t49 + t51;
+            let coupler_pose_r22: S = t43 + t50;
+            let t103: S = 0.22 * rocker_joint_x_r00;
+            let t104: S = 0.22 * rocker_joint_x_r20;
+            let coupler_pose_px: S = 0.12 * crank_joint_x_r00;
+            let t76: S = 0.8644853776196937 * coupler_pose_r00;
+            let t77: S = 0.8644853776196937 * coupler_pose_r20;
+            let t78: S = (-0.5026579670926699) * coupler_pose_r02;
+            let t80: S = (-0.5026579670926699) * coupler_pose_r22;
+            let t82: S = 0.5026579670926699 * coupler_pose_r00;
+            let t83: S = 0.5026579670926699 * coupler_pose_r20;
+            let t84: S = 0.8644853776196937 * coupler_pose_r02;
+            let t86: S = 0.8644853776196937 * coupler_pose_r22;
+            let t157: S = (-0.12) * crank_joint_x_r20;
+            let t105: S = 0.3 + t103;
+            let t106: S = 0.05 + t104;
+            let t79: S = t76 + t78;
+            let t81: S = t77 + t80;
+            let t85: S = t82 + t84;
+            let t87: S = t83 + t86;
+            let t158: S = t106 + t157;
+            let t159: S = coupler_pose_px - t105;
+            let t160: S = t79 * t158;
+            let t161: S = t81 * t159;
+            let t163: S = t85 * t158;
+            let t164: S = t87 * t159;
+            let t162: S = t160 + t161;
+            let t165: S = t163 + t164;
+            let t166: S = -t162;
+            let t167: S = -t165;
+            let t178: S = ::embedyn::codegen_support::abs(t166);
+            let t182: S = ::embedyn::codegen_support::abs(t167);
+            let t186: S = if t182 > t178 { t167 } else { t166 };
+            let t193: S = 1.0 / t186;
+            let t149: S = (-0.05) + t106;
+            let t150: S = 0.3 - t105;
+            let t151: S = t79 * t149;
+            let t152: S = t81 * t150;
+            let t154: S = t85 * t149;
+            let t155: S = t87 * t150;
+            let coupler_pose_pz: S = 0.12 * crank_joint_x_r20;
+            let t88: S = 0.32 * coupler_pose_r00;
+            let t89: S = 0.32 * coupler_pose_r20;
+            let t187: S = if t182 > t178 { t166 } else { t167 };
+            let t153: S = t151 + t152;
+            let t156: S = t154 + t155;
+            let t90: S = coupler_pose_px + t88;
+            let t91: S = coupler_pose_pz + t89;
+            let t194: S = t187 * t193;
+            let t188: S = if t182 > t178 { t156 } else { t153 };
+            let t117: S = t105 - t90;
+            let t118: S = t106 - t91;
+            let t195: S = t188 * t194;
+            let t119: S = t79 * t117;
+            let t120: S = t81 * t118;
+            let t122: S = t85 * t117;
+            let t123: S = t87 * t118;
+            let t189: S = if t182 > t178 { t153 } else { t156 };
+            let t196: S = t189 - t195;
+            let t121: S = t119 + t120;
+            let t124: S = t122 + t123;
+            let t201: S = 1.0 / t196;
+            let t176: S = -t121;
+            let t177: S = -t124;
+            let t190: S = if t182 > t178 { t177 } else { t176 };
+            let t107: S = ::embedyn::codegen_support::abs(t90);
+            let t197: S = t190 * t194;
+            let t191: S = if t182 > t178 { t176 } else { t177 };
+            let t108: S = if t107 > 0.0 { t107 } else { 0.0 };
+            let t198: S = t191 - t197;
+            let t109: S = if 0.0 > t108 { 0.0 } else { t108 };
+            let t110: S = ::embedyn::codegen_support::abs(t91);
+            let t202: S = t198 * t201;
+            let t111: S = if t110 > t109 { t110 } else { t109 };
+            let t112: S = ::embedyn::codegen_support::abs(t105);
+            let t113: S = if t112 > t111 { t112 } else { t111 };
+            let t203: S = t188 * t202;
+            let t114: S = if 0.0 > t113 { 0.0 } else { t113 };
+            let t115: S = ::embedyn::codegen_support::abs(t106);
+            let t204: S = t190 - t203;
+            let t116: S = if t115 > t114 { t115 } else { t114 };
+            let t205: S = t193 * t204;
+            let t139: S = ::embedyn::codegen_support::abs(t121);
+            let t140: S = if t116 > 1.0 { t116 } else { 1.0 };
+            let t208: S = ::embedyn::codegen_support::abs(t205);
+            let t141: S = t139 / t140;
+            let t209: S = if t208 > 0.0 { t208 } else { 0.0 };
+            let t210: S = ::embedyn::codegen_support::abs(t202);
+            let t144: S = ::embedyn::codegen_support::abs(t124);
+            let t211: S = if t210 > t209 { t210 } else { t209 };
+            let t145: S = t144 / t140;
+            let t212: S = 0.5 / t211;
+            let t142: S = if t141 > 0.0 { t141 } else { 0.0 };
+            let t143: S = if t141 > (-1.0) { t142 } else { t141 };
+            let t146: S = if t145 > t143 { t145 } else { t143 };
+            let t213: S = if t211 > 0.5 { t212 } else { 1.0 };
+            let t147: S = if t145 > (-1.0) { t146 } else { t145 };
+            let t214: S = t205 * t213;
+            let t216: S = t202 * t213;
+            let t218: S = if t147 > 0.0 { t147 } else { 0.0 };
+            let t215: S = coupler_joint_q + t214;
+            q_out[1] = t215;
+            let t217: S = rocker_joint_q + t216;
+            q_out[3] = t217;
+            let t219: S = if t147 > (-1.0) { t218 } else { t147 };
+            q_out[0] = q[0];
+            q_out[2] = q[2];
+            t219
+        }
+        /// Position completion: `q_out` is `q` with its dependent coordinates solved from the independent
+        /// ones by Newton's method from `q`'s dependent entries as the guess (it converges to the assembly
+        /// branch nearest the guess), iterated until the largest residual, relative to the magnitudes in
+        /// each equation, is below 64 ε or for at most `COMPLETION_MAX_STEPS` steps. Returns that residual:
+        /// check it — a guess outside the mechanism's range does not converge (or gives NaN).
+        #[must_use = "the returned measure says whether the outputs can be used (see the function's documentation)"]
+        #[target_feature(enable = "avx")]
+        pub fn complete(q: &[S; super::NQ], q_out: &mut [S; super::NQ]) -> S {
+            let tolerance: S = 64.0 * S::EPSILON;
+            *q_out = *q;
+            let mut next = *q;
+            for _ in 0..COMPLETION_MAX_STEPS {
+                let residual = complete_step(q_out, &mut next);
+                if !(residual > tolerance) {
+                    return residual;
+                }
+                *q_out = next;
+            }
+            complete_step(q_out, &mut next)
+        }
+        /// Newton steps `complete` takes at most.
+        pub const COMPLETION_MAX_STEPS: usize = 50;
+    }
     /// The embedding map `X` (rows: all velocity coordinates, columns: independent ones): `v = X v_independent`. Returns the singularity measure cond₁(Y1) (as `aba` does).
     ///
     /// Bodies it computes, in the model's order: `crank`, `coupler`, `rocker`.
     #[must_use = "the returned measure says whether the outputs can be used (see the function's documentation)"]
     #[allow(unused_variables, clippy::all)]
     pub fn embedding(q: &[S; 4], x: &mut [[S; 2]; 4]) -> S {
+        #[cfg(
+            all(
+                target_arch = "x86_64",
+                target_feature = "sse2",
+                not(target_feature = "avx")
+            )
+        )]
+        if ::embedyn::codegen_support::dispatch::avx() {
+            return unsafe { embedding_avx::embedding(q, x) };
+        }
         let crank_joint_q: S = q[0];
         let coupler_joint_q: S = q[1];
         let rocker_joint_q: S = q[3];
@@ -1250,12 +2348,201 @@ pub mod f64 {
         x[3][1] = 0.0;
         t199
     }
+    #[cfg(
+        all(target_arch = "x86_64", target_feature = "sse2", not(target_feature = "avx"))
+    )]
+    /// The functions above compiled for `avx` (see `helpers::dispatch`).
+    mod embedding_avx {
+        #[allow(unused_imports)]
+        use super::*;
+        /// The embedding map `X` (rows: all velocity coordinates, columns: independent ones): `v = X v_independent`. Returns the singularity measure cond₁(Y1) (as `aba` does).
+        ///
+        /// Bodies it computes, in the model's order: `crank`, `coupler`, `rocker`.
+        #[must_use = "the returned measure says whether the outputs can be used (see the function's documentation)"]
+        #[allow(unused_variables, clippy::all)]
+        #[target_feature(enable = "avx")]
+        pub fn embedding(q: &[S; 4], x: &mut [[S; 2]; 4]) -> S {
+            let crank_joint_q: S = q[0];
+            let coupler_joint_q: S = q[1];
+            let rocker_joint_q: S = q[3];
+            let (sin_batch, cos_batch) = ::embedyn::codegen_support::sincos_batch([
+                crank_joint_q,
+                coupler_joint_q,
+                rocker_joint_q,
+            ]);
+            let crank_joint_q_sin: S = sin_batch[0];
+            let crank_joint_q_cos: S = cos_batch[0];
+            let coupler_joint_q_sin: S = sin_batch[1];
+            let coupler_joint_q_cos: S = cos_batch[1];
+            let rocker_joint_q_sin: S = sin_batch[2];
+            let rocker_joint_q_cos: S = cos_batch[2];
+            let t7: S = 0.4535961214255773 * crank_joint_q_cos;
+            let t8: S = 0.8912073600614354 * crank_joint_q_cos;
+            let t9: S = 0.8912073600614354 * crank_joint_q_sin;
+            let t11: S = (-0.4535961214255773) * crank_joint_q_sin;
+            let t13: S = 0.4535961214255773 * crank_joint_q_sin;
+            let t14: S = (-0.8912073600614354) * crank_joint_q_cos;
+            let t19: S = 0.8400996941839247 * coupler_joint_q_cos;
+            let t20: S = (-0.5424320269232599) * coupler_joint_q_cos;
+            let t21: S = (-0.5424320269232599) * coupler_joint_q_sin;
+            let t23: S = (-0.8400996941839247) * coupler_joint_q_sin;
+            let t25: S = 0.8400996941839247 * coupler_joint_q_sin;
+            let t26: S = 0.5424320269232599 * coupler_joint_q_cos;
+            let crank_joint_x_r00: S = t7 + t9;
+            let crank_joint_x_r20: S = t8 + t11;
+            let crank_joint_x_r02: S = t13 + t14;
+            let coupler_joint_x_r00: S = t19 + t21;
+            let coupler_joint_x_r20: S = t20 + t23;
+            let coupler_joint_x_r02: S = t25 + t26;
+            let t34: S = 0.14121297913350594 * rocker_joint_q_cos;
+            let t35: S = 0.98997923944103 * rocker_joint_q_cos;
+            let t36: S = 0.98997923944103 * rocker_joint_q_sin;
+            let t38: S = (-0.14121297913350594) * rocker_joint_q_sin;
+            let t43: S = crank_joint_x_r00 * coupler_joint_x_r00;
+            let t44: S = crank_joint_x_r20 * coupler_joint_x_r00;
+            let t45: S = crank_joint_x_r02 * coupler_joint_x_r20;
+            let t47: S = crank_joint_x_r00 * coupler_joint_x_r20;
+            let t49: S = crank_joint_x_r00 * coupler_joint_x_r02;
+            let t50: S = crank_joint_x_r20 * coupler_joint_x_r02;
+            let t51: S = crank_joint_x_r02 * coupler_joint_x_r00;
+            let rocker_joint_x_r00: S = t34 + t36;
+            let rocker_joint_x_r20: S = t35 + t38;
+            let coupler_pose_r00: S = t43 + t45;
+            let coupler_pose_r20: S = t44 + t47;
+            let coupler_pose_r02: S = t49 + t51;
+            let coupler_pose_r22: S = t43 + t50;
+            let t103: S = 0.22 * rocker_joint_x_r00;
+            let t104: S = 0.22 * rocker_joint_x_r20;
+            let coupler_pose_px: S = 0.12 * crank_joint_x_r00;
+            let t76: S = 0.8644853776196937 * coupler_pose_r00;
+            let t77: S = 0.8644853776196937 * coupler_pose_r20;
+            let t78: S = (-0.5026579670926699) * coupler_pose_r02;
+            let t80: S = (-0.5026579670926699) * coupler_pose_r22;
+            let t82: S = 0.5026579670926699 * coupler_pose_r00;
+            let t83: S = 0.5026579670926699 * coupler_pose_r20;
+            let t84: S = 0.8644853776196937 * coupler_pose_r02;
+            let t86: S = 0.8644853776196937 * coupler_pose_r22;
+            let t116: S = (-0.12) * crank_joint_x_r20;
+            let t105: S = 0.3 + t103;
+            let t106: S = 0.05 + t104;
+            let t79: S = t76 + t78;
+            let t81: S = t77 + t80;
+            let t85: S = t82 + t84;
+            let t87: S = t83 + t86;
+            let t117: S = t106 + t116;
+            let t118: S = coupler_pose_px - t105;
+            let t119: S = t79 * t117;
+            let t120: S = t81 * t118;
+            let t122: S = t85 * t117;
+            let t123: S = t87 * t118;
+            let t121: S = t119 + t120;
+            let t124: S = t122 + t123;
+            let t125: S = -t121;
+            let t126: S = -t124;
+            let t135: S = ::embedyn::codegen_support::abs(t125);
+            let t139: S = ::embedyn::codegen_support::abs(t126);
+            let t143: S = if t139 > t135 { t126 } else { t125 };
+            let t152: S = 1.0 / t143;
+            let t108: S = (-0.05) + t106;
+            let t109: S = 0.3 - t105;
+            let t110: S = t79 * t108;
+            let t111: S = t81 * t109;
+            let t113: S = t85 * t108;
+            let t114: S = t87 * t109;
+            let t144: S = if t139 > t135 { t125 } else { t126 };
+            let t112: S = t110 + t111;
+            let t115: S = t113 + t114;
+            let t153: S = t144 * t152;
+            let t145: S = if t139 > t135 { t115 } else { t112 };
+            let t154: S = t145 * t153;
+            let t146: S = if t139 > t135 { t112 } else { t115 };
+            let t155: S = t146 - t154;
+            let t164: S = 1.0 / t155;
+            let t149: S = if t139 > t135 { 0.0 } else { 1.0 };
+            let t158: S = t149 * t153;
+            let t150: S = if t139 > t135 { 1.0 } else { 0.0 };
+            let t159: S = t150 - t158;
+            let t160: S = t150 * t153;
+            let t169: S = t159 * t164;
+            let t107: S = -t105;
+            let t161: S = t149 - t160;
+            let t170: S = t145 * t169;
+            let t127: S = t79 * t106;
+            let t128: S = t81 * t107;
+            let t130: S = t85 * t106;
+            let t131: S = t87 * t107;
+            let t173: S = t161 * t164;
+            let t171: S = t149 - t170;
+            let t129: S = t127 + t128;
+            let t132: S = t130 + t131;
+            let t174: S = t145 * t173;
+            let t172: S = t152 * t171;
+            let t133: S = -t129;
+            let t134: S = -t132;
+            let t175: S = t150 - t174;
+            let t147: S = if t139 > t135 { t134 } else { t133 };
+            let t179: S = ::embedyn::codegen_support::abs(t172);
+            let t180: S = ::embedyn::codegen_support::abs(t169);
+            let t176: S = t152 * t175;
+            let t156: S = t147 * t153;
+            let t181: S = t179 + t180;
+            let t189: S = t135 + t139;
+            let t148: S = if t139 > t135 { t133 } else { t134 };
+            let t137: S = ::embedyn::codegen_support::abs(t112);
+            let t141: S = ::embedyn::codegen_support::abs(t115);
+            let t182: S = if t181 > 0.0 { t181 } else { 0.0 };
+            let t184: S = ::embedyn::codegen_support::abs(t176);
+            let t185: S = ::embedyn::codegen_support::abs(t173);
+            let t190: S = if t189 > 0.0 { t189 } else { 0.0 };
+            let t157: S = t148 - t156;
+            let t183: S = if t181 > (-1.0) { t182 } else { t181 };
+            let t186: S = t184 + t185;
+            let t191: S = if t189 > (-1.0) { t190 } else { t189 };
+            let t192: S = t137 + t141;
+            let t165: S = t157 * t164;
+            let t187: S = if t186 > t183 { t186 } else { t183 };
+            let t193: S = if t192 > t191 { t192 } else { t191 };
+            let t166: S = t145 * t165;
+            let t188: S = if t186 > (-1.0) { t187 } else { t186 };
+            let t194: S = if t192 > (-1.0) { t193 } else { t192 };
+            let t167: S = t147 - t166;
+            let t195: S = t188 * t194;
+            let t168: S = t152 * t167;
+            let t196: S = if 1000000000000000000000000000000.0 > t195 {
+                t195
+            } else {
+                1000000000000000000000000000000.0
+            };
+            let t197: S = -t168;
+            x[1][0] = t197;
+            let t198: S = -t165;
+            x[3][0] = t198;
+            let t199: S = if t196 > 1.0 { t196 } else { 1.0 };
+            x[0][0] = 1.0;
+            x[0][1] = 0.0;
+            x[1][1] = 0.0;
+            x[2][0] = 0.0;
+            x[2][1] = 1.0;
+            x[3][1] = 0.0;
+            t199
+        }
+    }
     /// The mass matrix over the independent coordinates, `Xᵀ M(q) X` (the spanning tree's `M` is `crba`). Returns the singularity measure cond₁(Y1) (as `aba` does).
     ///
     /// Bodies it computes, in the model's order: `crank`, `coupler`, `tip`, `rocker`.
     #[must_use = "the returned measure says whether the outputs can be used (see the function's documentation)"]
     #[allow(unused_variables, clippy::all)]
     pub fn crba_independent(q: &[S; 4], m: &mut [[S; 2]; 2]) -> S {
+        #[cfg(
+            all(
+                target_arch = "x86_64",
+                target_feature = "sse2",
+                not(target_feature = "avx")
+            )
+        )]
+        if ::embedyn::codegen_support::dispatch::avx() {
+            return unsafe { crba_independent_avx::crba_independent(q, m) };
+        }
         let crank_joint_q: S = q[0];
         let coupler_joint_q: S = q[1];
         let tip_joint_q: S = q[2];
@@ -1469,5 +2756,234 @@ pub mod f64 {
         let t336: S = if t196 > 1.0 { t196 } else { 1.0 };
         m[1][1] = 0.0020330000000000005;
         t336
+    }
+    #[cfg(
+        all(target_arch = "x86_64", target_feature = "sse2", not(target_feature = "avx"))
+    )]
+    /// The functions above compiled for `avx` (see `helpers::dispatch`).
+    mod crba_independent_avx {
+        #[allow(unused_imports)]
+        use super::*;
+        /// The mass matrix over the independent coordinates, `Xᵀ M(q) X` (the spanning tree's `M` is `crba`). Returns the singularity measure cond₁(Y1) (as `aba` does).
+        ///
+        /// Bodies it computes, in the model's order: `crank`, `coupler`, `tip`, `rocker`.
+        #[must_use = "the returned measure says whether the outputs can be used (see the function's documentation)"]
+        #[allow(unused_variables, clippy::all)]
+        #[target_feature(enable = "avx")]
+        pub fn crba_independent(q: &[S; 4], m: &mut [[S; 2]; 2]) -> S {
+            let crank_joint_q: S = q[0];
+            let coupler_joint_q: S = q[1];
+            let tip_joint_q: S = q[2];
+            let rocker_joint_q: S = q[3];
+            let (sin_batch, cos_batch) = ::embedyn::codegen_support::sincos_batch([
+                crank_joint_q,
+                coupler_joint_q,
+                tip_joint_q,
+                rocker_joint_q,
+            ]);
+            let crank_joint_q_sin: S = sin_batch[0];
+            let crank_joint_q_cos: S = cos_batch[0];
+            let coupler_joint_q_sin: S = sin_batch[1];
+            let coupler_joint_q_cos: S = cos_batch[1];
+            let tip_joint_q_sin: S = sin_batch[2];
+            let tip_joint_q_cos: S = cos_batch[2];
+            let rocker_joint_q_sin: S = sin_batch[3];
+            let rocker_joint_q_cos: S = cos_batch[3];
+            let t7: S = 0.4535961214255773 * crank_joint_q_cos;
+            let t8: S = 0.8912073600614354 * crank_joint_q_cos;
+            let t9: S = 0.8912073600614354 * crank_joint_q_sin;
+            let t11: S = (-0.4535961214255773) * crank_joint_q_sin;
+            let t13: S = 0.4535961214255773 * crank_joint_q_sin;
+            let t14: S = (-0.8912073600614354) * crank_joint_q_cos;
+            let t19: S = 0.8400996941839247 * coupler_joint_q_cos;
+            let t20: S = (-0.5424320269232599) * coupler_joint_q_cos;
+            let t21: S = (-0.5424320269232599) * coupler_joint_q_sin;
+            let t23: S = (-0.8400996941839247) * coupler_joint_q_sin;
+            let t25: S = 0.8400996941839247 * coupler_joint_q_sin;
+            let t26: S = 0.5424320269232599 * coupler_joint_q_cos;
+            let crank_joint_x_r00: S = t7 + t9;
+            let crank_joint_x_r20: S = t8 + t11;
+            let crank_joint_x_r02: S = t13 + t14;
+            let coupler_joint_x_r00: S = t19 + t21;
+            let coupler_joint_x_r20: S = t20 + t23;
+            let coupler_joint_x_r02: S = t25 + t26;
+            let t34: S = 0.14121297913350594 * rocker_joint_q_cos;
+            let t35: S = 0.98997923944103 * rocker_joint_q_cos;
+            let t36: S = 0.98997923944103 * rocker_joint_q_sin;
+            let t38: S = (-0.14121297913350594) * rocker_joint_q_sin;
+            let t43: S = crank_joint_x_r00 * coupler_joint_x_r00;
+            let t44: S = crank_joint_x_r20 * coupler_joint_x_r00;
+            let t45: S = crank_joint_x_r02 * coupler_joint_x_r20;
+            let t47: S = crank_joint_x_r00 * coupler_joint_x_r20;
+            let t49: S = crank_joint_x_r00 * coupler_joint_x_r02;
+            let t50: S = crank_joint_x_r20 * coupler_joint_x_r02;
+            let t51: S = crank_joint_x_r02 * coupler_joint_x_r00;
+            let rocker_joint_x_r00: S = t34 + t36;
+            let rocker_joint_x_r20: S = t35 + t38;
+            let coupler_pose_r00: S = t43 + t45;
+            let coupler_pose_r20: S = t44 + t47;
+            let coupler_pose_r02: S = t49 + t51;
+            let coupler_pose_r22: S = t43 + t50;
+            let t103: S = 0.22 * rocker_joint_x_r00;
+            let t104: S = 0.22 * rocker_joint_x_r20;
+            let coupler_pose_px: S = 0.12 * crank_joint_x_r00;
+            let t76: S = 0.8644853776196937 * coupler_pose_r00;
+            let t77: S = 0.8644853776196937 * coupler_pose_r20;
+            let t78: S = (-0.5026579670926699) * coupler_pose_r02;
+            let t80: S = (-0.5026579670926699) * coupler_pose_r22;
+            let t82: S = 0.5026579670926699 * coupler_pose_r00;
+            let t83: S = 0.5026579670926699 * coupler_pose_r20;
+            let t84: S = 0.8644853776196937 * coupler_pose_r02;
+            let t86: S = 0.8644853776196937 * coupler_pose_r22;
+            let t116: S = (-0.12) * crank_joint_x_r20;
+            let t105: S = 0.3 + t103;
+            let t106: S = 0.05 + t104;
+            let t79: S = t76 + t78;
+            let t81: S = t77 + t80;
+            let t85: S = t82 + t84;
+            let t87: S = t83 + t86;
+            let t117: S = t106 + t116;
+            let t118: S = coupler_pose_px - t105;
+            let t119: S = t79 * t117;
+            let t120: S = t81 * t118;
+            let t122: S = t85 * t117;
+            let t123: S = t87 * t118;
+            let t121: S = t119 + t120;
+            let t124: S = t122 + t123;
+            let t125: S = -t121;
+            let t126: S = -t124;
+            let t135: S = ::embedyn::codegen_support::abs(t125);
+            let t139: S = ::embedyn::codegen_support::abs(t126);
+            let t143: S = if t139 > t135 { t126 } else { t125 };
+            let t152: S = 1.0 / t143;
+            let t108: S = (-0.05) + t106;
+            let t109: S = 0.3 - t105;
+            let t110: S = t79 * t108;
+            let t111: S = t81 * t109;
+            let t113: S = t85 * t108;
+            let t114: S = t87 * t109;
+            let t144: S = if t139 > t135 { t125 } else { t126 };
+            let t112: S = t110 + t111;
+            let t115: S = t113 + t114;
+            let t153: S = t144 * t152;
+            let t145: S = if t139 > t135 { t115 } else { t112 };
+            let t154: S = t145 * t153;
+            let t146: S = if t139 > t135 { t112 } else { t115 };
+            let t155: S = t146 - t154;
+            let t107: S = -t105;
+            let t164: S = 1.0 / t155;
+            let t127: S = t79 * t106;
+            let t128: S = t81 * t107;
+            let t130: S = t85 * t106;
+            let t131: S = t87 * t107;
+            let t149: S = if t139 > t135 { 0.0 } else { 1.0 };
+            let t129: S = t127 + t128;
+            let t132: S = t130 + t131;
+            let t158: S = t149 * t153;
+            let t150: S = if t139 > t135 { 1.0 } else { 0.0 };
+            let t133: S = -t129;
+            let t134: S = -t132;
+            let t159: S = t150 - t158;
+            let t147: S = if t139 > t135 { t134 } else { t133 };
+            let t160: S = t150 * t153;
+            let t169: S = t159 * t164;
+            let t156: S = t147 * t153;
+            let t199: S = (-0.020000000000000004) * tip_joint_q_sin;
+            let t200: S = (-0.020000000000000004) * tip_joint_q_cos;
+            let t148: S = if t139 > t135 { t133 } else { t134 };
+            let t161: S = t149 - t160;
+            let t170: S = t145 * t169;
+            let t157: S = t148 - t156;
+            let t232: S = 0.032 + t199;
+            let t233: S = (-0.006) + t200;
+            let t173: S = t161 * t164;
+            let t201: S = t199 + t199;
+            let t204: S = t200 + t200;
+            let t165: S = t157 * t164;
+            let t171: S = t149 - t170;
+            let coupler_ic_hx: S = 0.128 + t232;
+            let coupler_ic_hz: S = (-0.0032) + t233;
+            let t174: S = t145 * t173;
+            let t202: S = 0.032 + t201;
+            let t205: S = (-0.006) + t204;
+            let t172: S = t152 * t171;
+            let t263: S = coupler_joint_x_r00 * coupler_ic_hx;
+            let t265: S = coupler_joint_x_r02 * coupler_ic_hz;
+            let t166: S = t145 * t165;
+            let t203: S = 0.16 * t202;
+            let t206: S = (-0.03) * t205;
+            let coupler_ic_hx_neg: S = -coupler_ic_hx;
+            let t175: S = t150 - t174;
+            let t179: S = ::embedyn::codegen_support::abs(t172);
+            let t180: S = ::embedyn::codegen_support::abs(t169);
+            let t266: S = t263 + t265;
+            let t167: S = t147 - t166;
+            let t313: S = coupler_joint_x_r20 * coupler_ic_hz;
+            let t316: S = coupler_joint_x_r00 * coupler_ic_hx_neg;
+            let t176: S = t152 * t175;
+            let t212: S = t203 + t206;
+            let t181: S = t179 + t180;
+            let t189: S = t135 + t139;
+            let t269: S = t266 + t266;
+            let t168: S = t152 * t167;
+            let t230: S = 0.0020330000000000005 + t212;
+            let t317: S = t313 + t316;
+            let t137: S = ::embedyn::codegen_support::abs(t112);
+            let t141: S = ::embedyn::codegen_support::abs(t115);
+            let t182: S = if t181 > 0.0 { t181 } else { 0.0 };
+            let t184: S = ::embedyn::codegen_support::abs(t176);
+            let t185: S = ::embedyn::codegen_support::abs(t173);
+            let t190: S = if t189 > 0.0 { t189 } else { 0.0 };
+            let t270: S = 0.12 + t269;
+            let t242: S = 0.020000000000000004 * tip_joint_q_sin;
+            let t197: S = -t168;
+            let coupler_ic_i11: S = 0.027392800000000002 + t230;
+            let t321: S = (-0.12) * t317;
+            let t183: S = if t181 > (-1.0) { t182 } else { t181 };
+            let t186: S = t184 + t185;
+            let t191: S = if t189 > (-1.0) { t190 } else { t189 };
+            let t192: S = t137 + t141;
+            let t271: S = 0.12 * t270;
+            let t244: S = (-0.03) * t200;
+            let t245: S = 0.16 * t242;
+            let t249: S = coupler_joint_x_r20 * t200;
+            let t252: S = coupler_joint_x_r00 * t242;
+            let t327: S = t197 * coupler_ic_i11;
+            let t187: S = if t186 > t183 { t186 } else { t183 };
+            let t193: S = if t192 > t191 { t192 } else { t191 };
+            let t322: S = coupler_ic_i11 + t321;
+            let t300: S = coupler_ic_i11 + t271;
+            let t188: S = if t186 > (-1.0) { t187 } else { t186 };
+            let t194: S = if t192 > (-1.0) { t193 } else { t192 };
+            let t246: S = t244 - t245;
+            let t253: S = t249 + t252;
+            let t325: S = t197 * t322;
+            let t328: S = t322 + t327;
+            let crank_ic_i11: S = 0.0019336 + t300;
+            let t331: S = (-0.009709599999999999) * t165;
+            let t195: S = t188 * t194;
+            let t198: S = -t165;
+            let t247: S = 0.0020330000000000005 + t246;
+            let t261: S = (-0.12) * t253;
+            let t332: S = t197 * t328;
+            let t326: S = crank_ic_i11 + t325;
+            let t329: S = t197 * t247;
+            let t334: S = t198 * t331;
+            let t196: S = if 1000000000000000000000000000000.0 > t195 {
+                t195
+            } else {
+                1000000000000000000000000000000.0
+            };
+            let t262: S = t247 + t261;
+            let t333: S = t326 + t332;
+            let t330: S = t262 + t329;
+            m[0][1] = t330;
+            m[1][0] = t330;
+            let t335: S = t333 + t334;
+            m[0][0] = t335;
+            let t336: S = if t196 > 1.0 { t196 } else { 1.0 };
+            m[1][1] = 0.0020330000000000005;
+            t336
+        }
     }
 }

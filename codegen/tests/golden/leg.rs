@@ -80,6 +80,16 @@ pub mod f64 {
     /// Bodies it computes, in the model's order: `thigh`, `shin`, `foot`.
     #[allow(unused_variables, clippy::all)]
     pub fn kinematics(q: &[S; 3], frames: &mut [[S; 12]; 3]) {
+        #[cfg(
+            all(
+                target_arch = "x86_64",
+                target_feature = "sse2",
+                not(target_feature = "avx")
+            )
+        )]
+        if ::embedyn::codegen_support::dispatch::avx() {
+            return unsafe { kinematics_avx::kinematics(q, frames) };
+        }
         let hip_q: S = q[0];
         let knee_q: S = q[1];
         let ankle_q: S = q[2];
@@ -155,11 +165,110 @@ pub mod f64 {
         frames[2][3] = 0.0;
         frames[2][10] = 0.1;
     }
+    #[cfg(
+        all(target_arch = "x86_64", target_feature = "sse2", not(target_feature = "avx"))
+    )]
+    /// The functions above compiled for `avx` (see `helpers::dispatch`).
+    mod kinematics_avx {
+        #[allow(unused_imports)]
+        use super::*;
+        /// Forward kinematics: the world pose of every link on a moving body, in the order of `FRAMES`, as `[r00, r01, r02, r10, r11, r12, r20, r21, r22, x, y, z]` (the rotation row-major: its columns are the link's axes in world coordinates; then the link origin in the world).
+        ///
+        /// Bodies it computes, in the model's order: `thigh`, `shin`, `foot`.
+        #[allow(unused_variables, clippy::all)]
+        #[target_feature(enable = "avx")]
+        pub fn kinematics(q: &[S; 3], frames: &mut [[S; 12]; 3]) {
+            let hip_q: S = q[0];
+            let knee_q: S = q[1];
+            let ankle_q: S = q[2];
+            let (sin_batch, cos_batch) = ::embedyn::codegen_support::sincos_batch([
+                hip_q,
+                knee_q,
+                ankle_q,
+            ]);
+            let hip_q_sin: S = sin_batch[0];
+            let hip_q_cos: S = cos_batch[0];
+            let knee_q_sin: S = sin_batch[1];
+            let knee_q_cos: S = cos_batch[1];
+            let ankle_q_sin: S = sin_batch[2];
+            let ankle_q_cos: S = cos_batch[2];
+            frames[0][2] = hip_q_sin;
+            frames[0][0] = hip_q_cos;
+            frames[0][8] = hip_q_cos;
+            frames[2][4] = ankle_q_cos;
+            let hip_x_r20: S = -hip_q_sin;
+            frames[0][6] = hip_x_r20;
+            let t12: S = hip_q_cos * knee_q_cos;
+            let t18: S = hip_q_cos * knee_q_sin;
+            let t19: S = hip_x_r20 * knee_q_sin;
+            let t20: S = hip_q_sin * knee_q_cos;
+            let knee_x_r20: S = -knee_q_sin;
+            let shin_pose_r02: S = t18 + t20;
+            frames[1][2] = shin_pose_r02;
+            let shin_pose_r22: S = t12 + t19;
+            frames[1][8] = shin_pose_r22;
+            let t13: S = hip_x_r20 * knee_q_cos;
+            let t14: S = hip_q_sin * knee_x_r20;
+            let t16: S = hip_q_cos * knee_x_r20;
+            let shin_pose_px: S = (-0.4) * hip_q_sin;
+            frames[1][9] = shin_pose_px;
+            let shin_pose_pz: S = (-0.4) * hip_q_cos;
+            frames[1][11] = shin_pose_pz;
+            let t29: S = (-0.38) * shin_pose_r02;
+            let t30: S = (-0.38) * shin_pose_r22;
+            let foot_pose_r01: S = ankle_q_sin * shin_pose_r02;
+            frames[2][1] = foot_pose_r01;
+            let foot_pose_r21: S = ankle_q_sin * shin_pose_r22;
+            frames[2][7] = foot_pose_r21;
+            let foot_pose_r02: S = ankle_q_cos * shin_pose_r02;
+            frames[2][2] = foot_pose_r02;
+            let foot_pose_r22: S = ankle_q_cos * shin_pose_r22;
+            frames[2][8] = foot_pose_r22;
+            let ankle_x_r12: S = -ankle_q_sin;
+            frames[2][5] = ankle_x_r12;
+            let shin_pose_r00: S = t12 + t14;
+            frames[1][0] = shin_pose_r00;
+            frames[2][0] = shin_pose_r00;
+            let shin_pose_r20: S = t13 + t16;
+            frames[1][6] = shin_pose_r20;
+            frames[2][6] = shin_pose_r20;
+            let foot_pose_px: S = shin_pose_px + t29;
+            frames[2][9] = foot_pose_px;
+            let foot_pose_pz: S = shin_pose_pz + t30;
+            frames[2][11] = foot_pose_pz;
+            frames[0][1] = 0.0;
+            frames[0][3] = 0.0;
+            frames[0][4] = 1.0;
+            frames[0][5] = 0.0;
+            frames[0][7] = 0.0;
+            frames[0][9] = 0.0;
+            frames[0][10] = 0.1;
+            frames[0][11] = 0.0;
+            frames[1][1] = 0.0;
+            frames[1][3] = 0.0;
+            frames[1][4] = 1.0;
+            frames[1][5] = 0.0;
+            frames[1][7] = 0.0;
+            frames[1][10] = 0.1;
+            frames[2][3] = 0.0;
+            frames[2][10] = 0.1;
+        }
+    }
     /// Forward dynamics: `qdd = M(q)⁻¹ (τ − C(q, v) − g(q))` (the O(N) articulated-body algorithm, unrolled).
     ///
     /// Bodies it computes, in the model's order: `thigh`, `shin`, `foot`.
     #[allow(unused_variables, clippy::all)]
     pub fn aba(q: &[S; 3], v: &[S; 3], tau: &[S; 3], qdd: &mut [S; 3]) {
+        #[cfg(
+            all(
+                target_arch = "x86_64",
+                target_feature = "sse2",
+                not(target_feature = "avx")
+            )
+        )]
+        if ::embedyn::codegen_support::dispatch::avx() {
+            return unsafe { aba_avx::aba(q, v, tau, qdd) };
+        }
         let hip_q: S = q[0];
         let knee_q: S = q[1];
         let ankle_q: S = q[2];
@@ -409,11 +518,284 @@ pub mod f64 {
         let ankle_qdd: S = 367.6470588235294 * t502;
         qdd[2] = ankle_qdd;
     }
+    #[cfg(
+        all(target_arch = "x86_64", target_feature = "sse2", not(target_feature = "avx"))
+    )]
+    /// The functions above compiled for `avx` (see `helpers::dispatch`).
+    mod aba_avx {
+        #[allow(unused_imports)]
+        use super::*;
+        /// Forward dynamics: `qdd = M(q)⁻¹ (τ − C(q, v) − g(q))` (the O(N) articulated-body algorithm, unrolled).
+        ///
+        /// Bodies it computes, in the model's order: `thigh`, `shin`, `foot`.
+        #[allow(unused_variables, clippy::all)]
+        #[target_feature(enable = "avx")]
+        pub fn aba(q: &[S; 3], v: &[S; 3], tau: &[S; 3], qdd: &mut [S; 3]) {
+            let hip_q: S = q[0];
+            let knee_q: S = q[1];
+            let ankle_q: S = q[2];
+            let hip_v: S = v[0];
+            let knee_v: S = v[1];
+            let ankle_v: S = v[2];
+            let hip_tau: S = tau[0];
+            let knee_tau: S = tau[1];
+            let ankle_tau: S = tau[2];
+            let (sin_batch, cos_batch) = ::embedyn::codegen_support::sincos_batch([
+                hip_q,
+                knee_q,
+                ankle_q,
+            ]);
+            let hip_q_sin: S = sin_batch[0];
+            let hip_q_cos: S = cos_batch[0];
+            let knee_q_sin: S = sin_batch[1];
+            let knee_q_cos: S = cos_batch[1];
+            let ankle_q_sin: S = sin_batch[2];
+            let ankle_q_cos: S = cos_batch[2];
+            let t15: S = (-0.4) * hip_v;
+            let t152: S = ankle_q_cos * ankle_q_cos;
+            let t153: S = ankle_q_sin * ankle_q_sin;
+            let shin_v_ang_y: S = hip_v + knee_v;
+            let shin_v_lin_z: S = knee_q_sin * t15;
+            let t154: S = t152 - t153;
+            let shin_v_lin_x: S = knee_q_cos * t15;
+            let ankle_x_r12: S = -ankle_q_sin;
+            let t27: S = 0.38 * shin_v_ang_y;
+            let t161: S = (-0.024) * ankle_q_cos;
+            let t157: S = 0.0006247058823529413 * t154;
+            let foot_v_ang_z: S = shin_v_ang_y * ankle_x_r12;
+            let foot_v_lin_z: S = shin_v_lin_z * ankle_q_cos;
+            let foot_v_lin_x: S = shin_v_lin_x - t27;
+            let t195: S = 0.38 * t161;
+            let foot_v_ang_y: S = shin_v_ang_y * ankle_q_cos;
+            let foot_v_lin_y: S = shin_v_lin_z * ankle_q_sin;
+            let t158: S = 0.006095294117647059 + t157;
+            let t69: S = 0.0012000000000000001 * ankle_v;
+            let t73: S = 0.006 * foot_v_ang_z;
+            let t77: S = (-0.024) * foot_v_lin_x;
+            let t78: S = 0.04000000000000001 * foot_v_lin_z;
+            let t89: S = (-0.024) * ankle_v;
+            let t90: S = 0.04000000000000001 * foot_v_ang_z;
+            let t205: S = t158 - t195;
+            let t70: S = 0.00672 * foot_v_ang_y;
+            let t80: S = 0.04000000000000001 * foot_v_lin_y;
+            let t85: S = 0.8 * foot_v_lin_y;
+            let t86: S = 0.8 * foot_v_lin_z;
+            let t92: S = 0.04000000000000001 * foot_v_ang_y;
+            let t74: S = t69 + t73;
+            let t79: S = t77 - t78;
+            let t91: S = t89 - t90;
+            let t206: S = t205 - t195;
+            let t82: S = t70 + t79;
+            let t83: S = t74 + t80;
+            let t94: S = t85 - t91;
+            let t95: S = t86 - t92;
+            let t68: S = 0.00272 * ankle_v;
+            let t71: S = 0.0012000000000000001 * foot_v_ang_z;
+            let t207: S = t206 - (-0.11552000000000003);
+            let t96: S = foot_v_ang_y * t83;
+            let t97: S = foot_v_ang_z * t82;
+            let t105: S = foot_v_lin_y * t95;
+            let t106: S = foot_v_lin_z * t94;
+            let t76: S = 0.024 * foot_v_lin_y;
+            let t84: S = 0.8 * foot_v_lin_x;
+            let t88: S = 0.024 * foot_v_ang_y;
+            let shin_p_a11: S = 0.11099999999999999 + t207;
+            let t72: S = t68 + t71;
+            let t98: S = t96 - t97;
+            let t107: S = t105 - t106;
+            let knee_d_inv: S = 1.0 / shin_p_a11;
+            let t81: S = t72 + t76;
+            let t93: S = t84 - t88;
+            let t34: S = ankle_v * foot_v_ang_y;
+            let t36: S = ankle_v * foot_v_lin_z;
+            let foot_z_ang_x: S = t98 + t107;
+            let t163: S = (-0.02941176470588236) * ankle_q_sin;
+            let t165: S = (-0.04000000000000001) * ankle_q_cos;
+            let t102: S = ankle_v * t82;
+            let t103: S = foot_v_ang_y * t81;
+            let t111: S = foot_v_lin_x * t94;
+            let t112: S = foot_v_lin_y * t93;
+            let t33: S = ankle_v * foot_v_ang_z;
+            let t37: S = ankle_v * foot_v_lin_y;
+            let ankle_eps: S = ankle_tau - foot_z_ang_x;
+            let t99: S = foot_v_ang_z * t81;
+            let t100: S = ankle_v * t83;
+            let t108: S = foot_v_lin_z * t93;
+            let t109: S = foot_v_lin_x * t95;
+            let t132: S = (-0.005470588235294118) * t34;
+            let t133: S = 0.02941176470588236 * t36;
+            let t173: S = ankle_q_sin * t163;
+            let t175: S = ankle_q_cos * t165;
+            let t104: S = t102 - t103;
+            let t113: S = t111 - t112;
+            let t214: S = (-0.30400000000000005) + t161;
+            let t127: S = 367.6470588235294 * ankle_eps;
+            let t131: S = 0.00672 * t33;
+            let t134: S = 0.04000000000000001 * t37;
+            let t101: S = t99 - t100;
+            let t110: S = t108 - t109;
+            let foot_z_ang_z: S = t104 + t113;
+            let t136: S = t132 + t133;
+            let shin_p_b12: S = t173 + t175;
+            let shin_p_b10: S = (-0.44999999999999996) + t214;
+            let t179: S = (-0.10588235294117643) * t154;
+            let t117: S = foot_v_ang_y * t95;
+            let t118: S = foot_v_ang_z * t94;
+            let t129: S = 0.0012000000000000001 * t127;
+            let foot_z_ang_y: S = t101 + t110;
+            let t135: S = t131 + t134;
+            let t145: S = foot_z_ang_z + t136;
+            let t257: S = shin_p_b10 * knee_d_inv;
+            let t259: S = shin_p_b12 * knee_d_inv;
+            let t54: S = 2.5 * shin_v_lin_x;
+            let t57: S = 0.44999999999999996 * shin_v_ang_y;
+            let t137: S = (-0.024) * t33;
+            let t181: S = 0.6941176470588236 - t179;
+            let foot_z_lin_x: S = t117 - t118;
+            let t144: S = foot_z_ang_y + t135;
+            let t150: S = t129 + t145;
+            let t120: S = foot_v_ang_z * t93;
+            let t121: S = ankle_v * t95;
+            let t138: S = (-0.02941176470588236) * t34;
+            let t140: S = 0.5882352941176472 * t36;
+            let t290: S = shin_p_b10 * t257;
+            let t295: S = shin_p_b12 * t259;
+            let t55: S = 2.5 * shin_v_lin_z;
+            let shin_p_c22: S = 2.5 + t181;
+            let t58: S = t54 - t57;
+            let t146: S = foot_z_lin_x + t137;
+            let t232: S = ankle_q_cos * t144;
+            let t234: S = ankle_x_r12 * t150;
+            let t123: S = ankle_v * t94;
+            let t124: S = foot_v_ang_y * t93;
+            let t139: S = (-0.04000000000000001) * t33;
+            let t141: S = (-0.8) * t37;
+            let foot_z_lin_y: S = t120 - t121;
+            let t142: S = t138 + t140;
+            let t296: S = 3.3 - t290;
+            let t301: S = shin_p_c22 - t295;
+            let t62: S = shin_v_lin_z * t58;
+            let t63: S = shin_v_lin_x * t55;
+            let t241: S = (-0.38) * t146;
+            let t130: S = 0.024 * t127;
+            let t235: S = t232 + t234;
+            let foot_z_lin_z: S = t123 - t124;
+            let t143: S = t139 + t141;
+            let t147: S = foot_z_lin_y + t142;
+            let t292: S = shin_p_b12 * t257;
+            let t339: S = knee_q_cos * knee_q_cos;
+            let t340: S = knee_q_sin * knee_q_sin;
+            let t342: S = knee_q_sin * knee_q_cos;
+            let t386: S = 0.5 * t301;
+            let t387: S = 0.5 * t296;
+            let t20: S = knee_v * shin_v_lin_z;
+            let t64: S = t62 - t63;
+            let t245: S = t235 + t241;
+            let t148: S = foot_z_lin_z + t143;
+            let t151: S = t130 + t147;
+            let t298: S = -t292;
+            let t341: S = t339 - t340;
+            let t343: S = t342 + t342;
+            let t389: S = t386 - t387;
+            let t22: S = knee_v * shin_v_lin_x;
+            let shin_z_ang_y: S = t64 + t245;
+            let t21: S = -t20;
+            let t227: S = ankle_q_sin * t151;
+            let t230: S = ankle_q_cos * t148;
+            let t390: S = t341 * t389;
+            let t391: S = t298 * t343;
+            let knee_eps: S = knee_tau - shin_z_ang_y;
+            let t65: S = shin_v_ang_y * t55;
+            let t66: S = shin_v_ang_y * t58;
+            let t318: S = t21 * t296;
+            let t320: S = t20 * t292;
+            let t321: S = t22 * t298;
+            let t325: S = t22 * t301;
+            let t231: S = t227 + t230;
+            let t302: S = knee_d_inv * knee_eps;
+            let t388: S = t386 + t387;
+            let t392: S = t390 - t391;
+            let shin_z_lin_x: S = t65 + t146;
+            let shin_z_lin_z: S = t231 - t66;
+            let t322: S = t318 + t321;
+            let t326: S = t320 + t325;
+            let t394: S = t388 - t392;
+            let t306: S = shin_p_b10 * t302;
+            let t308: S = shin_p_b12 * t302;
+            let t330: S = shin_z_lin_x + t322;
+            let t332: S = shin_z_lin_z + t326;
+            let t404: S = (-0.4) * t394;
+            let t336: S = t306 + t330;
+            let t338: S = t308 + t332;
+            let t395: S = t343 * t389;
+            let t396: S = t298 * t341;
+            let t423: S = (-0.4) * t404;
+            let t439: S = knee_q_cos * t336;
+            let t441: S = knee_q_sin * t338;
+            let thigh_p_c02: S = t395 + t396;
+            let thigh_p_a11: S = 0.22000000000000003 + t423;
+            let thigh_z_lin_x: S = t439 + t441;
+            let thigh_p_b12: S = (-0.4) * thigh_p_c02;
+            let hip_d_inv: S = 1.0 / thigh_p_a11;
+            let thigh_a_lin_x: S = (-9.81) * hip_q_sin;
+            let thigh_a_lin_z: S = 9.81 * hip_q_cos;
+            let thigh_p_b10: S = (-0.8) + t404;
+            let t453: S = (-0.4) * thigh_z_lin_x;
+            let t464: S = thigh_p_b10 * thigh_a_lin_x;
+            let t465: S = thigh_p_b12 * thigh_a_lin_z;
+            let thigh_z_ang_y: S = knee_tau + t453;
+            let hip_eps: S = hip_tau - thigh_z_ang_y;
+            let t466: S = t464 + t465;
+            let t467: S = hip_eps - t466;
+            let hip_qdd: S = hip_d_inv * t467;
+            qdd[0] = hip_qdd;
+            let t470: S = 0.4 * hip_qdd;
+            let knee_x_r20: S = -knee_q_sin;
+            let t471: S = thigh_a_lin_x - t470;
+            let t472: S = knee_q_cos * t471;
+            let t473: S = knee_x_r20 * thigh_a_lin_z;
+            let t475: S = knee_q_sin * t471;
+            let t476: S = knee_q_cos * thigh_a_lin_z;
+            let t474: S = t472 + t473;
+            let t477: S = t475 + t476;
+            let shin_a_lin_x: S = t474 - t20;
+            let shin_a_lin_z: S = t22 + t477;
+            let t481: S = shin_p_b10 * shin_a_lin_x;
+            let t482: S = shin_p_b12 * shin_a_lin_z;
+            let t480: S = shin_p_a11 * hip_qdd;
+            let t483: S = t481 + t482;
+            let t484: S = t480 + t483;
+            let t485: S = knee_eps - t484;
+            let knee_qdd: S = knee_d_inv * t485;
+            qdd[1] = knee_qdd;
+            let shin_a_ang_y: S = hip_qdd + knee_qdd;
+            let t492: S = ankle_x_r12 * shin_a_ang_y;
+            let t493: S = ankle_q_sin * shin_a_lin_z;
+            let foot_a_ang_z: S = t492 - t34;
+            let foot_a_lin_y: S = t36 + t493;
+            let t499: S = 0.0012000000000000001 * foot_a_ang_z;
+            let t500: S = 0.024 * foot_a_lin_y;
+            let t501: S = t499 + t500;
+            let t502: S = ankle_eps - t501;
+            let ankle_qdd: S = 367.6470588235294 * t502;
+            qdd[2] = ankle_qdd;
+        }
+    }
     /// Inverse dynamics: `τ = M(q) qdd + C(q, v) + g(q)` (recursive Newton–Euler, unrolled).
     ///
     /// Bodies it computes, in the model's order: `thigh`, `shin`, `foot`.
     #[allow(unused_variables, clippy::all)]
     pub fn rnea(q: &[S; 3], v: &[S; 3], qdd: &[S; 3], tau: &mut [S; 3]) {
+        #[cfg(
+            all(
+                target_arch = "x86_64",
+                target_feature = "sse2",
+                not(target_feature = "avx")
+            )
+        )]
+        if ::embedyn::codegen_support::dispatch::avx() {
+            return unsafe { rnea_avx::rnea(q, v, qdd, tau) };
+        }
         let hip_q: S = q[0];
         let knee_q: S = q[1];
         let ankle_q: S = q[2];
@@ -606,11 +988,227 @@ pub mod f64 {
         let thigh_f_ang_y: S = t45 + t233;
         tau[0] = thigh_f_ang_y;
     }
+    #[cfg(
+        all(target_arch = "x86_64", target_feature = "sse2", not(target_feature = "avx"))
+    )]
+    /// The functions above compiled for `avx` (see `helpers::dispatch`).
+    mod rnea_avx {
+        #[allow(unused_imports)]
+        use super::*;
+        /// Inverse dynamics: `τ = M(q) qdd + C(q, v) + g(q)` (recursive Newton–Euler, unrolled).
+        ///
+        /// Bodies it computes, in the model's order: `thigh`, `shin`, `foot`.
+        #[allow(unused_variables, clippy::all)]
+        #[target_feature(enable = "avx")]
+        pub fn rnea(q: &[S; 3], v: &[S; 3], qdd: &[S; 3], tau: &mut [S; 3]) {
+            let hip_q: S = q[0];
+            let knee_q: S = q[1];
+            let ankle_q: S = q[2];
+            let hip_v: S = v[0];
+            let knee_v: S = v[1];
+            let ankle_v: S = v[2];
+            let hip_qdd: S = qdd[0];
+            let knee_qdd: S = qdd[1];
+            let ankle_qdd: S = qdd[2];
+            let (sin_batch, cos_batch) = ::embedyn::codegen_support::sincos_batch([
+                hip_q,
+                knee_q,
+                ankle_q,
+            ]);
+            let hip_q_sin: S = sin_batch[0];
+            let hip_q_cos: S = cos_batch[0];
+            let knee_q_sin: S = sin_batch[1];
+            let knee_q_cos: S = cos_batch[1];
+            let ankle_q_sin: S = sin_batch[2];
+            let ankle_q_cos: S = cos_batch[2];
+            let thigh_a_lin_x: S = (-9.81) * hip_q_sin;
+            let t58: S = 0.4 * hip_qdd;
+            let t15: S = (-0.4) * hip_v;
+            let thigh_a_lin_z: S = 9.81 * hip_q_cos;
+            let t59: S = thigh_a_lin_x - t58;
+            let shin_v_lin_x: S = knee_q_cos * t15;
+            let shin_v_ang_y: S = hip_v + knee_v;
+            let ankle_x_r12: S = -ankle_q_sin;
+            let t63: S = knee_q_sin * t59;
+            let t64: S = knee_q_cos * thigh_a_lin_z;
+            let shin_v_lin_z: S = knee_q_sin * t15;
+            let t22: S = knee_v * shin_v_lin_x;
+            let t27: S = 0.38 * shin_v_ang_y;
+            let foot_v_ang_y: S = shin_v_ang_y * ankle_q_cos;
+            let foot_v_ang_z: S = shin_v_ang_y * ankle_x_r12;
+            let t65: S = t63 + t64;
+            let shin_a_ang_y: S = hip_qdd + knee_qdd;
+            let knee_x_r20: S = -knee_q_sin;
+            let foot_v_lin_y: S = shin_v_lin_z * ankle_q_sin;
+            let foot_v_lin_z: S = shin_v_lin_z * ankle_q_cos;
+            let foot_v_lin_x: S = shin_v_lin_x - t27;
+            let t34: S = ankle_v * foot_v_ang_y;
+            let shin_a_lin_z: S = t22 + t65;
+            let t98: S = ankle_x_r12 * shin_a_ang_y;
+            let t154: S = (-0.024) * ankle_v;
+            let t155: S = 0.04000000000000001 * foot_v_ang_z;
+            let t60: S = knee_q_cos * t59;
+            let t61: S = knee_x_r20 * thigh_a_lin_z;
+            let t33: S = ankle_v * foot_v_ang_z;
+            let t36: S = ankle_v * foot_v_lin_z;
+            let t37: S = ankle_v * foot_v_lin_y;
+            let t97: S = ankle_q_cos * shin_a_ang_y;
+            let t99: S = ankle_q_sin * shin_a_lin_z;
+            let t100: S = ankle_q_cos * shin_a_lin_z;
+            let t149: S = 0.8 * foot_v_lin_x;
+            let t150: S = 0.8 * foot_v_lin_y;
+            let t151: S = 0.8 * foot_v_lin_z;
+            let t153: S = 0.024 * foot_v_ang_y;
+            let t157: S = 0.04000000000000001 * foot_v_ang_y;
+            let foot_a_ang_z: S = t98 - t34;
+            let t156: S = t154 - t155;
+            let t20: S = knee_v * shin_v_lin_z;
+            let t133: S = 0.00272 * ankle_v;
+            let t134: S = 0.0012000000000000001 * ankle_v;
+            let t136: S = 0.0012000000000000001 * foot_v_ang_z;
+            let t138: S = 0.006 * foot_v_ang_z;
+            let t142: S = (-0.024) * foot_v_lin_x;
+            let t143: S = 0.04000000000000001 * foot_v_lin_z;
+            let t62: S = t60 + t61;
+            let foot_a_ang_y: S = t33 + t97;
+            let foot_a_lin_y: S = t36 + t99;
+            let foot_a_lin_z: S = t100 - t37;
+            let t126: S = (-0.024) * ankle_qdd;
+            let t127: S = 0.04000000000000001 * foot_a_ang_z;
+            let t158: S = t149 - t153;
+            let t159: S = t150 - t156;
+            let t160: S = t151 - t157;
+            let t95: S = 0.38 * shin_a_ang_y;
+            let t135: S = 0.00672 * foot_v_ang_y;
+            let t141: S = 0.024 * foot_v_lin_y;
+            let t145: S = 0.04000000000000001 * foot_v_lin_y;
+            let shin_a_lin_x: S = t62 - t20;
+            let t137: S = t133 + t136;
+            let t139: S = t134 + t138;
+            let t144: S = t142 - t143;
+            let t122: S = 0.8 * foot_a_lin_y;
+            let t123: S = 0.8 * foot_a_lin_z;
+            let t129: S = 0.04000000000000001 * foot_a_ang_y;
+            let t185: S = foot_v_ang_z * t158;
+            let t186: S = ankle_v * t160;
+            let t188: S = ankle_v * t159;
+            let t189: S = foot_v_ang_y * t158;
+            let t128: S = t126 - t127;
+            let foot_a_lin_x: S = shin_a_lin_x - t95;
+            let t146: S = t137 + t141;
+            let t147: S = t135 + t144;
+            let t148: S = t139 + t145;
+            let t80: S = 2.5 * shin_v_lin_x;
+            let t83: S = 0.44999999999999996 * shin_v_ang_y;
+            let t131: S = t122 - t128;
+            let t132: S = t123 - t129;
+            let t187: S = t185 - t186;
+            let t190: S = t188 - t189;
+            let t106: S = 0.0012000000000000001 * ankle_qdd;
+            let t110: S = 0.006 * foot_a_ang_z;
+            let t114: S = (-0.024) * foot_a_lin_x;
+            let t115: S = 0.04000000000000001 * foot_a_lin_z;
+            let t164: S = foot_v_ang_z * t146;
+            let t165: S = ankle_v * t148;
+            let t167: S = ankle_v * t147;
+            let t168: S = foot_v_ang_y * t146;
+            let t173: S = foot_v_lin_z * t158;
+            let t174: S = foot_v_lin_x * t160;
+            let t176: S = foot_v_lin_x * t159;
+            let t177: S = foot_v_lin_y * t158;
+            let t81: S = 2.5 * shin_v_lin_z;
+            let t72: S = 2.5 * shin_a_lin_x;
+            let t75: S = 0.44999999999999996 * shin_a_ang_y;
+            let t84: S = t80 - t83;
+            let t121: S = 0.8 * foot_a_lin_x;
+            let t125: S = 0.024 * foot_a_ang_y;
+            let t182: S = foot_v_ang_y * t160;
+            let t183: S = foot_v_ang_z * t159;
+            let foot_f_lin_y: S = t131 + t187;
+            let foot_f_lin_z: S = t132 + t190;
+            let t107: S = 0.00672 * foot_a_ang_y;
+            let t117: S = 0.04000000000000001 * foot_a_lin_y;
+            let t111: S = t106 + t110;
+            let t116: S = t114 - t115;
+            let t166: S = t164 - t165;
+            let t169: S = t167 - t168;
+            let t175: S = t173 - t174;
+            let t178: S = t176 - t177;
+            let t73: S = 2.5 * shin_a_lin_z;
+            let t88: S = shin_v_ang_y * t81;
+            let t89: S = shin_v_ang_y * t84;
+            let t198: S = ankle_q_sin * foot_f_lin_y;
+            let t201: S = ankle_q_cos * foot_f_lin_z;
+            let t76: S = t72 - t75;
+            let t130: S = t121 - t125;
+            let t184: S = t182 - t183;
+            let t119: S = t107 + t116;
+            let t120: S = t111 + t117;
+            let t180: S = t166 + t175;
+            let t181: S = t169 + t178;
+            let t92: S = t76 + t88;
+            let t93: S = t73 - t89;
+            let foot_f_lin_x: S = t130 + t184;
+            let t202: S = t198 + t201;
+            let foot_f_ang_y: S = t119 + t180;
+            let foot_f_ang_z: S = t120 + t181;
+            let shin_f_lin_x: S = t92 + foot_f_lin_x;
+            let shin_f_lin_z: S = t93 + t202;
+            let t69: S = 0.11099999999999999 * shin_a_ang_y;
+            let t70: S = (-0.44999999999999996) * shin_a_lin_x;
+            let t85: S = shin_v_lin_z * t84;
+            let t86: S = shin_v_lin_x * t81;
+            let t203: S = ankle_q_cos * foot_f_ang_y;
+            let t205: S = ankle_x_r12 * foot_f_ang_z;
+            let t217: S = knee_q_cos * shin_f_lin_x;
+            let t219: S = knee_q_sin * shin_f_lin_z;
+            let t211: S = (-0.38) * foot_f_lin_x;
+            let t71: S = t69 + t70;
+            let t87: S = t85 - t86;
+            let t206: S = t203 + t205;
+            let t105: S = 0.00272 * ankle_qdd;
+            let t108: S = 0.0012000000000000001 * foot_a_ang_z;
+            let t161: S = foot_v_ang_y * t148;
+            let t162: S = foot_v_ang_z * t147;
+            let t170: S = foot_v_lin_y * t160;
+            let t171: S = foot_v_lin_z * t159;
+            let t220: S = t217 + t219;
+            let t91: S = t71 + t87;
+            let t213: S = t206 + t211;
+            let t43: S = 0.22000000000000003 * hip_qdd;
+            let t44: S = (-0.8) * thigh_a_lin_x;
+            let t113: S = 0.024 * foot_a_lin_y;
+            let t231: S = (-0.4) * t220;
+            let t109: S = t105 + t108;
+            let t163: S = t161 - t162;
+            let t172: S = t170 - t171;
+            let shin_f_ang_y: S = t91 + t213;
+            tau[1] = shin_f_ang_y;
+            let t45: S = t43 + t44;
+            let t118: S = t109 + t113;
+            let t179: S = t163 + t172;
+            let t233: S = shin_f_ang_y + t231;
+            let foot_f_ang_x: S = t118 + t179;
+            tau[2] = foot_f_ang_x;
+            let thigh_f_ang_y: S = t45 + t233;
+            tau[0] = thigh_f_ang_y;
+        }
+    }
     /// The joint-space mass matrix `M(q)` (composite-rigid-body algorithm, unrolled).
     ///
     /// Bodies it computes, in the model's order: `thigh`, `shin`.
     #[allow(unused_variables, clippy::all)]
     pub fn crba(q: &[S; 3], m: &mut [[S; 3]; 3]) {
+        #[cfg(
+            all(
+                target_arch = "x86_64",
+                target_feature = "sse2",
+                not(target_feature = "avx")
+            )
+        )]
+        if ::embedyn::codegen_support::dispatch::avx() {
+            return unsafe { crba_avx::crba(q, m) };
+        }
         let knee_q: S = q[1];
         let ankle_q: S = q[2];
         let (sin_batch, cos_batch) = ::embedyn::codegen_support::sincos_batch([
@@ -658,5 +1256,67 @@ pub mod f64 {
         m[0][1] = t126;
         m[1][0] = t126;
         m[2][2] = 0.00272;
+    }
+    #[cfg(
+        all(target_arch = "x86_64", target_feature = "sse2", not(target_feature = "avx"))
+    )]
+    /// The functions above compiled for `avx` (see `helpers::dispatch`).
+    mod crba_avx {
+        #[allow(unused_imports)]
+        use super::*;
+        /// The joint-space mass matrix `M(q)` (composite-rigid-body algorithm, unrolled).
+        ///
+        /// Bodies it computes, in the model's order: `thigh`, `shin`.
+        #[allow(unused_variables, clippy::all)]
+        #[target_feature(enable = "avx")]
+        pub fn crba(q: &[S; 3], m: &mut [[S; 3]; 3]) {
+            let knee_q: S = q[1];
+            let ankle_q: S = q[2];
+            let (sin_batch, cos_batch) = ::embedyn::codegen_support::sincos_batch([
+                knee_q,
+                ankle_q,
+            ]);
+            let knee_q_sin: S = sin_batch[0];
+            let knee_q_cos: S = cos_batch[0];
+            let ankle_q_sin: S = sin_batch[1];
+            let ankle_q_cos: S = cos_batch[1];
+            let t13: S = (-0.024) * ankle_q_cos;
+            let t45: S = (-0.30400000000000005) + t13;
+            let t26: S = ankle_q_cos * ankle_q_cos;
+            let t27: S = ankle_q_sin * ankle_q_sin;
+            let shin_ic_hz: S = (-0.44999999999999996) + t45;
+            let t71: S = (-0.04000000000000001) * knee_q_sin;
+            let t74: S = knee_q_cos * shin_ic_hz;
+            let t17: S = t13 + t13;
+            let t28: S = t26 - t27;
+            let t18: S = (-0.30400000000000005) + t17;
+            let t31: S = 0.0003600000000000001 * t28;
+            let t75: S = t71 + t74;
+            let t19: S = (-0.38) * t18;
+            let t78: S = t75 + t75;
+            let t12: S = 0.024 * ankle_q_sin;
+            let t32: S = 0.00636 + t31;
+            let t79: S = (-1.32) + t78;
+            let t41: S = t19 + t32;
+            let t57: S = knee_q_sin * t12;
+            let t80: S = (-0.4) * t79;
+            let shin_ic_i11: S = 0.11099999999999999 + t41;
+            m[1][1] = shin_ic_i11;
+            let t36: S = (-0.0012000000000000001) * ankle_q_sin;
+            m[1][2] = t36;
+            m[2][1] = t36;
+            let t67: S = (-0.4) * t57;
+            let t125: S = (-0.4) * t75;
+            let t110: S = shin_ic_i11 + t80;
+            let t69: S = t36 + t67;
+            m[0][2] = t69;
+            m[2][0] = t69;
+            let thigh_ic_i11: S = 0.22000000000000003 + t110;
+            m[0][0] = thigh_ic_i11;
+            let t126: S = shin_ic_i11 + t125;
+            m[0][1] = t126;
+            m[1][0] = t126;
+            m[2][2] = 0.00272;
+        }
     }
 }
