@@ -42,12 +42,12 @@ pub const TWIN_MAX_STATEMENTS: usize = 25_000;
 /// `AvxTwins::Large` ([`AvxTwins::small_twins`]): such functions gain from a twin too (2026-12-04, an AMD
 /// EPYC host, the same code with and without its twin in one binary: the floating ANYmal B's `aba`, 2.3k
 /// statements, 0.67× the time, `rnea` 0.78×, `crba` 0.80×; the Z1's `aba` 0.94×, `crba` 0.88×; the
-/// floating G1's `crba` 0.82× and `rnea` 0.76×), but each twin costs compile time, and with AVX more
-/// than the baseline copy (LLVM's SLP vectorizer, which buys those twins nothing, takes 0.57 of their
-/// compile time there: G1 `crba` and `rnea` 3.9 s of user time with it off, 6.7 s on). A robot with a
-/// few thousand statements per function gets every function twinned at about a second's compile time;
-/// the humanoids' `crba` and `rnea` (2.2k to 3.8k each, beside a twinned 6.3k `aba`) would take the
-/// crates over issue 13's 10 s budget and keep their one copy.
+/// floating G1's `crba` 0.82× and `rnea` 0.76×), but each twin costs compile time. A robot with a few
+/// thousand statements per function gets every function twinned at about a second's compile time; the
+/// humanoids' `crba` and `rnea` (2.2k to 3.8k each, beside a twinned 6.3k `aba`) keep their one copy:
+/// their twins took the default crates from 5.9–7.0 to 7.5–8.1 s (G1) and from 6.6–7.7 to 7.9–10.5 s
+/// (TALOS; three interleaved rounds, 2 cores), against issue 13's budget of 10 s (`avx_twins = all`
+/// gives them).
 pub const TWIN_BUDGET_STATEMENTS: usize = 8_000;
 
 /// Which generated functions get an AVX twin (macro `avx_twins = none|large|all`, `embedyn generate
