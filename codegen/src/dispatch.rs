@@ -15,7 +15,7 @@
 //! itself (`-C target-cpu=native`) compiles the twin out. Other architectures never see it. The twin
 //! costs compile time (its code is optimized twice), so functions of at least `TWIN_MIN_STATEMENTS`
 //! statements get one, and smaller ones only under a budget shared by the module
-//! (`TWIN_BUDGET_STATEMENTS`, largest first): their gain depends on the CPU (nil for the Z1's `aba`,
+//! (`TWIN_BUDGET_STATEMENTS`, smallest first): their gain depends on the CPU (nil for the Z1's `aba`,
 //! 1.8k operations, on one Xeon; 0.67× the time for the floating ANYmal B's, 2.3k, on an AMD EPYC).
 //!
 //! A lane module of 256-bit values gives its functions two twins (`TwinOf::Lanes`, [`AVX512`] then
@@ -43,12 +43,13 @@ pub const TWIN_MAX_STATEMENTS: usize = 25_000;
 /// EPYC host, the same code with and without its twin in one binary: the floating ANYmal B's `aba`, 2.3k
 /// statements, 0.67× the time, `rnea` 0.78×, `crba` 0.80×; the Z1's `aba` 0.94×, `crba` 0.88×; the
 /// floating G1's `crba` 0.82× and `rnea` 0.76×), but each twin costs compile time. A robot with a few
-/// thousand statements per function gets every function twinned at about a second's compile time; the
-/// humanoids' `crba` and `rnea` (2.2k to 3.8k each, beside a twinned 6.3k `aba`) keep their one copy:
-/// their twins took the default crates from 5.9–7.0 to 7.5–8.1 s (G1) and from 6.6–7.7 to 7.9–10.5 s
-/// (TALOS; three interleaved rounds, 2 cores), against issue 13's budget of 10 s (`avx_twins = all`
-/// gives them).
-pub const TWIN_BUDGET_STATEMENTS: usize = 8_000;
+/// thousand statements per function gets every function twinned at about a second's compile time; a
+/// humanoid, beside its twinned 6.3k `aba`, its `kinematics` and `crba` (2.2k–2.4k; the G1's default
+/// crate 6.1–7.5 → 7.7–8.5 s, TALOS's 6.9–7.1 → 7.4–9.8 s, three interleaved rounds on 2 cores) but not
+/// its `rnea` (3.4k–3.8k), whose twin as well took TALOS's crate to 10.5 s in one round of three, over
+/// issue 13's budget of 10 s. Smallest first: the most functions the budget holds (a twin's gain and its
+/// compile time both grow about with the function's size).
+pub const TWIN_BUDGET_STATEMENTS: usize = 10_000;
 
 /// Which generated functions get an AVX twin (macro `avx_twins = none|large|all`, `embedyn generate
 /// --avx-twins none|large|all`).
@@ -57,7 +58,7 @@ pub enum AvxTwins {
     /// None: one copy of every function, half the compile time of the large ones.
     None,
     /// The `f64` functions of `TWIN_MIN_STATEMENTS` to `TWIN_MAX_STATEMENTS` statements, and smaller
-    /// ones, largest first, while the module's twins total at most `TWIN_BUDGET_STATEMENTS` (the
+    /// ones, smallest first, while the module's twins total at most `TWIN_BUDGET_STATEMENTS` (the
     /// default; [`AvxTwins::small_twins`]).
     #[default]
     Large,
@@ -88,8 +89,8 @@ impl AvxTwins {
 
     /// The functions below [`TWIN_MIN_STATEMENTS`] that also get a twin (`Large` only), by index: given
     /// every f64 function's `statements` and whether it has a twin by [`AvxTwins::twins`], the others
-    /// largest first, each while the module's twins (the large ones included) stay within
-    /// [`TWIN_BUDGET_STATEMENTS`]: the larger a function, the more its twin saves per call.
+    /// smallest first, while the module's twins (the large ones included) stay within
+    /// [`TWIN_BUDGET_STATEMENTS`]: as many functions as the budget holds.
     pub fn small_twins(self, statements: &[usize], twinned: &[bool]) -> Vec<usize> {
         if self != AvxTwins::Large {
             return Vec::new();
@@ -103,8 +104,8 @@ impl AvxTwins {
         let mut candidates: Vec<usize> = (0..statements.len())
             .filter(|&k| !twinned[k] && statements[k] < TWIN_MIN_STATEMENTS)
             .collect();
-        // Largest first; equal sizes in the module's order.
-        candidates.sort_by_key(|&k| (core::cmp::Reverse(statements[k]), k));
+        // Smallest first; equal sizes in the module's order.
+        candidates.sort_by_key(|&k| (statements[k], k));
         let mut chosen = Vec::new();
         for k in candidates {
             if total + statements[k] <= TWIN_BUDGET_STATEMENTS {
@@ -505,13 +506,12 @@ mod tests {
         quote!(crate::helpers)
     }
 
-    /// Below `TWIN_MIN_STATEMENTS`, twins go to the largest functions first while the module's twins
-    /// (the large ones counted) fit the budget; a function too large for what is left is skipped for
-    /// smaller ones; only `Large` gives them.
+    /// Below `TWIN_MIN_STATEMENTS`, twins go to the smallest functions first while the module's twins
+    /// (the large ones counted) fit the budget; only `Large` gives them.
     #[test]
-    fn small_functions_share_a_budget_of_twins_largest_first() {
-        let large = TWIN_MIN_STATEMENTS + 1;
-        // A robot with 2.3k, 1.3k, 600 and 400 statements: all of them.
+    fn small_functions_share_a_budget_of_twins_smallest_first() {
+        assert_eq!(TWIN_BUDGET_STATEMENTS, 10_000);
+        // A quadruped with 400, 2.3k, 1.3k and 600 statements: all of them.
         let quadruped = [400, 2_300, 1_300, 600];
         assert_eq!(
             AvxTwins::Large.small_twins(&quadruped, &[false; 4]),
@@ -523,26 +523,24 @@ mod tests {
         assert!(AvxTwins::All
             .small_twins(&quadruped, &[false; 4])
             .is_empty());
-        // A humanoid: a twinned `aba` of 6.3k leaves 1.7k, which `rnea` (3.4k) and `crba` (2.4k) do not
-        // fit and `kinematics` (800) does.
+        // A humanoid: beside a twinned `aba` of 6.3k, `kinematics` (800) and `crba` (2.4k) fit, `rnea`
+        // (3.4k) no longer does.
         let humanoid = [800, 6_300, 3_400, 2_400];
         assert_eq!(
             AvxTwins::Large.small_twins(&humanoid, &[false, true, false, false]),
-            vec![0]
+            vec![0, 3]
         );
-        // Largest first, skipping what no longer fits: of 3.5k, 3k, 1.6k and 300 under 8k, the 1.6k
-        // does not fit after the first two, the 300 does.
-        assert_eq!(TWIN_BUDGET_STATEMENTS, 8_000);
+        // Equal sizes in the module's order: of two 3.9k functions after 300 and 3k, the first fits.
         assert_eq!(
-            AvxTwins::Large.small_twins(&[3_000, 3_500, 1_600, 300], &[false; 4]),
-            vec![0, 1, 3]
+            AvxTwins::Large.small_twins(&[3_900, 3_900, 3_000, 300], &[false; 4]),
+            vec![0, 2, 3]
         );
         // A large function alone over the budget leaves nothing; one twinned by size is not chosen again.
         assert!(AvxTwins::Large
             .small_twins(&[TWIN_BUDGET_STATEMENTS + 1, 10], &[true, false])
             .is_empty());
         assert_eq!(
-            AvxTwins::Large.small_twins(&[large, 10], &[true, false]),
+            AvxTwins::Large.small_twins(&[TWIN_MIN_STATEMENTS + 1, 10], &[true, false]),
             vec![1]
         );
     }
