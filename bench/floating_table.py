@@ -23,8 +23,9 @@ def main():
         "the two sides alternate, model by model, for each round; the times are the medians over rounds, the "
         "ranges their spread, the ratio the median of the rounds' ratios. Ours through `embedyn bench --floating "
         "--json` (the generated code built for the baseline x86-64 target and timed in-process on random "
-        "states; on this CPU, which has AVX, its f64 functions of 4,000 to 25,000 statements — here the humanoids' "
-        "`aba` — and every batch of 24 or more sines and cosines run their AVX copies, the same bits: "
+        "states; on this CPU, which has AVX, its f64 functions with AVX twins — 4,000 to 25,000 statements, and "
+        "smaller ones under a budget per module: here all of ANYmal B's, the humanoids' `aba` and `crba` — and "
+        "every batch of 24 or more sines and cosines run their AVX copies, the same bits: "
         "docs/generated-code.md, \"AVX where the CPU has it\"), Pinocchio's through `pinocchio_bench --floating` "
         "(g++ -O3, no `-march=native`, as its PyPI wheel is built; compiled with `-mavx` against the wheel's "
         "prebuilt URDF parser it crashes in the model's destructor, Eigen's layouts differing). Issue 13's "
@@ -70,12 +71,22 @@ def main():
                 f"| {model} | {statistics.median(ours):,.0f} | {statistics.median(pin):,.0f} | {spread(pin)} | "
                 f"{statistics.median(ratios):.2f} | {min(ratios):.2f}–{max(ratios):.2f} |"
             )
+    # Hand-written notes on the runs (kept here so that a rerun keeps them).
+    lines += [
+        "",
+        "2026-12-04, this run: on this host (an AMD EPYC, where every generated function ran slower against Pinocchio than on the Xeon of the day before: in the same script without the change below, ANYmal B `aba`/`rnea`/`crba` 0.13/0.10/0.16, TALOS 0.12/0.28/0.24, G1 0.13/0.19/0.32) the AVX twins paid at every size, so functions below 4,000 statements now get them too under a budget per module (docs/generated-code.md, \"AVX where the CPU has it\": smallest first while the module's twins total at most 10,000 statements). The floating ANYmal B's four default functions and the humanoids' `kinematics` and `crba` got twins (the humanoids' `rnea` would take TALOS's crate over 10 s of compile time). In one binary with the twins on and off (`dispatch::use_avx`, five interleaved rounds, minimum of 30 batches each, ns): ANYmal B `aba` 515 → 344, `rnea` 213 → 165, `crba` 143 → 114; TALOS `crba` 693 → 555 (and `rnea` 1,002 → 725 with `avx_twins = all`); G1 `crba` 680 → 557 (`rnea` 834 → 632 with `all`); Z1 `aba` 266 → 251, `crba` 97 → 86. The G1's `crba` stays above the target here (0.25; 0.23 against Pinocchio's `crba` plus the lower triangle), TALOS's at 0.21 (0.20). Cutting the G1's twinned `crba` (in one binary, output no longer valid): without its 594 stores of the upper triangle it took 437 ns against 560. The code is bound by its instructions (about 4,000 in the twin, straight-line, beyond the op cache), not by its arithmetic.",
+        "",
+        "2026-12-04 (the run before this one, on another host): after the fix of the sine/cosine batch (a release-build miscompilation of its quadrant, CHANGELOG; the quadrant now stays a float). In one binary against the code before the fix (three interleaved rounds, ns): floating ANYmal B `crba` 116 → 120, `aba` 310 → 314, `rnea` 165 → 168; G1 with its AVX sine/cosine copy `crba` 377–383 → 377–381, `aba` 768–776 → 785–795, `rnea` 415–427 → 428–433. The first fix, `k as i64`, gave ANYmal B `crba` 113, `rnea` 172 and G1 `crba` 391–395. Against the table of 2026-12-03 (ANYmal B `crba` 109, TALOS 394, G1 386) the rest is this host's drift between runs; the humanoids' `crba` stays at 0.22–0.23 (0.20 against Pinocchio's `crba` plus the lower triangle).",
+        "",
+        "Body origins on the joint axes (`aba` and `crba` traced on `Model::with_origins_on_joint_axes`, docs/generated-code.md; 2026-12-03, this host, standalone crates of `aba`, `rnea`, `crba` with the default twins built from the commit before and after, one binary each, three interleaved rounds, ns per call): floating ANYmal B `crba` 125–129 → 112–119, `aba` 317–325 → 309–311; TALOS `crba` 404–419 → 392–406 (one round 439), `aba` 794–801 → 775–789; G1 `crba` 379–402 → 377–386, `aba` 807–831 → 768–770; `rnea` unchanged (it stays on the file's frames: traced on moved origins, the G1's ran 1.09× the time with 0.5 % fewer operations, its second part spilling 1,033 times to the stack against 428). `aba_derivatives` (default build): floating ANYmal B 3,644 → 3,540, Z1 1,876 → 1,883. The run of 2026-12-03 after this change had the humanoids' `crba` above 0.2 (G1 0.23, TALOS 0.21; against Pinocchio's `crba` plus the lower triangle 0.21 and 0.19). Tried on the G1's `crba` and counted: all quantities in the root body's frame, Pinocchio's way (dots with world-frame axes instead of a force transform per ancestor): 4,416 statements against 2,953, 1.4× the time.",
+    ]
     lines += [
         "",
         "AVX twins against the baseline copies, in one binary (`helpers::dispatch::use_avx` switched between 9 "
         "interleaved rounds, 2026-12-03; the same bits): the floating G1's `aba` 1,030 against 1,854 ns (0.56×; "
         "TALOS's 0.53× in a build with and one without AVX), `rnea` 0.92× and `crba` 0.97× (these two have no twin: "
-        "below 4,000 statements; they gain only the sines and cosines' AVX copy). The baseline copy of the "
+        "below 4,000 statements; they gained only the sines and cosines' AVX copy; since 2026-12-04 `crba` has "
+        "one, above). The baseline copy of the "
         "humanoids' `aba` runs 13.5k instructions of which 5.5k are register copies (SSE2 overwrites an operand); "
         "the AVX copy needs none of them. Before the twins, and before `crba` zeroed M whole instead of storing "
         "its 762 zeros one by one (TALOS: 0.9× the time), the ratios were `aba` 0.24–0.25, `crba` 0.25–0.27 "
@@ -116,7 +127,7 @@ def main():
         "one binary, output no longer valid): without the 703 stores of the upper triangle it takes 0.84× the time, "
         "with only the diagonal (the composite inertias and the 32 sines and cosines, which alone take about 90 ns) "
         "0.44×. So the columns and their stores cost about half; the 0.2 target for the humanoids' `crba` and `aba` "
-        "on this host needs fewer bytes of code per operation (spills, copies, stores), not fewer operations. The AVX twins are that for `aba` (above); `crba`, below 4,000 statements, has none: its twin measured 0.93× the time (TALOS, a build with AVX against one without), which would leave the G1 at about 0.205, and would take the G1's default functions from 8.1 to about 9.6 s of issue 13's 10 s compile budget.",
+        "on this host needs fewer bytes of code per operation (spills, copies, stores), not fewer operations. The AVX twins are that for `aba` (above); `crba`'s twin measured 0.93× the time on that host (TALOS, a build with AVX against one without) and has been given since 2026-12-04 (above).",
     ]
     write_section("\n".join(lines) + "\n")
 
