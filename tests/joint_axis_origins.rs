@@ -166,3 +166,57 @@ fn a_tilted_axis_keeps_its_origin_and_a_coordinate_axis_moves_exactly() {
     assert_eq!(exact, 500_000.0);
     assert_eq!(traced, exact);
 }
+
+/// A chain of 20,000 bodies, in a thread with a 2 MB stack (a spawned thread's default): the search for
+/// the moves keeps its own stack (it recursed once per body and overflowed from about 10,000 bodies), and
+/// the moved chain has the original's forward dynamics.
+#[test]
+fn a_chain_of_twenty_thousand_bodies_moves_its_origins_on_a_small_stack() {
+    use embedyn::nalgebra::{Matrix3, Vector3};
+    use embedyn::{JointType, SpatialInertia, Transform};
+    let worker = std::thread::Builder::new().stack_size(2 << 20).spawn(|| {
+        let n = 20_000;
+        let mut b = Model::<f64>::builder("chain");
+        let inertia = SpatialInertia::from_com(
+            1.0,
+            Vector3::new(0.0, 0.0, 0.05),
+            Matrix3::identity() * 1e-2,
+        );
+        let mut parent = None;
+        for i in 0..n {
+            let axis = [Vector3::x(), Vector3::y(), Vector3::z()][i % 3];
+            let placement = Transform::new(Matrix3::identity(), Vector3::new(0.01, 0.02, 0.1));
+            let link = format!("l{i}");
+            let body = format!("b{i}");
+            let id = b
+                .add_body(
+                    parent,
+                    &link,
+                    JointType::Revolute,
+                    axis,
+                    placement,
+                    &body,
+                    inertia,
+                )
+                .unwrap();
+            parent = Some(id);
+        }
+        let model = b.build().unwrap();
+        let moved = model.with_origins_on_joint_axes();
+        // Each joint's translation has a component along its axis, which the move cancels.
+        assert!(moved.weighted_translation_zeros() > model.weighted_translation_zeros());
+        let mut rng = Rng::new(20_000);
+        let q = rng.configuration(&model);
+        let v = rng.vec(model.nv(), -0.1, 0.1);
+        let tau = rng.vec(model.nv(), -1.0, 1.0);
+        let (mut a, mut b) = (Workspace::new(&model), Workspace::new(&moved));
+        let original = aba(&model, &mut a, &q, &v, &tau).unwrap().to_vec();
+        let shifted = aba(&moved, &mut b, &q, &v, &tau).unwrap().to_vec();
+        relative(&original, &shifted)
+    });
+    let difference = worker.unwrap().join().unwrap();
+    assert!(
+        difference < 1e-9,
+        "moved chain's aba differs by {difference:e}"
+    );
+}

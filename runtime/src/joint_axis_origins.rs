@@ -176,34 +176,112 @@ struct ShiftSearch<'m, T: Real> {
 impl<T: Real> ShiftSearch<'_, T> {
     /// The most weighted zeros in the translations of body `i`'s joint and of its subtree's, and the move
     /// of `i` that gives them, when `i`'s parent moved by `parent_shift`.
+    ///
+    /// A depth-first search with its own stack instead of recursion: a chain of ten thousand bodies
+    /// overflowed the 2 MB stack of a spawned thread one call per body deep (a regression test holds it).
     fn best_move(&mut self, i: usize, parent_shift: &Vector3<f64>) -> (usize, f64) {
-        let key = (i, parent_shift.map(f64::to_bits).into());
-        if let Some(found) = self.best.get(&key) {
+        if let Some(found) = self.best.get(&Self::key(i, parent_shift)) {
             return *found;
         }
-        let axis = self.model.joints[i].axis.map(|x| x.to_f64());
-        let weight = self.model.crossings(i);
-        // The list is borrowed for `'m`, not from `self`, so the recursion below may take `&mut self`.
-        let children = self.children;
-        let mut best = (0, 0.0);
-        for (k, (t, zeros)) in self
-            .model
-            .axis_moves(i, parent_shift)
-            .into_iter()
-            .enumerate()
-        {
-            let shift = axis * t;
-            let total = zeros * weight
-                + children[i]
-                    .iter()
-                    .map(|&c| self.best_move(c, &shift).0)
-                    .sum::<usize>();
-            // `t = 0` first, and a move must do better to be taken.
-            if k == 0 || total > best.0 {
-                best = (total, t);
+        let mut stack = vec![self.visit(i, parent_shift)];
+        // What the search of the frame just popped found, for the frame below it.
+        let mut returned: Option<usize> = None;
+        loop {
+            let frame = stack
+                .last_mut()
+                .expect("the search returns when its stack empties");
+            if let Some(zeros) = returned.take() {
+                frame.total += zeros;
+                frame.child += 1;
+            }
+            // Advance through the moves and, for each, the children's best, until a child's best is not
+            // remembered yet (searched next) or every move is counted.
+            let mut descend = None;
+            while frame.k < frame.moves.len() {
+                let children = &self.children[frame.body];
+                if frame.child < children.len() {
+                    let c = children[frame.child];
+                    match self.best.get(&Self::key(c, &frame.shift)) {
+                        Some(found) => {
+                            frame.total += found.0;
+                            frame.child += 1;
+                        }
+                        None => {
+                            descend = Some((c, frame.shift));
+                            break;
+                        }
+                    }
+                    continue;
+                }
+                // Every child counted for move `k`: `t = 0` first, and a move must do better to be taken.
+                let t = frame.moves[frame.k].0;
+                if frame.k == 0 || frame.total > frame.found.0 {
+                    frame.found = (frame.total, t);
+                }
+                frame.k += 1;
+                if frame.k < frame.moves.len() {
+                    self.start_move(frame);
+                }
+            }
+            if let Some((c, shift)) = descend {
+                let next = self.visit(c, &shift);
+                stack.push(next);
+                continue;
+            }
+            let done = stack.pop().expect("a frame was on the stack");
+            self.best
+                .insert(Self::key(done.body, &done.parent_shift), done.found);
+            match stack.is_empty() {
+                true => return done.found,
+                false => returned = Some(done.found.0),
             }
         }
-        self.best.insert(key, best);
-        best
     }
+
+    /// The memo's key of body `i` under its parent's move.
+    fn key(i: usize, parent_shift: &Vector3<f64>) -> (usize, [u64; 3]) {
+        (i, parent_shift.map(f64::to_bits).into())
+    }
+
+    /// A new frame of the search for body `i` under its parent's move, at its first move.
+    fn visit(&self, i: usize, parent_shift: &Vector3<f64>) -> SearchFrame {
+        let mut frame = SearchFrame {
+            body: i,
+            parent_shift: *parent_shift,
+            moves: self.model.axis_moves(i, parent_shift),
+            k: 0,
+            child: 0,
+            shift: Vector3::zeros(),
+            total: 0,
+            found: (0, 0.0),
+        };
+        self.start_move(&mut frame);
+        frame
+    }
+
+    /// Sets `frame` at the start of its move `k`: the body's shift, and its own zeros counted.
+    fn start_move(&self, frame: &mut SearchFrame) {
+        let (t, zeros) = frame.moves[frame.k];
+        frame.shift = self.model.joints[frame.body].axis.map(|x| x.to_f64()) * t;
+        frame.total = zeros * self.model.crossings(frame.body);
+        frame.child = 0;
+    }
+}
+
+/// One body's place in [`ShiftSearch::best_move`]'s search: the move it is at, the child it waits for.
+struct SearchFrame {
+    body: usize,
+    parent_shift: Vector3<f64>,
+    /// `(t, zeros)` of [`Model::axis_moves`], `t = 0` first.
+    moves: Vec<(f64, usize)>,
+    /// The move being counted.
+    k: usize,
+    /// The next child to count for move `k`.
+    child: usize,
+    /// The body's shift for move `k`.
+    shift: Vector3<f64>,
+    /// Weighted zeros of move `k` so far.
+    total: usize,
+    /// The best `(zeros, t)` of the moves counted.
+    found: (usize, f64),
 }
