@@ -51,6 +51,12 @@ pub const TWIN_MAX_STATEMENTS: usize = 25_000;
 /// compile time both grow about with the function's size).
 pub const TWIN_BUDGET_STATEMENTS: usize = 10_000;
 
+/// Statements from which a function below [`TWIN_MIN_STATEMENTS`] may get a twin under the budget: the
+/// smallest measured gain was the Z1's `crba` (466 statements, 0.88× the time); below, a function of a few
+/// operations (`integrate`, a frame function of a fixed link) would only add the dispatch's check, and take
+/// budget that a larger function would use better (a new user's trial).
+pub const TWIN_SMALL_MIN_STATEMENTS: usize = 400;
+
 /// Which generated functions get an AVX twin (macro `avx_twins = none|large|all`, `embedyn generate
 /// --avx-twins none|large|all`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -102,7 +108,10 @@ impl AvxTwins {
             .map(|(&s, _)| s)
             .sum();
         let mut candidates: Vec<usize> = (0..statements.len())
-            .filter(|&k| !twinned[k] && statements[k] < TWIN_MIN_STATEMENTS)
+            .filter(|&k| {
+                !twinned[k]
+                    && (TWIN_SMALL_MIN_STATEMENTS..TWIN_MIN_STATEMENTS).contains(&statements[k])
+            })
             .collect();
         // Smallest first; equal sizes in the module's order.
         candidates.sort_by_key(|&k| (statements[k], k));
@@ -530,17 +539,23 @@ mod tests {
             AvxTwins::Large.small_twins(&humanoid, &[false, true, false, false]),
             vec![0, 3]
         );
-        // Equal sizes in the module's order: of two 3.9k functions after 300 and 3k, the first fits.
+        // Equal sizes in the module's order: of two 3.9k functions after 500 and 3k, the first fits.
         assert_eq!(
-            AvxTwins::Large.small_twins(&[3_900, 3_900, 3_000, 300], &[false; 4]),
+            AvxTwins::Large.small_twins(&[3_900, 3_900, 3_000, 500], &[false; 4]),
             vec![0, 2, 3]
+        );
+        // Below `TWIN_SMALL_MIN_STATEMENTS` (a few operations: `integrate`, a fixed link's frame), none.
+        assert_eq!(TWIN_SMALL_MIN_STATEMENTS, 400);
+        assert_eq!(
+            AvxTwins::Large.small_twins(&[7, 0, 399, 400, 1_000], &[false; 5]),
+            vec![3, 4]
         );
         // A large function alone over the budget leaves nothing; one twinned by size is not chosen again.
         assert!(AvxTwins::Large
-            .small_twins(&[TWIN_BUDGET_STATEMENTS + 1, 10], &[true, false])
+            .small_twins(&[TWIN_BUDGET_STATEMENTS + 1, 500], &[true, false])
             .is_empty());
         assert_eq!(
-            AvxTwins::Large.small_twins(&[TWIN_MIN_STATEMENTS + 1, 10], &[true, false]),
+            AvxTwins::Large.small_twins(&[TWIN_MIN_STATEMENTS + 1, 500], &[true, false]),
             vec![1]
         );
     }

@@ -64,6 +64,9 @@ pub struct FunctionSize {
     /// Whether tracing stopped at the tape's budget (`tape_budget`): `operations` is then a lower
     /// bound, the nodes recorded when it stopped.
     pub tracing_stopped: bool,
+    /// Whether `compile_bytes` counts an AVX twin of the function (src/dispatch.rs), which
+    /// `avx_twins = none` leaves out.
+    pub twinned: bool,
 }
 
 impl FunctionSize {
@@ -76,6 +79,7 @@ impl FunctionSize {
             compile_bytes: full.nodes as f64 * crate::emit_large::PER_OPERATION / TAPE_SLACK,
             traced: true,
             tracing_stopped: true,
+            twinned: false,
         }
     }
 }
@@ -116,6 +120,7 @@ pub fn predicted(model: &Model<f64>, algorithm: Algorithm) -> FunctionSize {
         compile_bytes: operations * PREDICTED_BYTES_PER_OPERATION,
         traced: false,
         tracing_stopped: false,
+        twinned: false,
     }
 }
 
@@ -307,9 +312,22 @@ fn refusal(functions: &[FunctionSize], scalars: &[&str], memory: f64, limit: u64
                       `robot!`, `GenerateOptions::algorithms` in build.rs); "
             .to_string(),
     };
-    let one_scalar = if scalars.len() > 1 {
-        "generate one scalar type, which halves it (`--scalar f64` for `embedyn generate`, `f64_only` \
-         in `robot!`, `GenerateOptions::f32 = false`); "
+    let twinned = functions.iter().any(|f| f.twinned);
+    // The AVX copies are in the f64 module only: one scalar type halves the rest.
+    let one_scalar = match (scalars.len() > 1, twinned) {
+        (false, _) => "",
+        (true, false) => {
+            "generate one scalar type, which halves it (`--scalar f64` for `embedyn generate`, \
+             `f64_only` in `robot!`, `GenerateOptions::f32 = false`); "
+        }
+        (true, true) => {
+            "generate one scalar type (`--scalar f64` for `embedyn generate`, `f64_only` in \
+             `robot!`, `GenerateOptions::f32 = false`); "
+        }
+    };
+    let twins = if twinned {
+        "leave out the AVX copies of the `f64` functions (`--avx-twins none` for `embedyn generate`, \
+         `avx_twins = none` in `robot!`, `GenerateOptions::avx_twins`); "
     } else {
         ""
     };
@@ -321,10 +339,10 @@ fn refusal(functions: &[FunctionSize], scalars: &[&str], memory: f64, limit: u64
         ((memory / 1024.0).ceil() as u64) * 1024
     };
     // With one function in one scalar module there is nothing to leave out.
-    let remedy = if fewer.is_empty() && one_scalar.is_empty() {
+    let remedy = if fewer.is_empty() && one_scalar.is_empty() && twins.is_empty() {
         "Raise the limit".to_string()
     } else {
-        format!("To shrink it, {fewer}{one_scalar}or raise the limit")
+        format!("To shrink it, {twins}{fewer}{one_scalar}or raise the limit")
     };
     // Stopped tracing counted the tape's values, not the operations that would reach the code: an amount
     // of source is not known then.
