@@ -20,7 +20,7 @@ def main():
         "functions sit in up to 16 modules per function, which rustc optimizes in parallel "
         "(docs/generated-code.md); before that (2026-12-02) g1_29dof took 9.6 s and talos_reduced 8.4 s. "
         "Since 2026-12-04 functions below 4,000 statements get AVX twins under a budget per module "
-        "(docs/generated-code.md, \"AVX where the CPU has it\"): every default function of z1 and the "
+        "(docs/generated-code.md, \"AVX where the CPU has it\"): `aba`, `rnea` and `crba` of z1 and the "
         "quadrupeds, the humanoids' `kinematics` and `crba` besides their `aba`. Before, on the host of "
         "2026-12-03: z1 0.8 s, anymal_b 2.0, go2 2.0, solo12 1.9, g1_29dof 8.2, talos_reduced 8.3.",
         "",

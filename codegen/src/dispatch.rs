@@ -38,7 +38,7 @@ pub const TWIN_MIN_STATEMENTS: usize = 4_000;
 /// compiler's memory, already near the default limit.
 pub const TWIN_MAX_STATEMENTS: usize = 25_000;
 
-/// Statements of the twins a module's functions below [`TWIN_MIN_STATEMENTS`] may share under
+/// Statements of the twins a module's functions below `TWIN_MIN_STATEMENTS` may share under
 /// `AvxTwins::Large` ([`AvxTwins::small_twins`]): such functions gain from a twin too (2026-12-04, an AMD
 /// EPYC host, the same code with and without its twin in one binary: the floating ANYmal B's `aba`, 2.3k
 /// statements, 0.67× the time, `rnea` 0.78×, `crba` 0.80×; the Z1's `aba` 0.94×, `crba` 0.88×; the
@@ -51,7 +51,7 @@ pub const TWIN_MAX_STATEMENTS: usize = 25_000;
 /// compile time both grow about with the function's size).
 pub const TWIN_BUDGET_STATEMENTS: usize = 10_000;
 
-/// Statements from which a function below [`TWIN_MIN_STATEMENTS`] may get a twin under the budget: the
+/// Statements from which a function below `TWIN_MIN_STATEMENTS` may get a twin under the budget: the
 /// smallest measured gain was the Z1's `crba` (466 statements, 0.88× the time); below, a function of a few
 /// operations (`integrate`, a frame function of a fixed link) would only add the dispatch's check, and take
 /// budget that a larger function would use better (a new user's trial).
@@ -93,10 +93,10 @@ impl AvxTwins {
         }
     }
 
-    /// The functions below [`TWIN_MIN_STATEMENTS`] that also get a twin (`Large` only), by index: given
+    /// The functions below `TWIN_MIN_STATEMENTS` that also get a twin (`Large` only), by index: given
     /// every f64 function's `statements` and whether it has a twin by [`AvxTwins::twins`], the others
     /// smallest first, while the module's twins (the large ones included) stay within
-    /// [`TWIN_BUDGET_STATEMENTS`]: as many functions as the budget holds.
+    /// `TWIN_BUDGET_STATEMENTS`: as many functions as the budget holds.
     pub fn small_twins(self, statements: &[usize], twinned: &[bool]) -> Vec<usize> {
         if self != AvxTwins::Large {
             return Vec::new();
