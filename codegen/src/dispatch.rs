@@ -193,6 +193,11 @@ pub const AVX: Level = Level {
 /// Z1's `aba` 313 with AVX, 258 with AVX-512; `rnea` 178 against 164, `crba` 117 against 109; the floating
 /// ANYmal B's `aba` 843 against 826, `crba` 340 against 298. Neither the scalar functions (the same time)
 /// nor AVX2 and FMA (the ANYmal B's `rnea` 1.1× slower, the Z1's `aba` between the two) paid as well.
+/// (The scalar functions on another host, an AMD EPYC of the Zen 4 kind, 2026-12-04: the floating G1's
+/// twins compiled for AVX-512 F and VL instead of AVX took 0.90–0.92× the time, `crba` 546–554 → 489–499
+/// ns, `aba` 1,218–1,227 → 1,120–1,126, `rnea` 597–608 → 548–553, two runs of one binary each. Scalar
+/// functions keep one twin: a second one, for the CPUs with AVX but not AVX-512, would double the twins'
+/// compile time.)
 /// The lane values stay 256 bits wide, but LLVM is free to use 512-bit instructions where it finds
 /// them (an attacker's trial found some, in array copies and the batch of sines and cosines): on CPUs
 /// that lower their clock for those (Skylake-SP-class Xeons), `dispatch::use_avx512(false)` is the way
