@@ -637,7 +637,10 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
         .iter()
         .find_map(|s| crate::dispatch::avx_lane_type(s, options.lanes));
     if !scalars.is_empty() {
-        let instance_algorithms: Vec<Algorithm> = instances.iter().map(|i| i.algorithm).collect();
+        let instance_algorithms: Vec<(Algorithm, &str)> = instances
+            .iter()
+            .map(|i| (i.algorithm, i.name.as_str()))
+            .collect();
         let mut sizes =
             check_size_before_tracing(loaded, &model64, &instance_algorithms, &scalars, options)?;
         // The model some joint-space functions are traced on (fewer operations, the same dynamics;
@@ -673,7 +676,11 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
                 TracedFunction::Emitted(function, lane_function) => (function, lane_function),
                 // Refused on what was counted: no function that long fits the limit.
                 TracedFunction::Stopped(full) => {
-                    sizes[k] = size::FunctionSize::stopped(algo, full);
+                    let name = sizes[k].name.take();
+                    sizes[k] = size::FunctionSize {
+                        name,
+                        ..size::FunctionSize::stopped(algo, full)
+                    };
                     return Err(size::refuse(loaded, &sizes, &scalars, limit.unwrap_or(0)));
                 }
             };
@@ -730,6 +737,7 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
                 traced: true,
                 tracing_stopped: false,
                 twinned: twin.is_some(),
+                name: sizes[k].name.take(),
             };
             // Exact for what is traced: refused as soon as that alone is too large.
             size::check(loaded, &sizes[..=k], &sizes, &scalars, limit, 1.0)?;
@@ -900,7 +908,7 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
 fn check_size_before_tracing(
     loaded: &Loaded,
     model: &Model<f64>,
-    algorithms: &[Algorithm],
+    algorithms: &[(Algorithm, &str)],
     scalars: &[&'static str],
     options: &GenerateOptions,
 ) -> Result<Vec<size::FunctionSize>, LoadError> {
@@ -912,9 +920,10 @@ fn check_size_before_tracing(
     };
     let predicted: Vec<size::FunctionSize> = algorithms
         .iter()
-        .map(|&a| {
+        .map(|&(a, name)| {
             let mut f = size::predicted(model, a);
             f.compile_bytes *= lane_weight;
+            f.name = (name != a.name()).then(|| name.to_string());
             f
         })
         .collect();
@@ -1996,6 +2005,31 @@ mod tests {
         for f in ["kinematics", "aba", "rnea", "crba"] {
             assert!(tight.matches(&format!("pub fn {f}(")).count() >= 2, "{f}");
         }
+    }
+
+    /// A refusal for size names each frame function by its own name, not the algorithm's `frame` (a new
+    /// user's trial: two feet were listed as `frame` twice).
+    #[test]
+    fn a_refusal_names_frame_functions_by_their_links() {
+        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../models/peers/anymal_b.urdf");
+        let loaded = crate::load(path.as_ref()).unwrap();
+        let options = GenerateOptions {
+            model: ModelOptions {
+                floating: true,
+                ..ModelOptions::default()
+            },
+            links: LinkOptions {
+                frames: vec!["LF_FOOT".to_string(), "RF_FOOT".to_string()],
+                ..LinkOptions::default()
+            },
+            max_compile_memory_mb: Some(120),
+            ..GenerateOptions::default()
+        }
+        .with_requested(Some(vec![Algorithm::Aba, Algorithm::Frame]), &[]);
+        let refusal = generate_source(&loaded, &options).unwrap_err().to_string();
+        assert!(refusal.contains("`frame_lf_foot` "), "{refusal}");
+        assert!(refusal.contains("`frame_rf_foot` "), "{refusal}");
+        assert!(refusal.contains("`aba` "), "{refusal}");
     }
 
     /// Every function of a lane module of 256-bit values (`f64x4`, `f32x8`) gets an AVX twin, however

@@ -51,7 +51,7 @@ const SOURCE_BYTES_PER_OPERATION: f64 = 21.0;
 pub const PREDICTION_SLACK: f64 = 4.0;
 
 /// One function's size: exact once traced, else predicted from the model.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct FunctionSize {
     /// The function.
     pub algorithm: Algorithm,
@@ -67,6 +67,16 @@ pub struct FunctionSize {
     /// Whether `compile_bytes` counts an AVX twin of the function (src/dispatch.rs), which
     /// `avx_twins = none` leaves out.
     pub twinned: bool,
+    /// The generated function's name where it is not the algorithm's (`frame_foot`): a refusal lists
+    /// each frame function by it.
+    pub name: Option<String>,
+}
+
+impl FunctionSize {
+    /// The name a refusal gives the function: its own, else its algorithm's.
+    fn shown_name(&self) -> &str {
+        self.name.as_deref().unwrap_or(self.algorithm.name())
+    }
 }
 
 impl FunctionSize {
@@ -80,6 +90,7 @@ impl FunctionSize {
             traced: true,
             tracing_stopped: true,
             twinned: false,
+            name: None,
         }
     }
 }
@@ -121,6 +132,7 @@ pub fn predicted(model: &Model<f64>, algorithm: Algorithm) -> FunctionSize {
         traced: false,
         tracing_stopped: false,
         twinned: false,
+        name: None,
     }
 }
 
@@ -251,13 +263,13 @@ fn refusal(functions: &[FunctionSize], scalars: &[&str], memory: f64, limit: u64
             if f.tracing_stopped {
                 format!(
                     "`{}` more than {} traced operations (tracing stopped there)",
-                    f.algorithm.name(),
+                    f.shown_name(),
                     grouped(f.operations)
                 )
             } else {
                 format!(
                     "`{}` {}{}",
-                    f.algorithm.name(),
+                    f.shown_name(),
                     grouped(f.operations),
                     if f.traced { "" } else { " predicted" }
                 )
