@@ -684,16 +684,9 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
                     return Err(size::refuse(loaded, &sizes, &scalars, limit.unwrap_or(0)));
                 }
             };
-            // The f64 module's copy with an AVX twin (f64 only: the twin doubles the function's compile
-            // time, src/dispatch.rs).
-            let twin = (options.f64 && options.avx_twins.twins(function.statements)).then(|| {
-                crate::dispatch::with_avx_twin(
-                    &function.code,
-                    &instance.name,
-                    &options.helpers,
-                    crate::dispatch::TwinOf::Scalar,
-                )
-            });
+            // Whether the f64 module's copy gets an AVX twin by its size (f64 only: the twin doubles the
+            // function's compile time, src/dispatch.rs); the twins are written once all are chosen, below.
+            let twinned = options.f64 && options.avx_twins.twins(function.statements);
             // The lane function's copy with an AVX twin, for the lane module of 256-bit values.
             let lane_twin = lane_function.as_ref().and_then(|lane| {
                 let avx_type =
@@ -721,9 +714,11 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
                 // The lane module's copy is compiled beside each scalar's, at several times the cost.
                 compile_bytes: function.compile_bytes
                     // The twin is one more copy, in the f64 module (this is per scalar module).
-                    + twin
-                        .as_ref()
-                        .map_or(0.0, |_| function.compile_bytes / scalars.len() as f64)
+                    + if twinned {
+                        function.compile_bytes / scalars.len() as f64
+                    } else {
+                        0.0
+                    }
                     + lane_function.as_ref().map_or(0.0, |f| {
                         // The lane twins (AVX and AVX-512): each part of one more lane copy, in the
                         // 256-bit lane module.
@@ -736,13 +731,12 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
                     }),
                 traced: true,
                 tracing_stopped: false,
-                twinned: twin.is_some(),
+                twinned,
                 name: sizes[k].name.take(),
             };
             // Exact for what is traced: refused as soon as that alone is too large.
             size::check(loaded, &sizes[..=k], &sizes, &scalars, limit, 1.0)?;
             functions.push(function);
-            f64_twins.push(twin);
             if lane_function.is_some() {
                 lane_twins.push(lane_twin);
             }
@@ -751,12 +745,11 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
         // Smaller functions' twins, under the module's budget (src/dispatch.rs): decided once every function
         // is traced, as the budget is shared. They are a speed-up, not a request: one that would take the
         // estimate of the compiler's memory over the limit is left out (smallest first, so the rest are too).
-        if options.f64 && !functions.is_empty() {
+        if options.f64 {
             let statements: Vec<usize> = functions.iter().map(|f| f.statements).collect();
-            let twinned: Vec<bool> = f64_twins.iter().map(Option::is_some).collect();
+            let twinned: Vec<bool> = sizes.iter().map(|f| f.twinned).collect();
             for k in options.avx_twins.small_twins(&statements, &twinned) {
-                let function = &functions[k];
-                let bytes = function.compile_bytes / scalars.len() as f64;
+                let bytes = functions[k].compile_bytes / scalars.len() as f64;
                 if let Some(limit) = options.max_compile_memory_mb {
                     let mut with = sizes.clone();
                     with[k].compile_bytes += bytes;
@@ -764,16 +757,26 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
                         break;
                     }
                 }
-                f64_twins[k] = Some(crate::dispatch::with_avx_twin(
-                    &function.code,
-                    &instances[k].name,
-                    &options.helpers,
-                    crate::dispatch::TwinOf::Scalar,
-                ));
                 sizes[k].compile_bytes += bytes;
                 sizes[k].twinned = true;
             }
         }
+        // The chosen twins' code.
+        f64_twins = functions
+            .iter()
+            .zip(&sizes)
+            .zip(&instances)
+            .map(|((function, size), instance)| {
+                size.twinned.then(|| {
+                    crate::dispatch::with_avx_twin(
+                        &function.code,
+                        &instance.name,
+                        &options.helpers,
+                        crate::dispatch::TwinOf::Scalar,
+                    )
+                })
+            })
+            .collect();
     }
     let independent: Vec<bool> = (0..model64.joints.len())
         .map(|j| model64.is_independent(j))

@@ -77,9 +77,7 @@ impl FunctionSize {
     fn shown_name(&self) -> &str {
         self.name.as_deref().unwrap_or(self.algorithm.name())
     }
-}
 
-impl FunctionSize {
     /// A function whose tracing stopped at the tape's budget (`tape_budget`): the nodes recorded, and
     /// the memory that many emitted operations would take at the budget's own rate (at least the limit).
     pub(crate) fn stopped(algorithm: Algorithm, full: crate::trace::TapeFull) -> FunctionSize {
