@@ -45,12 +45,8 @@ def main():
         "",
         f"Generated f64 code vs Pinocchio 4.1's analytical derivatives in one session ({datetime.date.today()}, "
         f"{platform.machine()}, `bench/derivatives.sh`), each side from {copies} fresh copies of its binary "
-        "(medians, and the range over copies). The generator traces each derivative function each way it can — "
-        "the analytical world-frame recursion, forward-mode dual numbers through `aba` and `rnea`, and for "
-        "forward dynamics of a large tree the factors `q̈`, `∂τ`, `M⁻¹` with `−M⁻¹ ∂τ` in a loop — and keeps the "
-        "one that runs fewer statements (docs/conventions.md, \"Derivatives\"). *operations*: arithmetic of the "
-        "unrolled code; the loop's product adds 2 · nv · (nonzero rows of ∂τ/∂q and ∂τ/∂v): 13.6k on the "
-        "ANYmal B, 97.7k on the TALOS.",
+        "(medians, and the range over copies). "
+        'The generator traces each derivative function each way it can — the analytical recursion (in each root body\'s frame), with forward dynamics\' `q̈` and `M⁻¹` from `aba` and the inverse\'s sweeps or from the factorized mass matrix (`DerivativeMethod::MassMatrixFactorization`), forward-mode dual numbers through `aba` and `rnea`, and for forward dynamics of a large tree the factors `q̈`, `∂τ`, `M⁻¹` with `−M⁻¹ ∂τ` in a loop — and keeps the one that runs fewer statements (docs/conventions.md, "Derivatives"). *operations*: arithmetic of the unrolled code; the loop\'s product adds 2 · nv · (nonzero rows of ∂τ/∂q and ∂τ/∂v): 13.6k on the ANYmal B, 97.7k on the TALOS.',
         "",
         "| robot | call | operations | embedyn generated (ns) | range | Pinocchio (ns) | range | ratio | target |",
         "|---|---|---:|---:|---:|---:|---:|---:|---:|",
@@ -84,32 +80,21 @@ def main():
         ops = operations(urdf, False, "aba_derivatives_independent")
         a, d = statistics.median(base), statistics.median(xs)
         lines.append(f"| {robot} | {what} | {ops:,} | {a:,.0f} | {d:,.0f} | {spread(xs)} | {d / a:.1f} |")
-    lines += ["", "Which way each function takes, and why: on the Z1 (a 6-DoF chain) the recursion unrolled, 11.0k "
-              "operations against dual numbers' 16.3k. On the floating ANYmal B dual numbers fold the free flyer's and "
-              "each leg's zeros and pair leg with leg (32.1k statements), the recursion unrolled with its product is "
-              "40.9k unpaired, the factors 15.1k (paired) plus the loop: factors (6.2–6.4 µs against dual numbers' "
-              "8.9 µs). On the TALOS (nv = 38) dual numbers grow as nv² (254k), the recursion as nv · depth: "
-              "`rnea_derivatives` 32.6k against 105k, `aba_derivatives` 85.5k factors plus the loop against 187k "
-              "unrolled (its 98k-operation product, straight-line, ran at 0.65 ns per operation: 3.5× Pinocchio in "
-              "that run). On this CPU (it has AVX) the Z1's and ANYmal B's derivatives and TALOS's `aba` run their AVX "
-              "twins (docs/generated-code.md, \"AVX where the CPU has it\": the same bits; TALOS's derivatives, beyond "
-              "25,000 statements, have none); measured in one binary against their baseline copies, the Z1's "
-              "`aba_derivatives` took 0.78× the time and the ANYmal B's 0.66×. The 0.25× target remains out of "
-              "reach: the Z1 would need 0.08 ns per operation of its 11.0k (it runs at 0.2 with AVX); on the "
-              "ANYmal B the loop's `M⁻¹ ∂τ` alone took 1.8–1.9 µs of 6.5–6.7 before the twins (the standalone "
-              "crate, `aba_derivatives` against `aba_derivatives_factors` in one binary), most of the target's "
-              "whole 2.4–3 µs; Pinocchio pays the same product, in a dense matrix product.",
-              "", "Size and compile time (2026-12-03, `embedyn generate`, then `cargo build --release` of the standalone "
-              "crate on 2 cores, dependencies built): the floating TALOS's `aba_derivatives` and `rnea_derivatives` in "
-              "f64, 4.7 MB of source, 14.1 s wall (0.65 GB); in f64 and f32, 9.2 MB, 32.9 s (1.1 GB). Before the "
-              "recursion (dual numbers, 16 modules in parallel): 26.3 s and 99 s; before the modules, 36 s for "
-              "`aba_derivatives` alone. `step_derivatives` applies the chain rule to the recursion's ∂q̈ (the floating Solo-12's 46.9k "
-              "operations, 70.7k by dual numbers).",
-              "", "Interpreted (a loop over one state, 2026-12-03, `--release`): `aba_derivatives` by the recursion "
-              "5.9 µs on the Z1, 19.9 µs on the floating ANYmal B, 86 µs on the floating TALOS, against dual numbers' "
-              "57.6, 274 and 1,468 µs (6×, 9× and 16× the interpreted `aba`, against 61×, 127× and 255×). Dual "
-              "numbers remain the way to loop models' derivatives and a second opinion on trees "
-              "(`DerivativeMethod::DualNumbers`); the two agree to 1e-12."]
+    # Hand-written notes on the runs (kept here so that a rerun keeps them), newest first.
+    lines += [
+        "",
+        "2026-12-04, the run above (an AMD EPYC host, 2 vCPUs, shared; the notes below it are of an earlier run on a Xeon): the generated code took the same time as on the Xeon for the ANYmal B (2,685 against 2,689 ns) and longer for the Z1 (1,093 against 590), while Pinocchio took 1.3–1.4× its Xeon time (11,096 against 8,454 ns; 4,516 against 3,189), so the ratios of issue 12's target moved to 0.24 and 0.24 (Xeon: 0.32 and 0.19). Where the ANYmal B's time goes on this host (the standalone crate, one binary, medians of 5 rounds): `aba_derivatives_factors` 2.00 µs, the whole call 2.59 µs, so the loop's `−M⁻¹ ∂τ` about 0.6 µs. Tried on that loop and not kept (a scratch copy of it, AVX as in the twins, ns for both products): as it is 584; two partial sums per column (even and odd rows, to halve the chain of dependent additions) 663; two columns at once where they share their rows 797. Compile time of the floating TALOS's `aba_derivatives` and `rnea_derivatives` on this host (`embedyn generate --only aba_derivatives,rnea_derivatives`, `cargo build --release`, dependencies built): f64 alone 5.3 MB of source, 17.2 s wall; f64 and f32 (the default), 8.4 MB, 29.8 s (0.97 GB). rustc's own passes are serial: for the f64 crate (`-Z time-passes`, nightly) type checking 3.4 s, borrow checking 2.0 s, MIR optimization and code generation 4.0 s, metadata 1.2 s, then LLVM about 8 s over the two cores; naming the pair type (`PairF64`) instead of `<S as Float>::Pair`, or without the lighter MIR inlining, gave no gain (28.8 s, and 17.2 s against 16.2 s).",
+        'What changed on 2026-12-04 (on the Xeon, the run before the one above; the run of 2026-12-03 had Z1 `aba_derivatives` 10,976 operations, 2,125 ns, 0.60×; ANYmal B 15,071, 4,142 ns, 0.45×; TALOS 85,484, 39,451 ns, 1.11×; `rnea_derivatives` 0.40×, 0.44×, 0.74×):',
+        "- The recursion works in each root body's own frame instead of the world's axes at its origin: the root's quantities are constants and only gravity turns with it (a free flyer's dense rotation entered every body's placement before). Its inertia rates are 9 numbers (a spatial inertia's shape without mass) instead of 6 × 6 matrices, `β = −2η` on one-coordinate joints, and its value pass runs in that frame instead of a body-frame RNEA moved into it. `rnea_derivatives`: Z1 7,117 → 3,995 operations, ANYmal B 10,236 → 5,253, TALOS 32,576 → 20,907.",
+        "- `MassMatrixFactorization`: the recursion's composite inertias give `M` in dot products and its bias at `q̈ = 0`; Featherstone's sparse `M = Lᵀ D L` (entries only where one coordinate is the other's ancestor) then gives `q̈` and `M⁻¹ = L⁻¹ D⁻¹ L⁻ᵀ`, replacing `aba` and the inverse's two sweeps, which on the Z1 were as many operations as the recursion. One reciprocal per pivot (not a division per pair: the ANYmal B's code had 346 divisions, now 40). The generator takes it for the Z1 (unrolled, 5.9k operations against 8.1k by `aba`) and for the ANYmal B and TALOS as factors with the loop (ANYmal B 8.5k against 10.2k, TALOS 35k against 72k). Its cost is accuracy where `M` is ill-conditioned (`cond(M) ε`, growing as the cube of a chain's length), which the statement count does not see: so it is a way only where no f32 code is generated (these benches generate f64 only; with both scalars the Z1's `aba_derivatives` stays on `aba`, 12.1k operations).",
+        "- Where the time goes on the ANYmal B (one binary, `aba_derivatives` against `aba_derivatives_factors`): the factors 2.08 µs, the loop's `−M⁻¹ ∂τ` 0.61 µs (13.4k flops at about 21 per ns with AVX, near this core's peak without FMA). The 0.25× target needed 2.11 µs in that run. Tried and not kept: parts of 6,000 paired statements instead of 2,000 (factors 1.99 µs: the DWARF stack limit of debug builds keeps parts small); the factors unpaired (3.07 µs).",
+        '',
+        'On both CPUs (they have AVX) the Z1\'s and ANYmal B\'s derivatives and TALOS\'s `aba` run their AVX twins (docs/generated-code.md, "AVX where the CPU has it": the same bits; TALOS\'s derivatives, beyond 25,000 statements, have none); the Z1\'s `aba_derivatives` twin takes 0.41× the time of its baseline copy (583 against 1,421 ns in one binary).',
+        '',
+        "Size and compile time (2026-12-03, `embedyn generate`, then `cargo build --release` of the standalone crate on 2 cores, dependencies built): the floating TALOS's `aba_derivatives` and `rnea_derivatives` in f64, 4.7 MB of source, 14.1 s wall (0.65 GB); in f64 and f32, 9.2 MB, 32.9 s (1.1 GB). Before the recursion (dual numbers, 16 modules in parallel): 26.3 s and 99 s; before the modules, 36 s for `aba_derivatives` alone. `step_derivatives` applies the chain rule to the recursion's ∂q̈ (the floating Solo-12's 46.9k operations, 70.7k by dual numbers).",
+        '',
+        "Interpreted (a loop over one state, medians of 5 rounds, `--release`, a scratch binary on the runtime; 2026-12-04, beside another build): `aba_derivatives` by the recursion 4.6 µs on the Z1, 16.5 µs on the floating ANYmal B, 75 µs on the floating TALOS (2026-12-03: 5.9, 19.9, 86), and with `DerivativeMethod::MassMatrixFactorization` 3.0, 12.4 and 68 µs; `rnea_derivatives` 1.5, 4.6 and 14 µs; the interpreted `aba` 0.9, 2.1 and 5.0 µs. Dual numbers (2026-12-03: 57.6, 274 and 1,468 µs) remain the way to loop models' derivatives and a second opinion on trees (`DerivativeMethod::DualNumbers`); the three agree to 1e-12 (tests/derivatives.rs). The interpreted default stays `Analytical`: `aba` keeps `q̈` and `M⁻¹` accurate where `M` is ill-conditioned.",
+    ]
     write_section("\n".join(lines) + "\n")
 
 
