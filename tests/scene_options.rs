@@ -254,18 +254,6 @@ fn lock_refusals_name_the_joint_and_the_reason() {
             C::Coupling,
             "gear_3",
         ),
-        (
-            "models/loops/parallel_gripper.urdf",
-            "finger1_joint",
-            C::Mimic,
-            "finger2_joint",
-        ),
-        (
-            "models/loops/parallel_gripper.urdf",
-            "finger2_joint",
-            C::Mimic,
-            "finger2_joint",
-        ),
     ] {
         let e = lock(path, false, &[(joint, 0.0)]);
         match &e.kind {
@@ -276,6 +264,150 @@ fn lock_refusals_name_the_joint_and_the_reason() {
         }
         assert!(e.to_string().contains(&format!("joint \"{joint}\"")), "{e}");
     }
+}
+
+/// A `<mimic>` joint is not locked by itself (its driver would have to move with it): the refusal names
+/// the joint to lock instead. Its driver may be locked, which fixes it (the next test).
+#[test]
+fn a_mimic_joint_is_refused_with_the_joint_it_follows() {
+    let e = model_with(
+        "models/loops/parallel_gripper.urdf",
+        &ModelOptions {
+            locks: vec![LockedJoint {
+                joint: "finger2_joint".into(),
+                value: 0.01,
+            }],
+            ..Default::default()
+        },
+    )
+    .unwrap_err();
+    assert!(
+        matches!(&e.kind, LoadErrorKind::LockedMimicJoint { driver } if driver == "finger1_joint"),
+        "{e}"
+    );
+    let text = e.to_string();
+    assert!(
+        text.contains("joint \"finger2_joint\"") && text.contains("lock \"finger1_joint\" instead"),
+        "{text}"
+    );
+}
+
+/// The parallel gripper with a third finger on the second that follows it in turn, and `extra` `<mimic>`
+/// elements on that third finger: the text of the model file.
+fn gripper_with_third_finger(finger2_mimic: &str, finger3_mimics: &str) -> String {
+    let text = std::fs::read_to_string(repo_path("models/loops/parallel_gripper.urdf")).unwrap();
+    let mimic = r#"<mimic joint="finger1_joint" multiplier="1" offset="0"/>"#;
+    assert!(text.contains(mimic) && text.contains(r#"independent="false""#));
+    text.replace(mimic, finger2_mimic)
+        .replace(r#" independent="false""#, "")
+        .replace(
+            "</robot>",
+            &format!(
+                r#"  <link name="finger3">
+    <inertial><origin xyz="0.01 0 -0.02"/><mass value="0.05"/>
+      <inertia ixx="2e-5" iyy="1e-5" izz="1.5e-5" ixy="0" ixz="0" iyz="0"/></inertial>
+  </link>
+  <joint name="finger3_joint" type="revolute">
+    <origin xyz="0 0 -0.05" rpy="0.1 0 0"/>
+    <parent link="finger2"/>
+    <child link="finger3"/>
+    <axis xyz="1 0 0"/>
+    <limit lower="-3" upper="3" effort="1" velocity="1"/>
+    {finger3_mimics}
+  </joint>
+</robot>
+"#
+            ),
+        )
+}
+
+/// Locking the joint that mimic joints follow fixes them too, at `Σ m x + o` of their drivers, through a
+/// chain of mimics (finger 3 follows finger 2, which follows finger 1): the same model as the file without
+/// the `<mimic>` elements and each joint locked at that value, by hand. And a mimic joint that also
+/// follows a joint that is not locked keeps that term, the locked ones' constant in its offset.
+#[test]
+fn locking_a_driver_fixes_the_mimic_joints_that_follow_it() {
+    let x = 0.013;
+    let (m2, o2, m3, o3) = (-0.5, 0.02, 3.0, -0.1);
+    let finger2 = format!(r#"<mimic joint="finger1_joint" multiplier="{m2:?}" offset="{o2:?}"/>"#);
+    let finger3 = format!(r#"<mimic joint="finger2_joint" multiplier="{m3:?}" offset="{o3:?}"/>"#);
+    let lock = |joint: &str, value: f64| LockedJoint {
+        joint: joint.into(),
+        value,
+    };
+    let model = |text: String, locks: Vec<LockedJoint>| {
+        parse_urdf(&text, Path::new("gripper3.urdf"))
+            .unwrap_or_else(|e| panic!("{e}"))
+            .model::<f64>(&ModelOptions {
+                locks,
+                ..Default::default()
+            })
+            .unwrap_or_else(|e| panic!("{e}"))
+    };
+    let locked = model(
+        gripper_with_third_finger(&finger2, &finger3),
+        vec![lock("finger1_joint", x)],
+    );
+    let (x2, x3) = (0.0 + (m2 * x + o2), 0.0 + (m3 * (0.0 + (m2 * x + o2)) + o3));
+    let by_hand = model(
+        gripper_with_third_finger("", ""),
+        vec![
+            lock("finger1_joint", x),
+            lock("finger2_joint", x2),
+            lock("finger3_joint", x3),
+        ],
+    );
+    assert_eq!((locked.nv(), by_hand.nv()), (1, 1));
+    assert!(!locked.has_constraints());
+    // Not the spanning tree unchanged: the fingers' poses moved with their values.
+    let unlocked_fingers = model(
+        gripper_with_third_finger("", ""),
+        vec![
+            lock("finger1_joint", x),
+            lock("finger2_joint", 0.0),
+            lock("finger3_joint", 0.0),
+        ],
+    );
+    let mut rng = Rng::new(17);
+    let (mut wl, mut wh, mut wu) = (
+        Workspace::new(&locked),
+        Workspace::new(&by_hand),
+        Workspace::new(&unlocked_fingers),
+    );
+    for _ in 0..5 {
+        let q = rng.configuration(&locked);
+        let v = rng.vec(1, -2.0, 2.0);
+        let tau = rng.vec(1, -1.0, 1.0);
+        let a = aba(&locked, &mut wl, &q, &v, &tau).unwrap().to_vec();
+        let b = aba(&by_hand, &mut wh, &q, &v, &tau).unwrap().to_vec();
+        assert!(relative_error(&a, &b) <= 1e-14, "{a:?} {b:?}");
+        let c = aba(&unlocked_fingers, &mut wu, &q, &v, &tau)
+            .unwrap()
+            .to_vec();
+        assert!(
+            relative_error(&a, &c) > 1e-6,
+            "the fingers' values changed nothing: {a:?} {c:?}"
+        );
+    }
+    // Finger 3 follows finger 2 and the wrist: with finger 1 locked only the wrist's term stays, the rest
+    // a constant in its offset.
+    let (mw, ow) = (2.0, 0.05);
+    let wrist = format!(r#"<mimic joint="wrist" multiplier="{mw:?}" offset="{ow:?}"/>"#);
+    let locked = model(
+        gripper_with_third_finger(&finger2, &format!("{finger3}{wrist}")),
+        vec![lock("finger1_joint", x)],
+    );
+    let offset = ow + (0.0 + (m3 * x2 + o3));
+    let by_hand = model(
+        gripper_with_third_finger(
+            "",
+            &format!(r#"<mimic joint="wrist" multiplier="{mw:?}" offset="{offset:?}"/>"#),
+        ),
+        vec![lock("finger1_joint", x), lock("finger2_joint", x2)],
+    );
+    assert!(locked.has_constraints());
+    assert_eq!(format!("{locked:?}"), format!("{by_hand:?}"));
+    assert_eq!((locked.nv(), locked.independent_nv()), (2, 1));
 }
 
 /// A joint outside every loop can be locked in a model with loops: the loops stay, the coordinate goes,

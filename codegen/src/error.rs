@@ -551,8 +551,14 @@ pub enum LoadErrorKind {
         /// The value given.
         value: f64,
     },
-    /// `--lock` on a joint whose coordinate a constraint relates to others.
-    #[error("the joint cannot be locked: {what} \"{name}\" relates its coordinate to others (locking it would change the constraint; lock joints outside loops, couplings and mimic joints, or fix the joint in the file)")]
+    /// `--lock` on a `<mimic>` joint: its driver is the joint to lock (the mimic joint is fixed with it).
+    #[error("the joint cannot be locked: it follows joint \"{driver}\" through its <mimic>; lock \"{driver}\" instead, and the joints that follow it are fixed with it")]
+    LockedMimicJoint {
+        /// The joint it follows (the first of its `<mimic>` elements).
+        driver: String,
+    },
+    /// `--lock` on a joint whose coordinate a loop or coupling relates to others.
+    #[error("the joint cannot be locked: {what} \"{name}\" relates its coordinate to others (locking it would change the constraint; lock joints outside loops and couplings, or fix the joint in the file)")]
     LockedJointInConstraint {
         /// What the constraint is.
         what: ConstraintElement,
@@ -821,6 +827,7 @@ impl LoadErrorKind {
             | K::LockUnknownJoint { joint: a }
             | K::UnknownLinkNamed { link: a, .. }
             | K::LockedJointInConstraint { name: a, .. }
+            | K::LockedMimicJoint { driver: a }
             | K::ConstraintNameTaken { name: a, .. }
             | K::MergedInertiaOverflow { body_link: a } => shorten(a),
             K::NotANumber { attribute, text }

@@ -157,6 +157,7 @@ impl LinkTree {
 }
 
 /// For each joint, the first constraint (kind and name) whose coordinates it takes part in, and how many.
+/// Loops and couplings come before mimics, so a joint whose first is a mimic is in no loop or coupling.
 fn constraint_uses(
     robot: &Robot,
     tree: &LinkTree,
@@ -242,11 +243,22 @@ fn lock_joints(robot: &mut Robot, locks: &[LockedJoint], floating: bool) -> Resu
                 (!lock.value.is_finite())
                     .then_some(LoadErrorKind::LockValueNotFinite { value: lock.value })
             })
-            .or_else(|| {
-                uses[j]
-                    .1
-                    .clone()
-                    .map(|(what, name)| LoadErrorKind::LockedJointInConstraint { what, name })
+            .or_else(|| match &uses[j].1 {
+                // A joint that only drives mimic joints may be locked: they are fixed with it (below). A
+                // mimic joint itself may not: its driver would have to move with it.
+                Some((ConstraintElement::Mimic, _)) => {
+                    joint
+                        .mimics
+                        .first()
+                        .map(|m| LoadErrorKind::LockedMimicJoint {
+                            driver: m.joint.clone(),
+                        })
+                }
+                Some((what, name)) => Some(LoadErrorKind::LockedJointInConstraint {
+                    what: *what,
+                    name: name.clone(),
+                }),
+                None => None,
             });
         if let Some(kind) = kind {
             return Err(LoadError::at(at_joint(robot, j), kind));
@@ -254,7 +266,73 @@ fn lock_joints(robot: &mut Robot, locks: &[LockedJoint], floating: bool) -> Resu
         robot.joints[j].locked = Some(lock.value);
         locked_by_user[j] = Some(lock.value);
     }
-    Ok(())
+    fix_followers_of_locked_joints(robot, &uses)
+}
+
+/// Each `<mimic>` term whose driver is locked becomes a constant: `q = Σ mₖ q_dₖ + oₖ` keeps its other
+/// terms (the constant joins their offset), and a mimic joint whose drivers are all locked is locked
+/// itself at `Σ mₖ x_dₖ + oₖ`, which may fix the joints that follow it in turn. Why: the constraint holds
+/// at every instant, so with its drivers fixed the joint is fixed too, and a gripper's fingers lock with
+/// the joint they follow (a parallel gripper's `finger1_joint`, models/loops/parallel_gripper.urdf).
+fn fix_followers_of_locked_joints(
+    robot: &mut Robot,
+    uses: &[(usize, Option<(ConstraintElement, String)>)],
+) -> Result<(), LoadError> {
+    loop {
+        let mut newly_locked = false;
+        for f in 0..robot.joints.len() {
+            if robot.joints[f].mimics.is_empty() || robot.joints[f].locked.is_some() {
+                continue;
+            }
+            let mut constant = 0.0;
+            let mut kept = Vec::new();
+            for m in std::mem::take(&mut robot.joints[f].mimics) {
+                match robot
+                    .joints
+                    .iter()
+                    .find(|d| d.name == m.joint)
+                    .and_then(|d| d.locked)
+                {
+                    Some(value) => constant += m.multiplier * value + m.offset,
+                    None => kept.push(m),
+                }
+            }
+            let joint = &mut robot.joints[f];
+            if let Some(first) = kept.first_mut() {
+                first.offset += constant;
+                joint.mimics = kept;
+                continue;
+            }
+            let kind = if !joint.kind.is_one_dof() {
+                Some(LoadErrorKind::LockNotOneDof {
+                    kind: joint.kind.as_str(),
+                })
+            } else if !constant.is_finite() {
+                Some(LoadErrorKind::LockValueNotFinite { value: constant })
+            } else {
+                match &uses[f].1 {
+                    Some((ConstraintElement::Mimic, _)) | None => None,
+                    Some((what, name)) => Some(LoadErrorKind::LockedJointInConstraint {
+                        what: *what,
+                        name: name.clone(),
+                    }),
+                }
+            };
+            if let Some(kind) = kind {
+                let at = Location::new(
+                    &robot.source,
+                    joint.line,
+                    format!("joint \"{}\"", joint.name),
+                );
+                return Err(LoadError::at(at, kind));
+            }
+            joint.locked = Some(constant);
+            newly_locked = true;
+        }
+        if !newly_locked {
+            return Ok(());
+        }
+    }
 }
 
 /// The geared rotors of `robot` (see [`GearedRotor`]), in the order of their couplings. A coupling whose
