@@ -739,3 +739,66 @@ fn a_reflected_inertia_that_overflows_is_refused_at_the_coupling() {
     );
     assert!(e.to_string().contains("coupling \"elbow_gear\""), "{e}");
 }
+
+/// A chain of 2,000 joints each mimicking the one above, written leaf first, locked at its top: every
+/// joint is fixed at its value through the chain (the same model as the file without mimics, locked by
+/// hand). Found by an attacker's trial of the first version, which passed over all joints until nothing
+/// changed, looking each driver up by name: a 3,000-joint chain written so took 24.7 s (now 0.07 s).
+#[test]
+fn a_long_chain_of_mimic_joints_locks_from_its_top() {
+    let n = 2000;
+    let chain = |mimics: bool| {
+        let mut links = String::from(
+            r#"<link name="l0"><inertial><mass value="1"/><inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial></link>"#,
+        );
+        let mut joints = Vec::new();
+        for k in 1..=n {
+            links += &format!(
+                r#"<link name="l{k}"><inertial><origin xyz="0.01 0 0"/><mass value="1"/><inertia ixx="0.1" iyy="0.1" izz="0.1" ixy="0" ixz="0" iyz="0"/></inertial></link>"#
+            );
+            let mimic = if mimics && k > 1 {
+                format!(
+                    r#"<mimic joint="j{}" multiplier="0.99" offset="0.001"/>"#,
+                    k - 1
+                )
+            } else {
+                String::new()
+            };
+            joints.push(format!(
+                r#"<joint name="j{k}" type="revolute"><origin xyz="0 0 0.1"/><parent link="l{}"/><child link="l{k}"/><axis xyz="0 1 0"/><limit lower="-1" upper="1" effort="1" velocity="1"/>{mimic}</joint>"#,
+                k - 1
+            ));
+        }
+        joints.reverse();
+        format!(
+            r#"<robot name="mimic_chain">{links}{}</robot>"#,
+            joints.concat()
+        )
+    };
+    let lock = |joint: String, value: f64| LockedJoint { joint, value };
+    let mut values = vec![0.3];
+    for _ in 1..n {
+        let above = *values.last().unwrap();
+        values.push(0.0 + (0.99 * above + 0.001));
+    }
+    let model = |text: String, locks: Vec<LockedJoint>| {
+        parse_urdf(&text, Path::new("mimic_chain.urdf"))
+            .unwrap()
+            .model::<f64>(&ModelOptions {
+                locks,
+                ..Default::default()
+            })
+            .unwrap()
+    };
+    let locked = model(chain(true), vec![lock("j1".into(), values[0])]);
+    let by_hand = model(
+        chain(false),
+        values
+            .iter()
+            .enumerate()
+            .map(|(k, &v)| lock(format!("j{}", k + 1), v))
+            .collect(),
+    );
+    assert_eq!((locked.nv(), locked.nbodies()), (0, by_hand.nbodies()));
+    assert_eq!(format!("{locked:?}"), format!("{by_hand:?}"));
+}

@@ -278,21 +278,34 @@ fn fix_followers_of_locked_joints(
     robot: &mut Robot,
     uses: &[(usize, Option<(ConstraintElement, String)>)],
 ) -> Result<(), LoadError> {
-    loop {
-        let mut newly_locked = false;
-        for f in 0..robot.joints.len() {
-            if robot.joints[f].mimics.is_empty() || robot.joints[f].locked.is_some() {
+    let index: std::collections::HashMap<String, usize> = robot
+        .joints
+        .iter()
+        .enumerate()
+        .map(|(j, joint)| (joint.name.clone(), j))
+        .collect();
+    let mut followers = vec![Vec::new(); robot.joints.len()];
+    for (f, joint) in robot.joints.iter().enumerate() {
+        for m in &joint.mimics {
+            if let Some(&d) = index.get(&m.joint) {
+                followers[d].push(f);
+            }
+        }
+    }
+    // A worklist of locked joints, not passes until nothing changes: a chain of n mimics written leaf
+    // first would take n passes over every joint.
+    let mut locked: Vec<usize> = (0..robot.joints.len())
+        .filter(|&j| robot.joints[j].locked.is_some())
+        .collect();
+    while let Some(d) = locked.pop() {
+        for &f in &followers[d] {
+            if robot.joints[f].locked.is_some() {
                 continue;
             }
             let mut constant = 0.0;
             let mut kept = Vec::new();
             for m in std::mem::take(&mut robot.joints[f].mimics) {
-                match robot
-                    .joints
-                    .iter()
-                    .find(|d| d.name == m.joint)
-                    .and_then(|d| d.locked)
-                {
+                match index.get(&m.joint).and_then(|&d| robot.joints[d].locked) {
                     Some(value) => constant += m.multiplier * value + m.offset,
                     None => kept.push(m),
                 }
@@ -327,12 +340,10 @@ fn fix_followers_of_locked_joints(
                 return Err(LoadError::at(at, kind));
             }
             joint.locked = Some(constant);
-            newly_locked = true;
-        }
-        if !newly_locked {
-            return Ok(());
+            locked.push(f);
         }
     }
+    Ok(())
 }
 
 /// The geared rotors of `robot` (see [`GearedRotor`]), in the order of their couplings. A coupling whose
