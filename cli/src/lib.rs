@@ -83,7 +83,8 @@ pub struct SceneArgs {
     /// Gravity in the world frame, m/s² (default 0,0,-9.81).
     #[arg(long, value_name = "X,Y,Z", value_parser = parse_gravity, allow_hyphen_values = true)]
     pub gravity: Option<[f64; 3]>,
-    /// Fix a 1-DoF joint at VALUE (rad or m): its coordinate leaves q and v (repeatable).
+    /// Fix a 1-DoF joint at VALUE (rad or m): its coordinate leaves q and v, and the joints that mimic it
+    /// are fixed with it (repeatable).
     #[arg(long = "lock", value_name = "JOINT=VALUE", value_parser = parse_lock, allow_hyphen_values = true)]
     pub locks: Vec<LockedJoint>,
     /// How geared rotors are modelled: `exact` (aggregate links) or `reflected` (armature on the driving
