@@ -624,3 +624,39 @@ bad!(
         "largest is body `link2`'s"
     ]
 );
+
+/// A `<mimic>` whose multiplier is near the largest f64 loads without a panic (an attacker's trial: the
+/// grouping's Newton steps from its start configurations overflowed the coordinates to ±inf and the
+/// forward kinematics after them refused with a panic, `sizes match`). The mimic is a constraint like
+/// any other: three independent coordinates of four.
+#[test]
+fn a_mimic_multiplier_near_the_largest_f64_loads() {
+    let link = |name: &str| {
+        format!(
+            r#"<link name="{name}"><inertial><mass value="1"/><inertia ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.01"/></inertial></link>"#
+        )
+    };
+    let joint = |name: &str, parent: &str, child: &str, extra: &str| {
+        format!(
+            r#"<joint name="{name}" type="revolute"><origin xyz="0.2 0.01 0" rpy="0.1 0.2 0.3"/><parent link="{parent}"/><child link="{child}"/><axis xyz="0 1 0"/>{extra}</joint>"#
+        )
+    };
+    let text = format!(
+        r#"<robot name="m"><link name="base"/>{}{}{}{}{}{}{}{}</robot>"#,
+        link("l1"),
+        link("l2"),
+        link("l3"),
+        link("l4"),
+        joint("d", "base", "l1", ""),
+        joint("e", "l1", "l2", ""),
+        joint("f", "l2", "l3", r#"<mimic joint="d" multiplier="1e308"/>"#),
+        joint("g", "l3", "l4", ""),
+    );
+    let model = std::panic::catch_unwind(|| {
+        embedyn::codegen::parse_urdf(&text, std::path::Path::new("m.urdf"))
+            .and_then(|l| l.model::<f64>(&ModelOptions::default()))
+    })
+    .expect("loading panicked")
+    .unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!((model.nv(), model.independent_nv()), (4, 3));
+}

@@ -266,28 +266,176 @@ fn lock_refusals_name_the_joint_and_the_reason() {
     }
 }
 
-/// A `<mimic>` joint is not locked by itself (its driver would have to move with it): the refusal names
-/// the joint to lock instead. Its driver may be locked, which fixes it (the next test).
+/// A `<mimic>` joint is not locked by itself (the joints it follows would have to move with it): the
+/// refusal names the joints to lock instead, those at the top of its chains of mimics, all of them where
+/// it follows several, and says when they are locked already. A joint that mimics itself gets the file's
+/// own error, not a refusal of the lock (an attacker's trial: "lock \"a\" instead" for joint a).
 #[test]
-fn a_mimic_joint_is_refused_with_the_joint_it_follows() {
-    let e = model_with(
-        "models/loops/parallel_gripper.urdf",
-        &ModelOptions {
-            locks: vec![LockedJoint {
-                joint: "finger2_joint".into(),
+fn a_mimic_joint_is_refused_with_the_joints_to_lock_instead() {
+    let refusal = |path: &str, locks: &[&str]| {
+        let locks = locks
+            .iter()
+            .map(|&joint| LockedJoint {
+                joint: joint.into(),
                 value: 0.01,
-            }],
-            ..Default::default()
-        },
-    )
-    .unwrap_err();
+            })
+            .collect();
+        model_with(
+            path,
+            &ModelOptions {
+                locks,
+                ..Default::default()
+            },
+        )
+        .unwrap_err()
+    };
+    let gripper = "models/loops/parallel_gripper.urdf";
+    let e = refusal(gripper, &["finger2_joint"]);
     assert!(
-        matches!(&e.kind, LoadErrorKind::LockedMimicJoint { driver } if driver == "finger1_joint"),
+        matches!(&e.kind, LoadErrorKind::LockedMimicJoint { drivers, already_locked: false } if drivers == &["finger1_joint"]),
         "{e}"
     );
     let text = e.to_string();
     assert!(
         text.contains("joint \"finger2_joint\"") && text.contains("lock \"finger1_joint\" instead"),
+        "{text}"
+    );
+    let e = refusal(gripper, &["finger1_joint", "finger2_joint"]);
+    assert!(
+        matches!(
+            &e.kind,
+            LoadErrorKind::LockedMimicJoint {
+                already_locked: true,
+                ..
+            }
+        ),
+        "{e}"
+    );
+    assert!(e.to_string().contains("fixed already"), "{e}");
+    // The differential wrist's rotor follows both wrist joints: locking one would not fix it.
+    let e = refusal("models/loops/differential_wrist.urdf", &["rotor1_joint"]);
+    assert!(
+        matches!(&e.kind, LoadErrorKind::LockedMimicJoint { drivers, .. } if drivers == &["wrist_pitch", "wrist_roll"]),
+        "{e}"
+    );
+    assert!(
+        e.to_string().contains("\"wrist_pitch\" and \"wrist_roll\""),
+        "{e}"
+    );
+    // A chain: the third finger follows the second, which follows the first; the first is to lock.
+    let m = r#"<mimic joint="finger2_joint" multiplier="2" offset="0"/>"#;
+    let text = gripper_with_third_finger(r#"<mimic joint="finger1_joint"/>"#, m);
+    let e = parse_urdf(&text, Path::new("gripper3.urdf"))
+        .unwrap()
+        .model::<f64>(&ModelOptions {
+            locks: vec![LockedJoint {
+                joint: "finger3_joint".into(),
+                value: 0.0,
+            }],
+            ..Default::default()
+        })
+        .unwrap_err();
+    assert!(
+        matches!(&e.kind, LoadErrorKind::LockedMimicJoint { drivers, .. } if drivers == &["finger1_joint"]),
+        "{e}"
+    );
+    let text = gripper_with_third_finger("", r#"<mimic joint="finger3_joint"/>"#);
+    let e = parse_urdf(&text, Path::new("gripper3.urdf"))
+        .unwrap()
+        .model::<f64>(&ModelOptions {
+            locks: vec![LockedJoint {
+                joint: "finger3_joint".into(),
+                value: 0.0,
+            }],
+            ..Default::default()
+        })
+        .unwrap_err();
+    assert!(matches!(e.kind, LoadErrorKind::MimicSelf), "{e}");
+}
+
+/// Where a lock cannot be carried into a joint that mimics the locked one, the error is at that joint
+/// and names the lock (an attacker's trial: the error spoke of the mimic joint as if it had been locked,
+/// and a term whose constant overflowed the offset of a remaining one crashed the loader).
+#[test]
+fn a_lock_that_cannot_reach_a_mimic_joint_says_which_lock() {
+    let model = |joints: &str, lock: &str, value: f64| {
+        // The links the joints name.
+        let links: String = ["l1", "l2", "l3", "rotor"]
+            .iter()
+            .filter(|l| joints.contains(&format!("\"{l}\"")))
+            .map(|l| format!(r#"<link name="{l}"><inertial><mass value="1"/><inertia ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.01"/></inertial></link>"#))
+            .collect();
+        let text = format!(r#"<robot name="m"><link name="base"/>{links}{joints}</robot>"#);
+        parse_urdf(&text, Path::new("m.urdf"))
+            .unwrap_or_else(|e| panic!("{e}"))
+            .model::<f64>(&ModelOptions {
+                locks: vec![LockedJoint {
+                    joint: lock.into(),
+                    value,
+                }],
+                ..Default::default()
+            })
+    };
+    let joint = |name: &str, parent: &str, child: &str, extra: &str| {
+        format!(
+            r#"<joint name="{name}" type="revolute"><parent link="{parent}"/><child link="{child}"/><axis xyz="0 1 0"/>{extra}</joint>"#
+        )
+    };
+    // f follows d (× 1e300) and e: locking d at 1e10 overflows the offset of e's term.
+    let joints = [
+        joint("d", "base", "l1", ""),
+        joint("e", "l1", "l2", ""),
+        joint(
+            "f",
+            "l2",
+            "l3",
+            r#"<mimic joint="d" multiplier="1e300"/><mimic joint="e"/>"#,
+        ),
+    ]
+    .concat();
+    assert!(model(&joints, "d", 1e7).is_ok());
+    let e = model(&joints, "d", 1e10).unwrap_err();
+    match &e.kind {
+        LoadErrorKind::LockFixesMimicJoint { driver, reason } => {
+            assert_eq!(driver, "d");
+            assert!(
+                matches!(**reason, LoadErrorKind::MimicOffsetNotFinite { .. }),
+                "{e}"
+            );
+        }
+        other => panic!("{other:?}"),
+    }
+    assert!(e.to_string().contains("joint \"f\""), "{e}");
+    // f follows d alone: fixed at 1e300 × 1e10, which overflows.
+    let joints = [
+        joint("d", "base", "l1", ""),
+        joint("f", "l1", "l2", r#"<mimic joint="d" multiplier="1e300"/>"#),
+    ]
+    .concat();
+    let e = model(&joints, "d", 1e10).unwrap_err();
+    assert!(
+        matches!(&e.kind, LoadErrorKind::LockFixesMimicJoint { reason, .. } if matches!(**reason, LoadErrorKind::LockValueNotFinite { .. })),
+        "{e}"
+    );
+    // f follows drv and is geared to a rotor: fixing it would change the coupling.
+    let joints = [
+        joint("drv", "base", "l1", ""),
+        joint("f", "base", "l2", r#"<mimic joint="drv"/>"#),
+        r#"<joint name="rotor_joint" type="revolute" independent="false"><parent link="base"/><child link="rotor"/><axis xyz="0 1 0"/></joint>
+<coupling name="gear"><predecessor link="l2"/><successor link="rotor"/><ratio value="6"/></coupling>"#
+            .to_string(),
+    ]
+    .concat();
+    let e = model(&joints, "drv", 0.2).unwrap_err();
+    assert!(
+        matches!(&e.kind, LoadErrorKind::LockFixesMimicJoint { driver, reason } if driver == "drv" && matches!(**reason, LoadErrorKind::LockedJointInConstraint { .. })),
+        "{e}"
+    );
+    let text = e.to_string();
+    assert!(
+        text.contains("joint \"f\"")
+            && text.contains("locking joint \"drv\"")
+            && text.contains("coupling \"gear\""),
         "{text}"
     );
 }

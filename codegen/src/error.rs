@@ -551,11 +551,28 @@ pub enum LoadErrorKind {
         /// The value given.
         value: f64,
     },
-    /// `--lock` on a `<mimic>` joint: its driver is the joint to lock (the mimic joint is fixed with it).
-    #[error("the joint cannot be locked: it follows joint \"{driver}\" through its <mimic>; lock \"{driver}\" instead, and the joints that follow it are fixed with it")]
+    /// `--lock` on a `<mimic>` joint: the joints it follows are the ones to lock (it is fixed with them).
+    #[error("{}", locked_mimic_joint(.drivers, *.already_locked))]
     LockedMimicJoint {
-        /// The joint it follows (the first of its `<mimic>` elements).
+        /// The joints at the top of its chains of `<mimic>`s (those that follow no other joint), or, in a
+        /// cycle of mimics, the joints it follows itself.
+        drivers: Vec<String>,
+        /// Whether all of them are locked: then it is fixed already.
+        already_locked: bool,
+    },
+    /// The offset of a `<mimic>` once a locked joint's term joins it.
+    #[error("the offset of its <mimic> becomes {value}, not a finite number")]
+    MimicOffsetNotFinite {
+        /// The offset.
+        value: f64,
+    },
+    /// A joint that mimics a locked joint, where the lock cannot be carried into its `<mimic>`.
+    #[error("locking joint \"{}\" makes the term of it in this joint's <mimic> a constant, but {reason}", crate::names::shown(.driver))]
+    LockFixesMimicJoint {
+        /// The joint locked.
         driver: String,
+        /// Why this joint cannot be fixed.
+        reason: Box<LoadErrorKind>,
     },
     /// `--lock` on a joint whose coordinate a loop or coupling relates to others.
     #[error("the joint cannot be locked: {what} \"{name}\" relates its coordinate to others (locking it would change the constraint; lock joints outside loops and couplings, or fix the joint in the file)")]
@@ -812,6 +829,29 @@ impl LoadError {
     }
 }
 
+/// The message of [`LoadErrorKind::LockedMimicJoint`].
+fn locked_mimic_joint(drivers: &[String], already_locked: bool) -> String {
+    let names: Vec<String> = drivers
+        .iter()
+        .map(|d| format!("\"{}\"", crate::names::shown(d)))
+        .collect();
+    let (joints, list) = match names.as_slice() {
+        [one] => ("joint", one.clone()),
+        [rest @ .., last] => ("joints", format!("{} and {last}", rest.join(", "))),
+        [] => ("joints", String::new()),
+    };
+    if already_locked {
+        format!("the joint is fixed already: it follows {joints} {list} through <mimic>, locked; leave its own lock out")
+    } else {
+        let them = if names.len() == 1 {
+            list.as_str()
+        } else {
+            "them"
+        };
+        format!("the joint cannot be locked: it follows {joints} {list} through <mimic>; lock {them} instead, and the joints that follow are fixed with {}", if names.len() == 1 { "it" } else { "them" })
+    }
+}
+
 impl LoadErrorKind {
     /// Shortens every name and text from the model file ([`shorten`]).
     fn shorten_texts(&mut self) {
@@ -827,7 +867,6 @@ impl LoadErrorKind {
             | K::LockUnknownJoint { joint: a }
             | K::UnknownLinkNamed { link: a, .. }
             | K::LockedJointInConstraint { name: a, .. }
-            | K::LockedMimicJoint { driver: a }
             | K::ConstraintNameTaken { name: a, .. }
             | K::MergedInertiaOverflow { body_link: a } => shorten(a),
             K::NotANumber { attribute, text }
@@ -857,6 +896,11 @@ impl LoadErrorKind {
             }
             K::SeveralRoots { roots } => roots.iter_mut().for_each(shorten),
             K::NotForF32 { inner } => inner.shorten_texts(),
+            K::LockedMimicJoint { drivers, .. } => drivers.iter_mut().for_each(shorten),
+            K::LockFixesMimicJoint { driver, reason } => {
+                shorten(driver);
+                reason.shorten_texts();
+            }
             _ => {}
         }
     }

@@ -342,7 +342,12 @@ pub(crate) fn assemble<T: Real>(
     // Relative to the magnitudes of each equation (docs/conventions.md), and reachable in the scalar at hand.
     let tolerance = (64.0 * T::epsilon().to_f64()).max(1e-12);
     for _ in 0..iterations {
-        forward_kinematics(model, ws, q, &zeros).expect("sizes match");
+        // Only a non-finite coordinate fails here (the sizes are the model's): a step that overflowed,
+        // from a constraint whose coefficients are near the largest f64 (a <mimic multiplier="1e308">
+        // crashed the loader). That start does not assemble.
+        if forward_kinematics(model, ws, q, &zeros).is_err() {
+            return false;
+        }
         residuals_scaled(model, ws.kinematics(), q, &mut r, &mut scale);
         let rr: Vec<T> = rows.iter().map(|&i| -r[i]).collect();
         // A NaN residual (a configuration outside the representable range) never converges.
@@ -361,8 +366,16 @@ pub(crate) fn assemble<T: Real>(
         } else {
             T::one()
         };
-        for (k, &b) in bodies.iter().enumerate() {
-            q[model.joints[b].q_index] += step[k] * scale;
+        let next: Vec<T> = bodies
+            .iter()
+            .enumerate()
+            .map(|(k, &b)| q[model.joints[b].q_index] + step[k] * scale)
+            .collect();
+        if next.iter().any(|x| !x.to_f64().is_finite()) {
+            return false;
+        }
+        for (&b, x) in bodies.iter().zip(next) {
+            q[model.joints[b].q_index] = x;
         }
     }
     false
