@@ -660,3 +660,29 @@ fn a_mimic_multiplier_near_the_largest_f64_loads() {
     .unwrap_or_else(|e| panic!("{e}"));
     assert_eq!((model.nv(), model.independent_nv()), (4, 3));
 }
+
+/// A `<mimic>` offset too large for f32 is reported with the sign the file wrote (an attacker's trial:
+/// `offset="1e39"` was reported as −1e39, the constraint's own constant).
+#[test]
+fn a_mimic_offset_too_large_for_f32_is_reported_as_written() {
+    let link = |name: &str| {
+        format!(
+            r#"<link name="{name}"><inertial><mass value="1"/><inertia ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.01"/></inertial></link>"#
+        )
+    };
+    let text = format!(
+        r#"<robot name="m"><link name="base"/>{}{}<joint name="d" type="revolute"><parent link="base"/><child link="l1"/><axis xyz="0 1 0"/></joint><joint name="f" type="revolute"><parent link="l1"/><child link="l2"/><axis xyz="0 1 0"/><mimic joint="d" offset="1e39"/></joint></robot>"#,
+        link("l1"),
+        link("l2"),
+    );
+    let loaded = embedyn::codegen::parse_urdf(&text, std::path::Path::new("m.urdf")).unwrap();
+    assert!(loaded.model::<f64>(&ModelOptions::default()).is_ok());
+    let e = loaded
+        .model::<f32>(&ModelOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("offset 1e39") && e.contains("too large for f32"),
+        "{e}"
+    );
+}

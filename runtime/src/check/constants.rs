@@ -151,11 +151,14 @@ fn constants<T: Real>(model: &Model<T>) -> Vec<Constants> {
                     kind: Kind::Coefficients,
                     values: terms.iter().map(|(_, k)| k.to_f64()).collect(),
                 });
+                // The model's row is `Σ k q + offset = 0`, a mimic's `q = m q_d + o` written as
+                // `q − m q_d − o = 0`: the offset the file wrote is `−offset` (an attacker's trial: an
+                // offset of 1e39 was reported as −1e39). A coupling's is 0.
                 out.push(Constants {
                     element,
                     what: "offset",
                     kind: Kind::Offset,
-                    values: vec![offset.to_f64()],
+                    values: vec![-offset.to_f64()],
                 });
             }
             ConstraintKind::Loop(l) => {
