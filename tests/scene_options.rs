@@ -322,10 +322,12 @@ fn a_mimic_joint_is_refused_with_the_joints_to_lock_instead() {
         e.to_string().contains("\"wrist_pitch\" and \"wrist_roll\""),
         "{e}"
     );
-    // A chain: the third finger follows the second, which follows the first; the first is to lock.
-    let m = r#"<mimic joint="finger2_joint" multiplier="2" offset="0"/>"#;
-    let text = gripper_with_third_finger(r#"<mimic joint="finger1_joint"/>"#, m);
-    let e = parse_urdf(&text, Path::new("gripper3.urdf"))
+    // Locking the third finger of a gripper whose fingers follow `finger2` and `finger3`.
+    let lock_third_finger = |finger2: &str, finger3: &str| {
+        parse_urdf(
+            &gripper_with_third_finger(finger2, finger3),
+            Path::new("gripper3.urdf"),
+        )
         .unwrap()
         .model::<f64>(&ModelOptions {
             locks: vec![LockedJoint {
@@ -334,22 +336,18 @@ fn a_mimic_joint_is_refused_with_the_joints_to_lock_instead() {
             }],
             ..Default::default()
         })
-        .unwrap_err();
+        .unwrap_err()
+    };
+    // A chain: the third finger follows the second, which follows the first; the first is to lock.
+    let e = lock_third_finger(
+        r#"<mimic joint="finger1_joint"/>"#,
+        r#"<mimic joint="finger2_joint" multiplier="2" offset="0"/>"#,
+    );
     assert!(
         matches!(&e.kind, LoadErrorKind::LockedMimicJoint { drivers, .. } if drivers == &["finger1_joint"]),
         "{e}"
     );
-    let text = gripper_with_third_finger("", r#"<mimic joint="finger3_joint"/>"#);
-    let e = parse_urdf(&text, Path::new("gripper3.urdf"))
-        .unwrap()
-        .model::<f64>(&ModelOptions {
-            locks: vec![LockedJoint {
-                joint: "finger3_joint".into(),
-                value: 0.0,
-            }],
-            ..Default::default()
-        })
-        .unwrap_err();
+    let e = lock_third_finger("", r#"<mimic joint="finger3_joint"/>"#);
     assert!(matches!(e.kind, LoadErrorKind::MimicSelf), "{e}");
 }
 
