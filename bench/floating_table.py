@@ -24,7 +24,7 @@ def main():
         "ranges their spread, the ratio the median of the rounds' ratios. Ours through `embedyn bench --floating "
         "--json` (the generated code built for the baseline x86-64 target and timed in-process on random "
         "states; on this CPU, which has AVX, its f64 functions with AVX twins — 4,000 to 25,000 statements, and "
-        "smaller ones under a budget per module: here all three of ANYmal B's, the humanoids' `aba` and `crba` — and "
+        "smaller ones under a budget per module: here every one of the five functions `embedyn bench` builds (`aba`, `rnea`, `gravity`, `nle`, `crba`) — and "
         "every batch of 24 or more sines and cosines run their AVX copies, the same bits: "
         "docs/generated-code.md, \"AVX where the CPU has it\"), Pinocchio's through `pinocchio_bench --floating` "
         "(g++ -O3, no `-march=native`, as its PyPI wheel is built; compiled with `-mavx` against the wheel's "
