@@ -393,6 +393,8 @@ fn generate_never_replaces_files_it_did_not_write() {
 /// test profile's opt-level 1, which did not show the miscompilation this pins: rustc 1.95 (LLVM 22.1.2)
 /// at opt-level 3 gave one angle of the sine/cosine batch another's quadrant, and the arm7's release
 /// `kinematics` had every link below joint 2 wrong by up to 2 (`reduce` in runtime/src/codegen_support.rs).
+/// The lane module's batch forms (`--lanes 4`), whose sine/cosine takes each lane's quadrant from the bits
+/// of its shifted float as the scalar batch did, give the scalar functions' bits in that build too.
 #[test]
 fn standalone_crate_in_release_matches_the_interpreted_solver() {
     use embedyn_runtime::{
@@ -408,6 +410,8 @@ fn standalone_crate_in_release_matches_the_interpreted_solver() {
             "kinematics,aba,rnea,crba,minv",
             "--scalar",
             "f64",
+            "--lanes",
+            "4",
             "--name",
             "arm7-release-check",
         ],
@@ -422,9 +426,18 @@ fn standalone_crate_in_release_matches_the_interpreted_solver() {
         format!("&[{}]", items.join(", "))
     };
     let mut cases = String::new();
-    for _ in 0..16 {
-        // Angles over every quadrant (past the limits: the functions take any angle).
-        let q: Vec<f64> = (0..nv).map(|_| rng.uniform(-6.0, 6.0)).collect();
+    for case in 0..18 {
+        // Angles over every quadrant (past the limits: the functions take any angle), and two states at
+        // multiples of π/2 and just beside them, where the quadrant changes.
+        let q: Vec<f64> = match case {
+            16 => (0..nv)
+                .map(|k| (k as f64 - 3.0) * core::f64::consts::FRAC_PI_2)
+                .collect(),
+            17 => (0..nv)
+                .map(|k| (k as f64 - 3.0) * core::f64::consts::FRAC_PI_2 + (k as f64 - 3.0) * 1e-12)
+                .collect(),
+            _ => (0..nv).map(|_| rng.uniform(-6.0, 6.0)).collect(),
+        };
         let v: Vec<f64> = (0..nv).map(|_| rng.uniform(-2.0, 2.0)).collect();
         let tau: Vec<f64> = (0..nv).map(|_| rng.uniform(-20.0, 20.0)).collect();
         forward_kinematics(&model, &mut ws, &q, &v).unwrap();
@@ -448,7 +461,7 @@ fn standalone_crate_in_release_matches_the_interpreted_solver() {
             .as_slice()
             .to_vec();
         cases += &format!(
-            "    check({}, {}, {}, {}, {}, {}, {}, {});\n",
+            "    states.push(check({}, {}, {}, {}, {}, {}, {}, {}));\n",
             list(&q),
             list(&v),
             list(&tau),
@@ -470,8 +483,10 @@ fn close(what: &str, got: &[f64], want: &[f64]) {{
     }}
 }}
 
+type State = ([f64; NV], [f64; NV], [f64; NV]);
+
 #[allow(clippy::too_many_arguments)]
-fn check(q: &[f64], v: &[f64], tau: &[f64], frames: &[f64], qdd: &[f64], inverse: &[f64], m: &[f64], minv: &[f64]) {{
+fn check(q: &[f64], v: &[f64], tau: &[f64], frames: &[f64], qdd: &[f64], inverse: &[f64], m: &[f64], minv: &[f64]) -> State {{
     let (q, v, tau): ([f64; NV], [f64; NV], [f64; NV]) =
         (q.try_into().unwrap(), v.try_into().unwrap(), tau.try_into().unwrap());
     let mut f = [[0.0; 12]; FRAMES.len()];
@@ -487,10 +502,48 @@ fn check(q: &[f64], v: &[f64], tau: &[f64], frames: &[f64], qdd: &[f64], inverse
     close("crba", mat.as_flattened(), m);
     g::minv(&q, &mut mat);
     close("minv", mat.as_flattened(), minv);
+    (q, v, tau)
+}}
+
+/// The batch forms against the scalar functions, bit for bit.
+fn lanes(states: &[State]) {{
+    use arm7_release_check::f64x4 as l;
+    let same = |what: &str, k: usize, got: &[f64], want: &[f64]| {{
+        for (i, (a, b)) in got.iter().zip(want).enumerate() {{
+            assert!(a.to_bits() == b.to_bits(), "{{what}} state {{k}} [{{i}}]: lanes {{a:e}} against scalar {{b:e}}");
+        }}
+    }};
+    let q: Vec<[f64; NV]> = states.iter().map(|s| s.0).collect();
+    let v: Vec<[f64; NV]> = states.iter().map(|s| s.1).collect();
+    let tau: Vec<[f64; NV]> = states.iter().map(|s| s.2).collect();
+    let n = states.len();
+    let mut frames = vec![[[0.0; 12]; FRAMES.len()]; n];
+    assert!(l::kinematics_batch(&q, &mut frames));
+    let mut qdd = vec![[0.0; NV]; n];
+    assert!(l::aba_batch(&q, &v, &tau, &mut qdd));
+    let mut inverse = vec![[0.0; NV]; n];
+    assert!(l::rnea_batch(&q, &v, &tau, &mut inverse));
+    let mut m = vec![[[0.0; NV]; NV]; n];
+    assert!(l::crba_batch(&q, &mut m));
+    for k in 0..n {{
+        let mut f = [[0.0; 12]; FRAMES.len()];
+        g::kinematics(&q[k], &mut f);
+        same("kinematics", k, frames[k].as_flattened(), f.as_flattened());
+        let mut out = [0.0; NV];
+        let _ = g::aba(&q[k], &v[k], &tau[k], &mut out);
+        same("aba", k, &qdd[k], &out);
+        g::rnea(&q[k], &v[k], &tau[k], &mut out);
+        same("rnea", k, &inverse[k], &out);
+        let mut mat = [[0.0; NV]; NV];
+        g::crba(&q[k], &mut mat);
+        same("crba", k, m[k].as_flattened(), mat.as_flattened());
+    }}
 }}
 
 fn main() {{
-{cases}    println!("all cases agree");
+    let mut states = Vec::new();
+{cases}    lanes(&states);
+    println!("all cases agree");
 }}
 "#
     );
