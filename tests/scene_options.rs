@@ -347,7 +347,11 @@ fn a_mimic_joint_is_refused_with_the_joints_to_lock_instead() {
         matches!(&e.kind, LoadErrorKind::LockedMimicJoint { drivers, .. } if drivers == &["finger1_joint"]),
         "{e}"
     );
-    let e = lock_third_finger("", r#"<mimic joint="finger3_joint"/>"#);
+    let e = parse_urdf(
+        &gripper_with_third_finger("", r#"<mimic joint="finger3_joint"/>"#),
+        Path::new("gripper3.urdf"),
+    )
+    .unwrap_err();
     assert!(matches!(e.kind, LoadErrorKind::MimicSelf), "{e}");
 }
 

@@ -273,15 +273,6 @@ fn lock_joints(robot: &mut Robot, locks: &[LockedJoint], floating: bool) -> Resu
             ));
         };
         let joint = &robot.joints[j];
-        // The file's own error first, which a refusal of the lock would hide.
-        if let Some(m) = joint.mimics.iter().find(|m| m.joint == joint.name) {
-            let at = Location::new(
-                &robot.source,
-                m.line,
-                format!("joint \"{}\" <mimic>", joint.name),
-            );
-            return Err(LoadError::at(at, LoadErrorKind::MimicSelf));
-        }
         let kind = if joint.kind.is_one_dof() {
             None
         } else {

@@ -313,7 +313,8 @@ impl<'a, 'input> Parser<'a, 'input> {
             root_link = self.tree_root(root, &name, &links, &joints, &parent_joint)?;
         }
         // Mimic targets must exist (a joint the reader left out counts as existing: its own problem
-        // is reported).
+        // is reported) and be another joint: a file error whatever the scene options (a lock of the joint
+        // would otherwise be refused first and hide it).
         let written_joints: HashSet<&str> = root
             .children()
             .filter(|n| n.has_tag_name("joint"))
@@ -323,7 +324,12 @@ impl<'a, 'input> Parser<'a, 'input> {
             // (Shortened once per joint, not once per <mimic>: a joint's name may be megabytes long.)
             let element = format!("joint \"{}\" <mimic>", shortened(&joint.name));
             for m in &joint.mimics {
-                if !written_joints.contains(m.joint.as_str()) {
+                if m.joint == joint.name {
+                    self.record(
+                        Location::new(self.path, m.line, element.clone()),
+                        LoadErrorKind::MimicSelf,
+                    );
+                } else if !written_joints.contains(m.joint.as_str()) {
                     self.record(
                         Location::new(self.path, m.line, element.clone()),
                         LoadErrorKind::UnknownMimicTarget {

@@ -342,12 +342,8 @@ pub(crate) fn assemble<T: Real>(
     // Relative to the magnitudes of each equation (docs/conventions.md), and reachable in the scalar at hand.
     let tolerance = (64.0 * T::epsilon().to_f64()).max(1e-12);
     for _ in 0..iterations {
-        // Only a non-finite coordinate fails here (the sizes are the model's): a step that overflowed,
-        // from a constraint whose coefficients are near the largest f64 (a <mimic multiplier="1e308">
-        // crashed the loader). That start does not assemble.
-        if forward_kinematics(model, ws, q, &zeros).is_err() {
-            return false;
-        }
+        // `q` stays finite: a step that would leave it is refused below.
+        forward_kinematics(model, ws, q, &zeros).expect("sizes match");
         residuals_scaled(model, ws.kinematics(), q, &mut r, &mut scale);
         let rr: Vec<T> = rows.iter().map(|&i| -r[i]).collect();
         // A NaN residual (a configuration outside the representable range) never converges.
@@ -371,6 +367,9 @@ pub(crate) fn assemble<T: Real>(
             .enumerate()
             .map(|(k, &b)| q[model.joints[b].q_index] + step[k] * scale)
             .collect();
+        // A step that overflows the coordinates (a constraint with coefficients near the largest f64,
+        // a <mimic multiplier="1e308">, crashed the loader in the kinematics after it): that start does
+        // not assemble, and `q` stays as it was, finite, for the caller.
         if next.iter().any(|x| !x.to_f64().is_finite()) {
             return false;
         }
