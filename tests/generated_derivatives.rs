@@ -448,22 +448,28 @@ fn lane_derivatives_of_a_floating_quadruped_are_the_scalar_ones() {
 
 /// A large function's AVX twin (docs/generated-code.md, "AVX where the CPU has it") gives the bits of its
 /// baseline copy: the UR5's `aba_derivatives` and `rnea_derivatives`, the floating Solo-12's factored
-/// `aba_derivatives`, a four-bar's `complete` and `aba` (every function twinned) and the batch of 32 sines
-/// and cosines, each run with the twins allowed and forbidden, on finite states (a NaN's sign and payload
+/// `aba_derivatives`, a four-bar's `complete` and `aba` (every function twinned, with AVX-512 too) and the
+/// batch of 32 sines and cosines, each run with the twins allowed, with the AVX-512 ones forbidden and with
+/// all forbidden, on finite states (a NaN's sign and payload
 /// may differ between the copies, as x86 passes on the first operand's NaN). (On a CPU without AVX, or a build
 /// that enables AVX itself, both runs take the same copy and the test passes trivially; the CI machines
 /// have AVX.)
 #[test]
 fn avx_twins_give_the_bits_of_the_baseline_code() {
-    use embedyn::codegen_support::dispatch::use_avx;
-    // Runs of both copies, each state computed with the twins allowed, then forbidden.
+    use embedyn::codegen_support::dispatch::{use_avx, use_avx512};
+    // Runs of every copy, each state computed with the twins allowed (the AVX-512 one where the function
+    // and the CPU have it), with the AVX-512 ones forbidden, then with all forbidden.
     fn both<T: PartialEq + std::fmt::Debug>(mut run: impl FnMut() -> T) {
         use_avx(true);
         let with_twin = run();
+        use_avx512(false);
+        let with_avx = run();
+        use_avx512(true);
         use_avx(false);
         let baseline = run();
         use_avx(true);
         assert_eq!(with_twin, baseline);
+        assert_eq!(with_avx, baseline);
     }
     let bits = |m: &[[f64; N]; N]| m.map(|row| row.map(f64::to_bits));
     // The batch of sines and cosines every generated function starts with has its own AVX copy.

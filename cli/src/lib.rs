@@ -224,8 +224,9 @@ pub enum Command {
         lanes: Option<usize>,
         /// Which f64 functions also get an AVX copy that runs where the CPU has it (x86-64; same results,
         /// up to half the time): `large` (4,000 to 25,000 statements, smaller ones smallest first while
-        /// the twins total at most 17,000, and every lane function of `f64x4` or `f32x8` up to 25,000),
-        /// `all`, or `none` (less compile time).
+        /// the twins total at most 17,000, and every lane function of `f64x4` or `f32x8` up to 25,000;
+        /// with 24 or more degrees of freedom the smallest twinned ones, up to 4,000 statements, also get
+        /// an AVX-512 copy), `all`, or `none` (less compile time).
         #[arg(long, value_parser = ["none", "large", "all"], default_value = "large")]
         avx_twins: String,
         /// The crate's package name (default: the robot's name as an identifier, then `_dynamics`), e.g.

@@ -20,6 +20,8 @@
 //!
 //! A lane module of 256-bit values gives its functions two twins (`TwinOf::Lanes`, [`AVX512`] then
 //! [`AVX`]): the one compiled with AVX-512 F and VL runs where the CPU has them, the AVX one elsewhere.
+//! So do a wide tree's smallest twinned scalar functions ([`AVX512_MIN_NV`]), whose AVX twins still spill
+//! for want of registers.
 
 use crate::emit::Code;
 use proc_macro2::TokenStream;
@@ -62,6 +64,25 @@ pub const TWIN_BUDGET_STATEMENTS: usize = 17_000;
 /// operations (`integrate`, a frame function of a fixed link) would only add the dispatch's check, and take
 /// budget that a larger function would use better (a new user's trial).
 pub const TWIN_SMALL_MIN_STATEMENTS: usize = 400;
+
+/// Degrees of freedom (`nv`) from which a model's twinned `f64` functions may also get an AVX-512 twin
+/// ([`AvxTwins::avx512_twins`]). With AVX-512 F and VL the same scalar code has 32 vector registers
+/// instead of 16: where a function keeps more values live than 16 registers hold, it spills half as much
+/// (the floating G1's `crba` twin: 612 instructions touching the stack with AVX, 303 with AVX-512).
+/// Measured (2026-12-04, an AMD EPYC of the Zen 4 kind, the AVX twin against the AVX-512 one in one
+/// binary, two runs): the humanoids gained in every function, the floating G1 (nv = 35) `crba` 0.91–0.93×
+/// the time, `kinematics` 0.89–0.90×, `rnea` 0.88×, `aba` 0.94×; TALOS (nv = 44) `crba` 0.87–0.91×,
+/// `kinematics` 0.92×, `aba` 0.92×, `rnea` 0.95–0.96×; the floating ANYmal B (nv = 18) lost: `crba`
+/// 1.18–1.19×, `rnea` 1.10×, `kinematics` 1.05×, `aba` 1.0×. A small function pays for what LLVM does
+/// with 512-bit registers at its start (the batch of sines and cosines stored in 512-bit pieces, then
+/// read one by one), and gains little from the registers.
+pub const AVX512_MIN_NV: usize = 24;
+
+/// Statements of the AVX-512 twins a module may have under `AvxTwins::Large`, smallest function first
+/// ([`AvxTwins::avx512_twins`]): each is one more copy to compile. A humanoid's `kinematics` and `crba`
+/// (0.7k–0.8k and 2.2k–2.4k statements) fit; its `rnea` and `aba` (3.4k–3.8k, 6.3k–6.4k: less gain per
+/// statement, 0.88–0.96×) do not.
+pub const AVX512_TWIN_BUDGET_STATEMENTS: usize = 4_000;
 
 /// Which generated functions get an AVX twin (macro `avx_twins = none|large|all`, `embedyn generate
 /// --avx-twins none|large|all`).
@@ -132,6 +153,33 @@ impl AvxTwins {
         chosen
     }
 
+    /// The twinned `f64` functions (`twinned`, by index, of `statements` statements each) that also get
+    /// an AVX-512 twin in a model of `nv` degrees of freedom: under `Large`, from [`AVX512_MIN_NV`],
+    /// smallest first while they total at most [`AVX512_TWIN_BUDGET_STATEMENTS`]; under `All`, every
+    /// twinned one.
+    pub fn avx512_twins(self, nv: usize, statements: &[usize], twinned: &[bool]) -> Vec<usize> {
+        let candidates = (0..statements.len()).filter(|&k| twinned[k]);
+        match self {
+            AvxTwins::None => Vec::new(),
+            AvxTwins::All => candidates.collect(),
+            AvxTwins::Large if nv < AVX512_MIN_NV => Vec::new(),
+            AvxTwins::Large => {
+                let mut candidates: Vec<usize> = candidates.collect();
+                candidates.sort_by_key(|&k| (statements[k], k));
+                let mut total = 0;
+                let mut chosen = Vec::new();
+                for k in candidates {
+                    if total + statements[k] <= AVX512_TWIN_BUDGET_STATEMENTS {
+                        total += statements[k];
+                        chosen.push(k);
+                    }
+                }
+                chosen.sort_unstable();
+                chosen
+            }
+        }
+    }
+
     /// Whether a lane function of `statements` statements gets a twin in a lane module of 256-bit values
     /// (`lanes_of_256_bits`). There the twin computes a lane value in one AVX instruction where the
     /// baseline code takes two SSE2 ones, a gain at any size (2026-12-03, 4 f64 lanes, ns per state, the
@@ -168,8 +216,10 @@ pub fn avx_lane_type(scalar: &str, lanes: usize) -> Option<&'static str> {
 /// What a twin copies: a scalar module's function, or a lane module's.
 #[derive(Clone, Copy, Debug)]
 pub enum TwinOf<'a> {
-    /// A function of a scalar module: the twin is the same code compiled with AVX.
-    Scalar,
+    /// A function of a scalar module: the twin is the same code compiled with AVX, and where `avx512`
+    /// a second one compiled with AVX-512 F and VL, which runs first where the CPU has them
+    /// ([`AvxTwins::avx512_twins`]).
+    Scalar { avx512: bool },
     /// A function of a lane module of 256-bit values: the twins are the same code over `avx_type`
     /// (`AvxF64x4`: the lane type's layout, AVX instructions), one compiled with AVX-512 (F and VL) and
     /// one with AVX; the public functions hand their arguments and results over with `dispatch::recast`.
@@ -201,9 +251,9 @@ pub const AVX: Level = Level {
 /// nor AVX2 and FMA (the ANYmal B's `rnea` 1.1× slower, the Z1's `aba` between the two) paid as well.
 /// (The scalar functions on another host, an AMD EPYC of the Zen 4 kind, 2026-12-04: the floating G1's
 /// twins compiled for AVX-512 F and VL instead of AVX took 0.90–0.92× the time, `crba` 546–554 → 489–499
-/// ns, `aba` 1,218–1,227 → 1,120–1,126, `rnea` 597–608 → 548–553, two runs of one binary each. Scalar
-/// functions keep one twin: a second one, for the CPUs with AVX but not AVX-512, would double the twins'
-/// compile time.)
+/// ns, `aba` 1,218–1,227 → 1,120–1,126, `rnea` 597–608 → 548–553, two runs of one binary each. A
+/// scalar function gets this twin beside its AVX one, for the CPUs with AVX but not AVX-512, only in a
+/// wide tree and under a budget of its own, [`AVX512_MIN_NV`], as each costs compile time.)
 /// The lane values stay 256 bits wide, but LLVM is free to use 512-bit instructions where it finds
 /// them (an attacker's trial found some, in array copies and the batch of sines and cosines): on CPUs
 /// that lower their clock for those (Skylake-SP-class Xeons), `dispatch::use_avx512(false)` is the way
@@ -217,7 +267,8 @@ impl TwinOf<'_> {
     /// The levels this function gets a twin for, the one to prefer first.
     pub fn levels(self) -> &'static [Level] {
         match self {
-            TwinOf::Scalar => &[AVX],
+            TwinOf::Scalar { avx512: false } => &[AVX],
+            TwinOf::Scalar { avx512: true } => &[AVX512, AVX],
             TwinOf::Lanes { .. } => &[AVX512, AVX],
         }
     }
@@ -293,7 +344,7 @@ impl Twin<'_> {
 /// paired scalar code's one; in the twin it is one register.
 fn twin_items(of: TwinOf, helpers: &TokenStream) -> TokenStream {
     match of {
-        TwinOf::Scalar => quote!(),
+        TwinOf::Scalar { .. } => quote!(),
         TwinOf::Lanes { avx_type } => {
             let avx_type = format_ident!("{}", avx_type);
             quote! {
@@ -571,6 +622,84 @@ mod tests {
         );
     }
 
+    /// AVX-512 twins: none below `AVX512_MIN_NV` or under `None`; from it, among the twinned functions
+    /// only, smallest first within the budget (a humanoid's `kinematics` and `crba`, not its `rnea` and
+    /// `aba`); every twinned one under `All`.
+    #[test]
+    fn avx512_twins_go_to_a_wide_trees_smallest_twinned_functions() {
+        assert_eq!(AVX512_MIN_NV, 24);
+        assert_eq!(AVX512_TWIN_BUDGET_STATEMENTS, 4_000);
+        // The floating G1's default functions: kinematics, aba, rnea, crba.
+        let g1 = [802, 6_328, 3_354, 2_369];
+        let twinned = [true; 4];
+        assert_eq!(AvxTwins::Large.avx512_twins(35, &g1, &twinned), vec![0, 3]);
+        assert!(AvxTwins::Large.avx512_twins(23, &g1, &twinned).is_empty());
+        assert!(AvxTwins::None.avx512_twins(35, &g1, &twinned).is_empty());
+        assert_eq!(
+            AvxTwins::All.avx512_twins(6, &g1, &twinned),
+            vec![0, 1, 2, 3]
+        );
+        // Not twinned, not chosen, however small; equal sizes in the module's order.
+        assert_eq!(
+            AvxTwins::Large.avx512_twins(35, &g1, &[false, true, true, true]),
+            vec![3]
+        );
+        assert_eq!(
+            AvxTwins::Large.avx512_twins(30, &[2_000, 2_000, 2_000], &[true; 3]),
+            vec![0, 1]
+        );
+        // A function over the budget alone leaves room for a smaller one after it.
+        assert_eq!(
+            AvxTwins::Large.avx512_twins(30, &[4_001, 3_000, 1_500], &[true; 3]),
+            vec![2]
+        );
+    }
+
+    /// A scalar function with an AVX-512 twin asks for it first, then for the AVX one, each module's
+    /// functions carrying their level's attribute; the arguments pass as they are (no recast).
+    #[test]
+    fn a_scalar_function_can_get_an_avx512_twin_before_its_avx_one() {
+        let code = quote! {
+            pub fn f(q: &[S; 2], out: &mut [S; 1]) { out[0] = q[0]; }
+        };
+        let Code::Tokens(out) = with_avx_twin(
+            &Code::Tokens(code),
+            "f",
+            &helpers(),
+            TwinOf::Scalar { avx512: true },
+        ) else {
+            panic!("tokens stay tokens")
+        };
+        let text = crate::generate::format_tokens(&quote!(mod m { #out })).unwrap();
+        let avx512 = text
+            .find("if crate::helpers::dispatch::avx512() {")
+            .expect(&text);
+        let avx = text
+            .find("if crate::helpers::dispatch::avx() {")
+            .expect(&text);
+        assert!(avx512 < avx, "{text}");
+        assert!(
+            text.contains("return unsafe { f_avx512::f(q, out) };"),
+            "{text}"
+        );
+        assert!(
+            text.contains("return unsafe { f_avx::f(q, out) };"),
+            "{text}"
+        );
+        assert_eq!(
+            text.matches("#[target_feature(enable = \"avx512f,avx512vl\")]")
+                .count(),
+            1,
+            "{text}"
+        );
+        assert_eq!(
+            text.matches("#[target_feature(enable = \"avx\")]").count(),
+            1,
+            "{text}"
+        );
+        assert!(!text.contains("recast"), "{text}");
+    }
+
     #[test]
     fn tokens_get_a_dispatch_and_a_twin_with_avx_everywhere() {
         let code = quote! {
@@ -581,8 +710,12 @@ mod tests {
             use self::f_parts_0::f_part;
             pub fn f(q: &[S; 2], out: &mut [S; 1]) -> S { let mut s = [0.0; 1]; f_part(q, &mut s); out[0] = s[0]; s[0] }
         };
-        let Code::Tokens(out) = with_avx_twin(&Code::Tokens(code), "f", &helpers(), TwinOf::Scalar)
-        else {
+        let Code::Tokens(out) = with_avx_twin(
+            &Code::Tokens(code),
+            "f",
+            &helpers(),
+            TwinOf::Scalar { avx512: false },
+        ) else {
             panic!("tokens stay tokens")
         };
         let text = crate::generate::format_tokens(&quote!(mod m { #out })).unwrap();
@@ -614,7 +747,7 @@ mod tests {
             &Code::Text(text.to_string()),
             "g",
             &helpers(),
-            TwinOf::Scalar,
+            TwinOf::Scalar { avx512: false },
         ) else {
             panic!("text stays text")
         };

@@ -761,18 +761,40 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
                 sizes[k].twinned = true;
             }
         }
+        // AVX-512 twins beside some AVX ones (src/dispatch.rs), again within the compiler's memory.
+        let mut avx512 = vec![false; functions.len()];
+        if options.f64 {
+            let statements: Vec<usize> = functions.iter().map(|f| f.statements).collect();
+            let twinned: Vec<bool> = sizes.iter().map(|f| f.twinned).collect();
+            for k in options
+                .avx_twins
+                .avx512_twins(model64.nv(), &statements, &twinned)
+            {
+                let bytes = functions[k].compile_bytes / scalars.len() as f64;
+                if let Some(limit) = options.max_compile_memory_mb {
+                    let mut with = sizes.clone();
+                    with[k].compile_bytes += bytes;
+                    if size::compile_memory_mb(&with, scalars.len()) > limit as f64 {
+                        continue;
+                    }
+                }
+                sizes[k].compile_bytes += bytes;
+                avx512[k] = true;
+            }
+        }
         // The chosen twins' code.
         f64_twins = functions
             .iter()
             .zip(&sizes)
             .zip(&instances)
-            .map(|((function, size), instance)| {
+            .zip(&avx512)
+            .map(|(((function, size), instance), &avx512)| {
                 size.twinned.then(|| {
                     crate::dispatch::with_avx_twin(
                         &function.code,
                         &instance.name,
                         &options.helpers,
-                        crate::dispatch::TwinOf::Scalar,
+                        crate::dispatch::TwinOf::Scalar { avx512 },
                     )
                 })
             })
@@ -1975,6 +1997,48 @@ mod tests {
         assert_eq!(three.matches("mod aba_derivatives_avx {").count(), 1);
         assert_eq!(three.matches("mod step_derivatives_avx {").count(), 1);
         assert!(!three.contains("mod aba_avx {"));
+    }
+
+    /// A wide tree's smallest twinned functions also get an AVX-512 twin (src/dispatch.rs,
+    /// `AVX512_MIN_NV`): the bundled 34-joint humanoid's `kinematics` and `crba` under the default
+    /// budget, not its larger `rnea` and `aba`; a floating quadruped (nv = 18) gets none, and
+    /// `avx_twins = all` gives one to every function.
+    #[test]
+    fn a_wide_trees_small_functions_get_an_avx512_twin() {
+        let load = |path: &str| {
+            crate::load(format!("{}/../{path}", env!("CARGO_MANIFEST_DIR")).as_ref()).unwrap()
+        };
+        let options = |floating: bool, avx_twins: crate::AvxTwins| GenerateOptions {
+            model: ModelOptions {
+                floating,
+                ..ModelOptions::default()
+            },
+            avx_twins,
+            f32: false,
+            ..GenerateOptions::default()
+        };
+        let wide = |text: &str| -> Vec<&str> {
+            ["kinematics", "aba", "rnea", "crba"]
+                .into_iter()
+                .filter(|f| text.contains(&format!("mod {f}_avx512 {{")))
+                .collect()
+        };
+        let humanoid = load("models/humanoid34.urdf");
+        let text = generate_source(&humanoid, &options(false, crate::AvxTwins::Large)).unwrap();
+        assert_eq!(wide(&text), ["kinematics", "crba"]);
+        // Each asks for its AVX-512 twin first, then for its AVX one.
+        let crba = &text[text.find("pub fn crba(").unwrap()..];
+        let (avx512, avx) = (
+            crba.find("dispatch::avx512()").unwrap(),
+            crba.find("dispatch::avx()").unwrap(),
+        );
+        assert!(avx512 < avx);
+        let all = generate_source(&humanoid, &options(false, crate::AvxTwins::All)).unwrap();
+        assert_eq!(wide(&all), ["kinematics", "aba", "rnea", "crba"]);
+        let quadruped = load("models/peers/anymal_b.urdf");
+        let text = generate_source(&quadruped, &options(true, crate::AvxTwins::Large)).unwrap();
+        assert!(text.contains("mod crba_avx {"));
+        assert!(wide(&text).is_empty());
     }
 
     /// The smaller functions' twins are a speed-up, not a request: under a memory limit that the code
