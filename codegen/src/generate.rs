@@ -2033,6 +2033,15 @@ mod tests {
             crba.find("dispatch::avx()").unwrap(),
         );
         assert!(avx512 < avx);
+        // The standalone crate's README names them.
+        #[cfg(feature = "standalone")]
+        {
+            let readme = standalone_readme(&humanoid, &options(false, crate::AvxTwins::Large));
+            assert!(
+                readme.contains("functions `kinematics`, `crba` are also compiled with AVX-512"),
+                "{readme}"
+            );
+        }
         let all = generate_source(&humanoid, &options(false, crate::AvxTwins::All)).unwrap();
         assert_eq!(wide(&all), ["kinematics", "aba", "rnea", "crba"]);
         let quadruped = load("models/peers/anymal_b.urdf");
