@@ -71,6 +71,12 @@ mod four_bar_twins {
     );
 }
 
+// A wide tree (34 joints, from `dispatch::AVX512_MIN_NV`): its two smallest functions get an AVX-512
+// twin besides the AVX one by default.
+mod humanoid34_twins {
+    embedyn::robot!("models/humanoid34.urdf", f64_only, only(kinematics, crba));
+}
+
 // A quadruped's derivatives are paired (its left and right legs side by side), under the generator's
 // pairing limit of 60k operations; `aba_derivatives` is traced as factors with the product `−M⁻¹ ∂τ` in
 // a loop after them, here with two lanes: the lane module's loop product as well (`rnea_derivatives`
@@ -448,9 +454,9 @@ fn lane_derivatives_of_a_floating_quadruped_are_the_scalar_ones() {
 
 /// A large function's AVX twin (docs/generated-code.md, "AVX where the CPU has it") gives the bits of its
 /// baseline copy: the UR5's `aba_derivatives` and `rnea_derivatives`, the floating Solo-12's factored
-/// `aba_derivatives`, a four-bar's `complete` and `aba` (every function twinned, with AVX-512 too) and the
-/// batch of 32 sines and cosines, each run with the twins allowed, with the AVX-512 ones forbidden and with
-/// all forbidden, on finite states (a NaN's sign and payload
+/// `aba_derivatives`, a four-bar's `complete` and `aba` (every function twinned), a 34-joint humanoid's
+/// `kinematics` and `crba` (with AVX-512 twins too) and the batch of 32 sines and cosines, each run with
+/// the twins allowed, with the AVX-512 ones forbidden and with all forbidden, on finite states (a NaN's sign and payload
 /// may differ between the copies, as x86 passes on the first operand's NaN). (On a CPU without AVX, or a build
 /// that enables AVX itself, both runs take the same copy and the test passes trivially; the CI machines
 /// have AVX.)
@@ -511,6 +517,20 @@ fn avx_twins_give_the_bits_of_the_baseline_code() {
                 completed.map(f64::to_bits),
                 measure.to_bits(),
                 qdd.map(f64::to_bits),
+            )
+        });
+        const HQ: usize = humanoid34_twins::NQ;
+        const HV: usize = humanoid34_twins::NV;
+        const FRAMES: usize = humanoid34_twins::FRAMES.len();
+        let humanoid_q: [f64; HQ] = std::array::from_fn(|_| rng.uniform(-3.0, 3.0));
+        both(|| {
+            let mut frames = [[f64::NAN; 12]; FRAMES];
+            humanoid34_twins::f64::kinematics(&humanoid_q, &mut frames);
+            let mut m = [[f64::NAN; HV]; HV];
+            humanoid34_twins::f64::crba(&humanoid_q, &mut m);
+            (
+                frames.map(|frame| frame.map(f64::to_bits)),
+                m.map(|row| row.map(f64::to_bits)),
             )
         });
         const NQ: usize = solo12_free::NQ;

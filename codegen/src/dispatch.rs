@@ -96,7 +96,8 @@ pub enum AvxTwins {
     #[default]
     Large,
     /// Every `f64` function (each costs about twice its compile time more; the gain below
-    /// `TWIN_MIN_STATEMENTS` was small or nil where measured).
+    /// `TWIN_MIN_STATEMENTS` was small or nil where measured), and in a model of [`AVX512_MIN_NV`] or
+    /// more degrees of freedom an AVX-512 twin of each besides.
     All,
 }
 
@@ -154,15 +155,16 @@ impl AvxTwins {
     }
 
     /// The twinned `f64` functions (`twinned`, by index, of `statements` statements each) that also get
-    /// an AVX-512 twin in a model of `nv` degrees of freedom: under `Large`, from [`AVX512_MIN_NV`],
-    /// smallest first while they total at most [`AVX512_TWIN_BUDGET_STATEMENTS`]; under `All`, every
-    /// twinned one.
+    /// an AVX-512 twin in a model of `nv` degrees of freedom: none below [`AVX512_MIN_NV`] (there they
+    /// ran slower than the AVX twin: an attacker's trial of `all` on the floating ANYmal B, `crba`
+    /// 1.18–1.20×); from it, under `Large` the smallest first while they total at most
+    /// [`AVX512_TWIN_BUDGET_STATEMENTS`], under `All` every twinned one.
     pub fn avx512_twins(self, nv: usize, statements: &[usize], twinned: &[bool]) -> Vec<usize> {
         let candidates = (0..statements.len()).filter(|&k| twinned[k]);
         match self {
             AvxTwins::None => Vec::new(),
+            _ if nv < AVX512_MIN_NV => Vec::new(),
             AvxTwins::All => candidates.collect(),
-            AvxTwins::Large if nv < AVX512_MIN_NV => Vec::new(),
             AvxTwins::Large => {
                 let mut candidates: Vec<usize> = candidates.collect();
                 candidates.sort_by_key(|&k| (statements[k], k));
@@ -622,9 +624,9 @@ mod tests {
         );
     }
 
-    /// AVX-512 twins: none below `AVX512_MIN_NV` or under `None`; from it, among the twinned functions
-    /// only, smallest first within the budget (a humanoid's `kinematics` and `crba`, not its `rnea` and
-    /// `aba`); every twinned one under `All`.
+    /// AVX-512 twins: none below `AVX512_MIN_NV` (`All` included) or under `None`; from it, among the
+    /// twinned functions only, smallest first within the budget (a humanoid's `kinematics` and `crba`,
+    /// not its `rnea` and `aba`); every twinned one under `All`.
     #[test]
     fn avx512_twins_go_to_a_wide_trees_smallest_twinned_functions() {
         assert_eq!(AVX512_MIN_NV, 24);
@@ -636,9 +638,10 @@ mod tests {
         assert!(AvxTwins::Large.avx512_twins(23, &g1, &twinned).is_empty());
         assert!(AvxTwins::None.avx512_twins(35, &g1, &twinned).is_empty());
         assert_eq!(
-            AvxTwins::All.avx512_twins(6, &g1, &twinned),
+            AvxTwins::All.avx512_twins(35, &g1, &twinned),
             vec![0, 1, 2, 3]
         );
+        assert!(AvxTwins::All.avx512_twins(23, &g1, &twinned).is_empty());
         // Not twinned, not chosen, however small; equal sizes in the module's order.
         assert_eq!(
             AvxTwins::Large.avx512_twins(35, &g1, &[false, true, true, true]),

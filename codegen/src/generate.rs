@@ -2038,7 +2038,9 @@ mod tests {
         {
             let readme = standalone_readme(&humanoid, &options(false, crate::AvxTwins::Large));
             assert!(
-                readme.contains("functions `kinematics`, `crba` are also compiled with AVX-512"),
+                readme.contains(
+                    "The `f64` module's functions `kinematics`, `crba` are also compiled with AVX-512"
+                ),
                 "{readme}"
             );
         }

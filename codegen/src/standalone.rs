@@ -272,16 +272,7 @@ pub fn crate_files(
         }
     };
     for (module, functions) in twinned.iter().filter(|(_, f)| !f.is_empty()) {
-        let wide;
-        let gain = if *module == "f64" && !avx512.is_empty() {
-            wide = format!(
-                "the same results, up to half the time. The {} also compiled with AVX-512 (F and VL: \
-                 32 registers instead of 16, so a long function spills less), which runs where the CPU has \
-                 it (`helpers::dispatch::use_avx512(false)` runs the AVX copy instead)",
-                listed(&avx512)
-            );
-            wide.as_str()
-        } else if *module == "f64" {
+        let gain = if *module == "f64" {
             "the same results, up to half the time"
         } else {
             "the same results; there a lane value takes one instruction instead of two. They are also \
@@ -296,6 +287,15 @@ pub fn crate_files(
              docs/generated-code.md, \"AVX where the CPU has it\").\n\n",
             listed(functions)
         ));
+        if *module == "f64" && !avx512.is_empty() {
+            readme.push_str(&format!(
+                "The `f64` module's {} also compiled with AVX-512 (F and VL: 32 registers instead of 16, so \
+                 a long function spills less), and run that copy instead where the CPU has AVX-512, with \
+                 the same results (`helpers::dispatch::use_avx512(false)` makes them run the AVX copy, \
+                 e.g. on a Xeon that lowers its clock for 512-bit instructions).\n\n",
+                listed(&avx512)
+            ));
+        }
     }
     let constrained = model.has_constraints();
     for a in options.generated_algorithms(constrained) {

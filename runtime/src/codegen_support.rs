@@ -629,7 +629,9 @@ fn place_in_quadrant(m: f64, s: f64, c: f64) -> (f64, f64) {
 ///
 /// Large generated functions are compiled twice on x86-64: for the baseline target (SSE2) and, in a
 /// module of their own, with AVX enabled. They run the AVX copy when the CPU has AVX (and the operating
-/// system saves its registers), found out once with `cpuid` and cached. The two copies compute the same
+/// system saves its registers), found out once with `cpuid` and cached. Lane functions of 256-bit
+/// values, and a wide tree's smallest scalar functions, have a third copy compiled with AVX-512 F and
+/// VL, which runs first where the CPU has them ([`avx512`]). The two copies compute the same
 /// operations in the same order (AVX's three-operand encoding of them, no fused multiply-add), so their
 /// results are the same bits (but for the sign and payload of a NaN, which x86 takes from the first
 /// operand of the two, and the copies may order them differently); the AVX copy needs no
@@ -663,10 +665,11 @@ pub mod dispatch {
         ALLOWED.load(Ordering::Relaxed) && detected() >= 2
     }
 
-    /// Whether a lane function with an AVX-512 twin runs it now: the CPU has AVX-512 F and VL (and the
-    /// operating system saves their registers), and neither [`use_avx`] nor [`use_avx512`] turned the
-    /// twins off. The twin's lane values are 256 bits wide, as the AVX twin's; it has 32 vector
-    /// registers where AVX has 16 (docs/generated-code.md, "AVX where the CPU has it").
+    /// Whether a function with an AVX-512 twin runs it now (a lane function of 256-bit values, or a scalar
+    /// one of a model of 24 or more degrees of freedom): the CPU has AVX-512 F and VL (and the operating
+    /// system saves their registers), and neither [`use_avx`] nor [`use_avx512`] turned the twins off.
+    /// The twin computes what the AVX twin does, with 32 vector registers where AVX has 16
+    /// (docs/generated-code.md, "AVX where the CPU has it").
     #[inline(always)]
     pub fn avx512() -> bool {
         ALLOWED.load(Ordering::Relaxed)
@@ -683,8 +686,9 @@ pub mod dispatch {
         ALLOWED.store(allowed, Ordering::Relaxed);
     }
 
-    /// Turns the lane functions' AVX-512 twins off (`false`: they run their AVX twins, where the CPU has
-    /// AVX) or back on (`true`, the default). For comparing the two, as [`use_avx`].
+    /// Turns the AVX-512 twins off (`false`: those functions run their AVX twins, where the CPU has AVX)
+    /// or back on (`true`, the default). For comparing the two, as [`use_avx`], or on a CPU that lowers
+    /// its clock for 512-bit instructions (Skylake-SP-class Xeons), which LLVM may pick in these twins.
     pub fn use_avx512(allowed: bool) {
         ALLOWED_512.store(allowed, Ordering::Relaxed);
     }
