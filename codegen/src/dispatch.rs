@@ -20,7 +20,7 @@
 //!
 //! A lane module of 256-bit values gives its functions two twins (`TwinOf::Lanes`, [`AVX512`] then
 //! [`AVX`]): the one compiled with AVX-512 F and VL runs where the CPU has them, the AVX one elsewhere.
-//! So do a wide tree's smallest twinned scalar functions ([`AVX512_MIN_NV`]), whose AVX twins still spill
+//! So do a wide tree's smallest twinned scalar functions (`AVX512_MIN_NV`), whose AVX twins still spill
 //! for want of registers.
 
 use crate::emit::Code;
@@ -96,7 +96,7 @@ pub enum AvxTwins {
     #[default]
     Large,
     /// Every `f64` function (each costs about twice its compile time more; the gain below
-    /// `TWIN_MIN_STATEMENTS` was small or nil where measured), and in a model of [`AVX512_MIN_NV`] or
+    /// `TWIN_MIN_STATEMENTS` was small or nil where measured), and in a model of `AVX512_MIN_NV` or
     /// more degrees of freedom an AVX-512 twin of each besides.
     All,
 }
@@ -155,10 +155,10 @@ impl AvxTwins {
     }
 
     /// The twinned `f64` functions (`twinned`, by index, of `statements` statements each) that also get
-    /// an AVX-512 twin in a model of `nv` degrees of freedom: none below [`AVX512_MIN_NV`] (there they
+    /// an AVX-512 twin in a model of `nv` degrees of freedom: none below `AVX512_MIN_NV` (there they
     /// ran slower than the AVX twin: an attacker's trial of `all` on the floating ANYmal B, `crba`
     /// 1.18–1.20×); from it, under `Large` the smallest first while they total at most
-    /// [`AVX512_TWIN_BUDGET_STATEMENTS`], under `All` every twinned one.
+    /// `AVX512_TWIN_BUDGET_STATEMENTS`, under `All` every twinned one.
     pub fn avx512_twins(self, nv: usize, statements: &[usize], twinned: &[bool]) -> Vec<usize> {
         let candidates = (0..statements.len()).filter(|&k| twinned[k]);
         match self {
@@ -255,7 +255,7 @@ pub const AVX: Level = Level {
 /// twins compiled for AVX-512 F and VL instead of AVX took 0.90–0.92× the time, `crba` 546–554 → 489–499
 /// ns, `aba` 1,218–1,227 → 1,120–1,126, `rnea` 597–608 → 548–553, two runs of one binary each. A
 /// scalar function gets this twin beside its AVX one, for the CPUs with AVX but not AVX-512, only in a
-/// wide tree and under a budget of its own, [`AVX512_MIN_NV`], as each costs compile time.)
+/// wide tree and under a budget of its own, `AVX512_MIN_NV`, as each costs compile time.)
 /// The lane values stay 256 bits wide, but LLVM is free to use 512-bit instructions where it finds
 /// them (an attacker's trial found some, in array copies and the batch of sines and cosines): on CPUs
 /// that lower their clock for those (Skylake-SP-class Xeons), `dispatch::use_avx512(false)` is the way

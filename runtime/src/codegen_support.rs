@@ -631,7 +631,7 @@ fn place_in_quadrant(m: f64, s: f64, c: f64) -> (f64, f64) {
 /// module of their own, with AVX enabled. They run the AVX copy when the CPU has AVX (and the operating
 /// system saves its registers), found out once with `cpuid` and cached. Lane functions of 256-bit
 /// values, and a wide tree's smallest scalar functions, have a third copy compiled with AVX-512 F and
-/// VL, which runs first where the CPU has them ([`avx512`]). The two copies compute the same
+/// VL, which runs first where the CPU has them (`avx512`). The two copies compute the same
 /// operations in the same order (AVX's three-operand encoding of them, no fused multiply-add), so their
 /// results are the same bits (but for the sign and payload of a NaN, which x86 takes from the first
 /// operand of the two, and the copies may order them differently); the AVX copy needs no
