@@ -104,6 +104,11 @@ fn bad_scene_options_are_refused_clearly() {
             vec!["info", &ur5, "--lock", "knee=0.1"],
             "no joint \"knee\" to lock",
         ),
+        // A name with a control character is shown escaped, not sent to the terminal as it is.
+        (
+            vec!["info", &ur5, "--lock", "kn\u{1b}[31mee=0.1"],
+            "no joint \"kn\\u{1b}[31mee\" to lock",
+        ),
         (
             vec!["info", &ur5, "--rotors", "approximate"],
             "exact or reflected",

@@ -518,7 +518,7 @@ pub enum LoadErrorKind {
     #[error("--floating adds the root's joint \"{}\", but the file already has a joint of that name; rename it", crate::assemble::ROOT_JOINT)]
     RootJointNameTaken,
     /// `--lock` names a joint the model does not have.
-    #[error("there is no joint \"{joint}\" to lock")]
+    #[error("there is no joint \"{}\" to lock", crate::names::shown(.joint))]
     LockUnknownJoint {
         /// The name given.
         joint: String,
@@ -575,7 +575,7 @@ pub enum LoadErrorKind {
         reason: Box<LoadErrorKind>,
     },
     /// `--lock` on a joint whose coordinate a loop or coupling relates to others.
-    #[error("the joint cannot be locked: {what} \"{name}\" relates its coordinate to others (locking it would change the constraint; lock joints outside loops and couplings, or fix the joint in the file)")]
+    #[error("the joint cannot be locked: {what} \"{}\" relates its coordinate to others (locking it would change the constraint; lock joints outside loops and couplings, or fix the joint in the file)", crate::names::shown(.name))]
     LockedJointInConstraint {
         /// What the constraint is.
         what: ConstraintElement,
