@@ -135,23 +135,13 @@ impl AvxTwins {
             .filter(|(_, &t)| t)
             .map(|(&s, _)| s)
             .sum();
-        let mut candidates: Vec<usize> = (0..statements.len())
+        let candidates: Vec<usize> = (0..statements.len())
             .filter(|&k| {
                 !twinned[k]
                     && (TWIN_SMALL_MIN_STATEMENTS..TWIN_MIN_STATEMENTS).contains(&statements[k])
             })
             .collect();
-        // Smallest first; equal sizes in the module's order.
-        candidates.sort_by_key(|&k| (statements[k], k));
-        let mut chosen = Vec::new();
-        for k in candidates {
-            if total + statements[k] <= TWIN_BUDGET_STATEMENTS {
-                total += statements[k];
-                chosen.push(k);
-            }
-        }
-        chosen.sort_unstable();
-        chosen
+        smallest_first_within(candidates, statements, &mut total, TWIN_BUDGET_STATEMENTS)
     }
 
     /// The twinned `f64` functions (`twinned`, by index, of `statements` statements each) that also get
@@ -165,20 +155,12 @@ impl AvxTwins {
             AvxTwins::None => Vec::new(),
             _ if nv < AVX512_MIN_NV => Vec::new(),
             AvxTwins::All => candidates.collect(),
-            AvxTwins::Large => {
-                let mut candidates: Vec<usize> = candidates.collect();
-                candidates.sort_by_key(|&k| (statements[k], k));
-                let mut total = 0;
-                let mut chosen = Vec::new();
-                for k in candidates {
-                    if total + statements[k] <= AVX512_TWIN_BUDGET_STATEMENTS {
-                        total += statements[k];
-                        chosen.push(k);
-                    }
-                }
-                chosen.sort_unstable();
-                chosen
-            }
+            AvxTwins::Large => smallest_first_within(
+                candidates.collect(),
+                statements,
+                &mut 0,
+                AVX512_TWIN_BUDGET_STATEMENTS,
+            ),
         }
     }
 
@@ -195,6 +177,27 @@ impl AvxTwins {
             AvxTwins::All => true,
         }
     }
+}
+
+/// Of the `candidates` (indices into `statements`), as many as fit a budget: smallest first (equal sizes
+/// in the module's order), each taken while `total` plus its statements stays within `budget`; in the
+/// module's order.
+fn smallest_first_within(
+    mut candidates: Vec<usize>,
+    statements: &[usize],
+    total: &mut usize,
+    budget: usize,
+) -> Vec<usize> {
+    candidates.sort_by_key(|&k| (statements[k], k));
+    let mut chosen = Vec::new();
+    for k in candidates {
+        if *total + statements[k] <= budget {
+            *total += statements[k];
+            chosen.push(k);
+        }
+    }
+    chosen.sort_unstable();
+    chosen
 }
 
 /// Whether the lane module of `lanes` lanes of `scalar` holds 256-bit values (`F64x4`, `F32x8`), which

@@ -745,41 +745,39 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
         // Smaller functions' twins, under the module's budget (src/dispatch.rs): decided once every function
         // is traced, as the budget is shared. They are a speed-up, not a request: one that would take the
         // estimate of the compiler's memory over the limit is left out (smallest first, so the rest are too).
+        // One more copy of function `k` in the f64 module, if the estimate of the compiler's memory
+        // stays within the limit: counted in `sizes` then.
+        let add_copy = |sizes: &mut Vec<size::FunctionSize>, k: usize| -> bool {
+            let bytes = functions[k].compile_bytes / scalars.len() as f64;
+            if let Some(limit) = options.max_compile_memory_mb {
+                let mut with = sizes.clone();
+                with[k].compile_bytes += bytes;
+                if size::compile_memory_mb(&with, scalars.len()) > limit as f64 {
+                    return false;
+                }
+            }
+            sizes[k].compile_bytes += bytes;
+            true
+        };
+        let statements: Vec<usize> = functions.iter().map(|f| f.statements).collect();
         if options.f64 {
-            let statements: Vec<usize> = functions.iter().map(|f| f.statements).collect();
             let twinned: Vec<bool> = sizes.iter().map(|f| f.twinned).collect();
             for k in options.avx_twins.small_twins(&statements, &twinned) {
-                let bytes = functions[k].compile_bytes / scalars.len() as f64;
-                if let Some(limit) = options.max_compile_memory_mb {
-                    let mut with = sizes.clone();
-                    with[k].compile_bytes += bytes;
-                    if size::compile_memory_mb(&with, scalars.len()) > limit as f64 {
-                        break;
-                    }
+                if !add_copy(&mut sizes, k) {
+                    break;
                 }
-                sizes[k].compile_bytes += bytes;
                 sizes[k].twinned = true;
             }
         }
         // AVX-512 twins beside some AVX ones (src/dispatch.rs), again within the compiler's memory.
         let mut avx512 = vec![false; functions.len()];
         if options.f64 {
-            let statements: Vec<usize> = functions.iter().map(|f| f.statements).collect();
             let twinned: Vec<bool> = sizes.iter().map(|f| f.twinned).collect();
             for k in options
                 .avx_twins
                 .avx512_twins(model64.nv(), &statements, &twinned)
             {
-                let bytes = functions[k].compile_bytes / scalars.len() as f64;
-                if let Some(limit) = options.max_compile_memory_mb {
-                    let mut with = sizes.clone();
-                    with[k].compile_bytes += bytes;
-                    if size::compile_memory_mb(&with, scalars.len()) > limit as f64 {
-                        continue;
-                    }
-                }
-                sizes[k].compile_bytes += bytes;
-                avx512[k] = true;
+                avx512[k] = add_copy(&mut sizes, k);
             }
         }
         // The chosen twins' code.
