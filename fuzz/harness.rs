@@ -35,7 +35,7 @@ use embedyn_cli::{complete_text, eval_interpreted, Algo, Scalar};
 use embedyn_codegen::ir::Robot;
 use embedyn_codegen::{
     format_tokens, generate_tokens, parse_urdf, Algorithm, GenerateOptions, Loaded, Location,
-    ModelOptions,
+    LockedJoint, ModelOptions, Rotors,
 };
 use embedyn_runtime::constraints::{complete_configuration, complete_velocity, ConstraintKind};
 use embedyn_runtime::nalgebra::DMatrix;
@@ -123,6 +123,47 @@ pub fn urdf(data: &[u8]) {
             generated = true;
             let pick = usize::from(StateBytes::new(state).nth(1));
             generation(&loaded, &options, &model64, pick);
+        }
+    }
+    scene_options(&loaded, state, lines);
+}
+
+/// The scene options on top of the file (docs/model-format.md): one joint locked, picked by the state
+/// bytes, at a moderate value (a `<mimic>`'s driver fixes its followers; a mimic joint, a joint of a
+/// loop or coupling, or one of several coordinates is refused at a line of the file), each with exact and
+/// reflected rotors. The model that builds holds only finite numbers, and its dynamics keep the
+/// properties above.
+fn scene_options(loaded: &Loaded, state: &[u8], lines: usize) {
+    let joints = &loaded.robot.joints;
+    if joints.is_empty() {
+        return;
+    }
+    let joint = &joints[usize::from(StateBytes::new(state).nth(2)) % joints.len()];
+    let value = f64::from(StateBytes::new(state).nth(3)) / 32.0 - 4.0;
+    for rotors in [Rotors::Exact, Rotors::Reflected] {
+        let options = ModelOptions {
+            locks: vec![LockedJoint {
+                joint: joint.name.clone(),
+                value,
+            }],
+            rotors,
+            ..Default::default()
+        };
+        let model64 = loaded.model::<f64>(&options);
+        let model32 = loaded.model::<f32>(&options);
+        for e in [model64.as_ref().err(), model32.as_ref().err()]
+            .into_iter()
+            .flatten()
+        {
+            assert_line_in_file(&e.location, lines);
+        }
+        if let Ok(m) = &model32 {
+            assert_model_finite(m, "f32");
+        }
+        let Ok(model64) = model64 else { continue };
+        assert_model_finite(&model64, "f64");
+        if model64.nbodies() <= MAX_DYNAMICS_BODIES {
+            dynamics(&model64, &loaded.robot, state, "f64");
         }
     }
 }
