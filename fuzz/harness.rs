@@ -95,26 +95,13 @@ pub fn urdf(data: &[u8]) {
             floating,
             ..Default::default()
         };
-        let model64 = loaded.model::<f64>(&options);
-        let model32 = loaded.model::<f32>(&options);
-        for e in [model64.as_ref().err(), model32.as_ref().err()]
-            .into_iter()
-            .flatten()
-        {
-            assert_line_in_file(&e.location, lines);
-        }
-        if let Ok(m) = &model64 {
-            assert_model_finite(m, "f64");
-        }
-        if let Ok(m) = &model32 {
-            assert_model_finite(m, "f32");
-        }
-        let Ok(model64) = model64 else { continue };
+        let (model64, model32) = load_checked(&loaded, &options, lines);
+        let Some(model64) = model64 else { continue };
         if model64.nbodies() > MAX_DYNAMICS_BODIES {
             continue;
         }
         dynamics(&model64, &loaded.robot, state, "f64");
-        if let Ok(model32) = &model32 {
+        if let Some(model32) = &model32 {
             dynamics(model32, &loaded.robot, state, "f32");
         }
         // One algorithm per input (picked by the state bytes), on the first variant that builds: tracing
@@ -149,23 +136,37 @@ fn scene_options(loaded: &Loaded, state: &[u8], lines: usize) {
             rotors,
             ..Default::default()
         };
-        let model64 = loaded.model::<f64>(&options);
-        let model32 = loaded.model::<f32>(&options);
-        for e in [model64.as_ref().err(), model32.as_ref().err()]
-            .into_iter()
-            .flatten()
-        {
-            assert_line_in_file(&e.location, lines);
-        }
-        if let Ok(m) = &model32 {
-            assert_model_finite(m, "f32");
-        }
-        let Ok(model64) = model64 else { continue };
-        assert_model_finite(&model64, "f64");
+        let (Some(model64), _) = load_checked(loaded, &options, lines) else {
+            continue;
+        };
         if model64.nbodies() <= MAX_DYNAMICS_BODIES {
             dynamics(&model64, &loaded.robot, state, "f64");
         }
     }
+}
+
+/// The model of `options` in f64 and f32, where each builds: an error names a line of the file (`lines`
+/// lines), a model holds only finite numbers.
+fn load_checked(
+    loaded: &Loaded,
+    options: &ModelOptions,
+    lines: usize,
+) -> (Option<Model<f64>>, Option<Model<f32>>) {
+    let model64 = loaded.model::<f64>(options);
+    let model32 = loaded.model::<f32>(options);
+    for e in [model64.as_ref().err(), model32.as_ref().err()]
+        .into_iter()
+        .flatten()
+    {
+        assert_line_in_file(&e.location, lines);
+    }
+    if let Ok(m) = &model64 {
+        assert_model_finite(m, "f64");
+    }
+    if let Ok(m) = &model32 {
+        assert_model_finite(m, "f32");
+    }
+    (model64.ok(), model32.ok())
 }
 
 /// A message's line, where it gives one, is a line of the file (`lines` lines).
