@@ -742,9 +742,6 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
             }
             lane_functions.extend(lane_function);
         }
-        // Smaller functions' twins, under the module's budget (src/dispatch.rs): decided once every function
-        // is traced, as the budget is shared. They are a speed-up, not a request: one that would take the
-        // estimate of the compiler's memory over the limit is left out (smallest first, so the rest are too).
         // One more copy of function `k` in the f64 module, if the estimate of the compiler's memory
         // stays within the limit: counted in `sizes` then.
         let add_copy = |sizes: &mut Vec<size::FunctionSize>, k: usize| -> bool {
@@ -759,8 +756,13 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
             sizes[k].compile_bytes += bytes;
             true
         };
-        let statements: Vec<usize> = functions.iter().map(|f| f.statements).collect();
+        let mut avx512 = vec![false; functions.len()];
         if options.f64 {
+            let statements: Vec<usize> = functions.iter().map(|f| f.statements).collect();
+            // Smaller functions' twins, under the module's budget (src/dispatch.rs): decided once every
+            // function is traced, as the budget is shared. They are a speed-up, not a request: one that
+            // would take the estimate of the compiler's memory over the limit is left out (smallest
+            // first, so the rest are too).
             let twinned: Vec<bool> = sizes.iter().map(|f| f.twinned).collect();
             for k in options.avx_twins.small_twins(&statements, &twinned) {
                 if !add_copy(&mut sizes, k) {
@@ -768,10 +770,7 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
                 }
                 sizes[k].twinned = true;
             }
-        }
-        // AVX-512 twins beside some AVX ones (src/dispatch.rs), again within the compiler's memory.
-        let mut avx512 = vec![false; functions.len()];
-        if options.f64 {
+            // AVX-512 twins beside some AVX ones (src/dispatch.rs), again within the compiler's memory.
             let twinned: Vec<bool> = sizes.iter().map(|f| f.twinned).collect();
             for k in options
                 .avx_twins
