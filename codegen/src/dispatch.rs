@@ -12,8 +12,10 @@
 //!
 //! The choice is made at run time (`helpers::dispatch::avx()`: `cpuid` once, then one atomic load), so
 //! the generated crate still runs on any x86-64 CPU and needs no build flag; a build that enables AVX
-//! itself (`-C target-cpu=native`) compiles the twin out. Other architectures never see it. The twin
-//! costs compile time (its code is optimized twice), so functions of at least `TWIN_MIN_STATEMENTS`
+//! itself (`-C target-cpu=native`) compiles the twin out. Other architectures never see it. The twin's
+//! functions that call no other share their bodies with the baseline code (src/shared_bodies.rs), so
+//! rustc checks them once, but LLVM still optimizes them twice: the twin costs compile time, so functions
+//! of at least `TWIN_MIN_STATEMENTS`
 //! statements get one, and smaller ones only under a budget shared by the module
 //! (`TWIN_BUDGET_STATEMENTS`, smallest first): their gain depends on the CPU (nil for the Z1's `aba`,
 //! 1.8k operations, on one Xeon; 0.67× the time for the floating ANYmal B's, 2.3k, on an AMD EPYC).
@@ -304,9 +306,35 @@ pub fn with_avx_twin(code: &Code, function: &str, helpers: &TokenStream, of: Twi
         helpers,
         of,
     };
-    match code {
-        Code::Tokens(tokens) => Code::Tokens(tokens_with_twin(tokens.clone(), &twin)),
-        Code::Text(text) => Code::Text(text_with_twin(text, &twin)),
+    // A scalar twin's leaves call the bodies the baseline code calls (src/shared_bodies.rs); a lane
+    // twin's `S` is another type, so it is a copy.
+    let shared = match of {
+        TwinOf::Scalar { .. } => crate::shared_bodies::share(code, function),
+        TwinOf::Lanes { .. } => None,
+    };
+    let calls;
+    let (code, shared) = match shared {
+        Some((with_calls, shared)) => {
+            calls = with_calls;
+            (&calls, Some(shared))
+        }
+        None => (code, None),
+    };
+    match (code, shared) {
+        (Code::Tokens(tokens), shared) => {
+            let mut out = tokens_with_twin(tokens.clone(), &twin);
+            if let Some(Code::Tokens(shared)) = shared {
+                out.extend(shared);
+            }
+            Code::Tokens(out)
+        }
+        (Code::Text(text), shared) => {
+            let mut out = text_with_twin(text, &twin);
+            if let Some(Code::Text(shared)) = shared {
+                out.push_str(&shared);
+            }
+            Code::Text(out)
+        }
     }
 }
 
@@ -472,7 +500,7 @@ fn tokens_with_twin(tokens: TokenStream, twin: &Twin) -> TokenStream {
 
 /// Whether a trimmed line starts a function item (`fn`, `pub fn`, `pub(super) fn`): the emitters write
 /// no other line that way (bodies are `let` statements and assignments, docs start with `///`).
-fn starts_function(trimmed: &str) -> bool {
+pub(crate) fn starts_function(trimmed: &str) -> bool {
     ["fn ", "pub fn ", "pub(super) fn ", "pub(crate) fn "]
         .iter()
         .any(|p| trimmed.starts_with(p))

@@ -2267,7 +2267,8 @@ mod tests {
             let line = line.trim_start();
             let header = line
                 .strip_prefix("pub fn ")
-                .or_else(|| line.strip_prefix("pub(super) fn "));
+                .or_else(|| line.strip_prefix("pub(super) fn "))
+                .or_else(|| line.strip_prefix("pub(crate) fn "));
             if let Some(rest) = header {
                 most = most.max(current.take().unwrap_or_default());
                 current = Some((0, rest.split('(').next().unwrap().to_string()));

@@ -27,6 +27,7 @@ pub mod ir;
 pub mod names;
 mod pairing;
 pub mod scene;
+mod shared_bodies;
 mod size;
 #[cfg(feature = "standalone")]
 pub mod standalone;
