@@ -26,7 +26,10 @@ def main():
         "2.0, go2 2.0, solo12 1.9, g1_29dof 8.2, talos_reduced 8.3; on this host with the budget of 10,000 "
         "(humanoids without the `rnea` twin): z1 0.9, anymal_b 2.3, go2 2.3, solo12 2.0, g1_29dof 6.8, "
         "talos_reduced 7.5; with the budget of 17,000 but before the humanoids' `kinematics` and `crba` got "
-        "their AVX-512 twins (\"AVX-512 twins for wide trees\"): g1_29dof 8.1, talos_reduced 8.8.",
+        "their AVX-512 twins (\"AVX-512 twins for wide trees\"): g1_29dof 8.1, talos_reduced 8.8; with them, "
+        "before the twins shared their bodies with the baseline code (2026-12-05, docs/generated-code.md, "
+        "\"Bodies written once\"): z1 0.8, anymal_b 2.3, go2 2.2, solo12 2.2, g1_29dof 8.7, talos_reduced 8.9 "
+        "(3.1 MB of source each).",
         "",
         "| model | nv | source (KB) | KB per DoF | wall (s) | user (s) | s per DoF (wall) | rustc peak (MB) |",
         "|---|---:|---:|---:|---:|---:|---:|---:|",

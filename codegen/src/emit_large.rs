@@ -94,6 +94,18 @@ fn constructs(text: &str) -> (usize, usize, usize) {
     (lets, indexings, fields)
 }
 
+/// Operations from which a function's parts write the scratch tuple's slots of their own parity only
+/// (even parts the even slots), so that no two stores of a part to the scratch are adjacent. LLVM's SLP
+/// vectorizer tries every chain of adjacent stores as a seed of vector code, and on long functions that
+/// search was a quarter of the optimizer's time, mostly in vain: the floating TALOS's `aba_derivatives`
+/// and `rnea_derivatives` in f64 and f32 took 19.8–20.9 s to compile, 17.9 s with the slots spaced
+/// (2026-12-05, AMD EPYC, 2 cores, interleaved rounds; 21 % more slots, 2,931 → 3,539). The run time of
+/// the long functions stayed the same (in one binary, the same bits: the floating ANYmal B's
+/// `aba_derivatives` 0.99–1.0×, TALOS's 0.99×), but short ones lost what SLP found: the Z1's
+/// `aba_derivatives` (5.9k statements) took 1.06× the time (1.04× in its baseline copy), so they keep
+/// their slots adjacent.
+pub(crate) const SPACED_SLOTS_MIN_OPERATIONS: usize = 10_000;
+
 /// Slot `k` of the scratch tuple `s`.
 fn slot_text(k: usize) -> String {
     format!("s.{k}")
@@ -234,13 +246,20 @@ pub(crate) fn function_text(
         .collect();
     // Slots: a value read in a later part than its own occupies a slot from its part to its last
     // reader's part (the returned value to the end); a slot is free again from the part after that.
+    // In a long function ([`SPACED_SLOTS_MIN_OPERATIONS`]) each part writes only slots of its own
+    // parity (even parts even slots).
+    let spaced = order.len() >= SPACED_SLOTS_MIN_OPERATIONS;
     let mut slot: HashMap<u32, usize> = HashMap::new();
     let mut nslots = 0usize;
     {
-        let mut free: Vec<usize> = Vec::new();
+        let mut free: [Vec<usize>; 2] = [Vec::new(), Vec::new()];
+        let mut used = [0usize; 2];
         let mut release_at: Vec<Vec<usize>> = vec![Vec::new(); parts.len() + 1];
         for (c, range) in part_ranges(&parts, order.len()).enumerate() {
-            free.extend(release_at[c].drain(..).rev());
+            for k in release_at[c].drain(..).rev() {
+                free[if spaced { k % 2 } else { 0 }].push(k);
+            }
+            let parity = if spaced { c % 2 } else { 0 };
             for &n in &order[range] {
                 let last = if returned == Some(n) {
                     usize::MAX
@@ -250,9 +269,15 @@ pub(crate) fn function_text(
                         _ => continue,
                     }
                 };
-                let k = free.pop().unwrap_or_else(|| {
-                    nslots += 1;
-                    nslots - 1
+                let k = free[parity].pop().unwrap_or_else(|| {
+                    used[parity] += 1;
+                    let k = if spaced {
+                        2 * (used[parity] - 1) + parity
+                    } else {
+                        used[parity] - 1
+                    };
+                    nslots = nslots.max(k + 1);
+                    k
                 });
                 slot.insert(n, k);
                 if last != usize::MAX {

@@ -1792,6 +1792,49 @@ pub fn generation_model(loaded: &Loaded, options: &ModelOptions) -> Result<Model
 mod tests {
     use super::*;
 
+    /// The scratch stores of each part of a long unpaired function (`SPACED_SLOTS_MIN_OPERATIONS`) go to
+    /// slots of one parity (the part's own), so that none are adjacent; a short one's parts
+    /// store to adjacent slots, numbered without gaps.
+    #[test]
+    fn long_functions_parts_store_to_slots_of_their_own_parity() {
+        // The parity of the slots each part stores to (`s.K = …`), per part, in order.
+        fn parities(text: &str) -> (Vec<Vec<usize>>, usize) {
+            let mut parts: Vec<Vec<usize>> = Vec::new();
+            let mut most = 0;
+            for line in text.lines().map(str::trim_start) {
+                if line.starts_with("pub(super) fn ") || line.starts_with("pub(crate) fn ") {
+                    parts.push(Vec::new());
+                } else if let Some(rest) = line.strip_prefix("s.") {
+                    let k: usize = rest.split(' ').next().unwrap().parse().unwrap();
+                    most = most.max(k);
+                    parts.last_mut().unwrap().push(k % 2);
+                }
+            }
+            parts.retain(|p| !p.is_empty());
+            (parts, most)
+        }
+        let models = concat!(env!("CARGO_MANIFEST_DIR"), "/../models/");
+        let chain = crate::load(format!("{models}loops/rotor_chain_10.urdf").as_ref()).unwrap();
+        let (parts, _) = parities(&f64_source(&chain, Algorithm::AbaDerivatives));
+        assert!(parts.len() >= 4, "{}", parts.len());
+        for (c, p) in parts.iter().enumerate() {
+            assert!(p.iter().all(|&parity| parity == p[0]), "part {c}: {p:?}");
+        }
+        assert!(parts.iter().any(|p| p[0] == 0) && parts.iter().any(|p| p[0] == 1));
+        let z1 = crate::load(format!("{models}peers/z1.urdf").as_ref()).unwrap();
+        let text = f64_source(&z1, Algorithm::AbaDerivatives);
+        let (parts, most) = parities(&text);
+        assert!(parts.iter().any(|p| p.contains(&0) && p.contains(&1)));
+        let slots = text
+            .lines()
+            .find(|l| l.trim_start().starts_with("type AbaDerivativesScratch = ("))
+            .unwrap()
+            .matches('S')
+            .count()
+            - "AbaDerivativesScratch".matches('S').count();
+        assert_eq!(most + 1, slots, "slots without gaps");
+    }
+
     /// A paired body longer than `PAIRED_PART` statements (the twin arms' `crba`, 8,849) is cut into parts
     /// that pass scalars and pairs, spread over modules.
     #[test]
