@@ -77,6 +77,13 @@ mod humanoid34_twins {
     embedyn::robot!("models/humanoid34.urdf", f64_only, only(kinematics, crba));
 }
 
+// The floating humanoid's `com`, in two parts, twinned: its output is named `com` like the function,
+// which once kept its parts out of the bodies the twins share and failed to compile (E0603, an
+// attacker's trial of codegen/src/shared_bodies.rs).
+mod humanoid34_com {
+    embedyn::robot!("models/humanoid34.urdf", floating, f64_only, only(com));
+}
+
 // A quadruped's derivatives are paired (its left and right legs side by side), under the generator's
 // pairing limit of 60k operations; `aba_derivatives` is traced as factors with the product `−M⁻¹ ∂τ` in
 // a loop after them, here with two lanes: the lane module's loop product as well (`rnea_derivatives`
@@ -531,6 +538,19 @@ fn avx_twins_give_the_bits_of_the_baseline_code() {
             (
                 frames.map(|frame| frame.map(f64::to_bits)),
                 m.map(|row| row.map(f64::to_bits)),
+            )
+        });
+        const CQ: usize = humanoid34_com::NQ;
+        const CV: usize = humanoid34_com::NV;
+        let com_q: [f64; CQ] = std::array::from_fn(|_| rng.uniform(-1.0, 1.0));
+        let com_v: [f64; CV] = std::array::from_fn(|_| rng.uniform(-2.0, 2.0));
+        both(|| {
+            let (mut c, mut vc, mut j) = ([f64::NAN; 3], [f64::NAN; 3], [[f64::NAN; CV]; 3]);
+            humanoid34_com::f64::com(&com_q, &com_v, &mut c, &mut vc, &mut j);
+            (
+                c.map(f64::to_bits),
+                vc.map(f64::to_bits),
+                j.map(|row| row.map(f64::to_bits)),
             )
         });
         const NQ: usize = solo12_free::NQ;

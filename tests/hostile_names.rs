@@ -27,6 +27,29 @@ mod cases {
     embedyn::robot!("tests/data/case_names.urdf", only(aba));
 }
 
+// A joint named like a part of `aba` plus its cosine's suffix (`aba_l1_to_x` of link `x_q_cos`: its cosine
+// is `aba_l1_to_x_q_cos`, the name of `aba`'s second part), with every function twinned: the twins'
+// shared bodies once took that value for a call and failed to compile (E0603, an attacker's trial).
+mod part_names {
+    embedyn::robot!(
+        "tests/data/part_names.urdf",
+        f64_only,
+        only(aba),
+        avx_twins = all
+    );
+}
+
+// Links `x1` and `x_1` of a 43-link chain, whose frame functions are long enough for a scratch tuple:
+// both were `FrameX1Scratch` once (E0428, an attacker's trial).
+mod scratch_names {
+    embedyn::robot!(
+        "tests/data/scratch_names.urdf",
+        f64_only,
+        only(kinematics, frame),
+        frames(x1, x_1)
+    );
+}
+
 #[path = "data/hostile_names.rs"]
 mod names;
 use names::{FRAMES, JOINTS};
@@ -177,4 +200,47 @@ fn messages_show_control_characters_as_escapes() {
         .unwrap_err()
         .to_string();
     assert!(!e.contains('\r') && e.contains("j\\rforged"), "{e:?}");
+}
+
+/// Functions whose names meet other generated names compute what they should: the chain whose joint
+/// takes the name of an `aba` part matches the interpreted `aba`, and the frame functions of `x1` and
+/// `x_1` give the poses `kinematics` gives those links.
+#[test]
+fn names_that_meet_generated_names_compile_and_compute() {
+    let model: Model<f64> = load_model("tests/data/part_names.urdf", false);
+    let mut ws = Workspace::new(&model);
+    let mut rng = Rng::new(21);
+    const N: usize = part_names::NV;
+    for _ in 0..5 {
+        let q: [f64; N] = rng.configuration(&model).try_into().unwrap();
+        let v: [f64; N] = rng.vec(N, -2.0, 2.0).try_into().unwrap();
+        let tau: [f64; N] = rng.vec(N, -1.0, 1.0).try_into().unwrap();
+        let want = aba(&model, &mut ws, &q, &v, &tau).unwrap().to_vec();
+        let mut qdd = [0.0; N];
+        part_names::f64::aba(&q, &v, &tau, &mut qdd);
+        let e = relative_error(&qdd, &want);
+        assert!(e <= 1e-12, "generated vs interpreted: {e:e}");
+    }
+    const NQ: usize = scratch_names::NQ;
+    const NF: usize = scratch_names::FRAMES.len();
+    let q: [f64; NQ] = rng.vec(NQ, -2.0, 2.0).try_into().unwrap();
+    let v = [0.5; NQ];
+    let mut poses = [[0.0; 12]; NF];
+    scratch_names::f64::kinematics(&q, &mut poses);
+    type FrameFunction =
+        fn(&[f64; NQ], &[f64; NQ], &mut [f64; 12], &mut [[f64; NQ]; 6], &mut [f64; 6]);
+    let frames: [(usize, FrameFunction); 2] = [
+        (scratch_names::frames::X1, scratch_names::f64::frame_x1),
+        (scratch_names::frames::X_1, scratch_names::f64::frame_x_1),
+    ];
+    for (index, frame) in frames {
+        let (mut pose, mut jacobian, mut bias) = ([0.0; 12], [[0.0; NQ]; 6], [0.0; 6]);
+        frame(&q, &v, &mut pose, &mut jacobian, &mut bias);
+        let e = relative_error(&pose, &poses[index]);
+        assert!(e <= 1e-12, "frame {index}: {e:e}");
+    }
+    assert_ne!(
+        scratch_names::FRAMES[scratch_names::frames::X1],
+        scratch_names::FRAMES[scratch_names::frames::X_1]
+    );
 }

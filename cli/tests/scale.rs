@@ -94,9 +94,9 @@ fn split_functions_pass_values_through_a_reused_scratch_tuple() {
     assert!(source.contains("Part 2 of "), "not split");
     let declaration = source
         .lines()
-        .find(|l| l.trim_start().starts_with("type AbaScratch = ("))
+        .find(|l| l.trim_start().starts_with("type aba_scratch = ("))
         .expect("a scratch tuple");
-    let slots = declaration.matches('S').count() - 1;
+    let slots = declaration.matches('S').count();
     // Each part's results are read by later parts; slots whose last reader has run are reused, so
     // there are fewer slots than values written into the scratch.
     let f64_module = &source[..source.find("pub mod f32").unwrap()];

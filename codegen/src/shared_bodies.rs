@@ -51,14 +51,16 @@ pub fn share(code: &Code, function: &str) -> Option<(Code, Code)> {
     }
 }
 
-/// Whether `tokens` name one of `names` other than `own`.
-fn names_another(tokens: TokenStream, names: &HashSet<String>, own: &str) -> bool {
-    tokens.into_iter().any(|tree| match tree {
+/// Whether `tokens` call one of `names`: the name, then parentheses. (Only a call: a parameter or a
+/// value may have a function's name, `com` in `com`'s parts, and is never called.)
+fn calls_one_of(tokens: TokenStream, names: &HashSet<String>) -> bool {
+    let trees: Vec<TokenTree> = tokens.into_iter().collect();
+    trees.iter().enumerate().any(|(i, tree)| match tree {
         TokenTree::Ident(ident) => {
-            let word = ident.to_string();
-            word != own && names.contains(&word)
+            names.contains(&ident.to_string())
+                && matches!(trees.get(i + 1), Some(TokenTree::Group(g)) if g.delimiter() == proc_macro2::Delimiter::Parenthesis)
         }
-        TokenTree::Group(group) => names_another(group.stream(), names, own),
+        TokenTree::Group(group) => calls_one_of(group.stream(), names),
         _ => false,
     })
 }
@@ -109,11 +111,10 @@ fn collect_token_names(items: &[syn::Item], names: &mut HashSet<String>) {
     }
 }
 
-/// A function's parameters, if it is a leaf: it names no other function of the code.
+/// A function's parameters, if it is a leaf: it calls no function of the code.
 fn token_leaf(f: &syn::ItemFn, names: &HashSet<String>) -> Option<Vec<Ident>> {
-    let own = f.sig.ident.to_string();
     let block = &f.block;
-    if names_another(quote!(#block), names, &own) {
+    if calls_one_of(quote!(#block), names) {
         return None;
     }
     parameter_names(&f.sig)
@@ -151,12 +152,20 @@ fn calls_in_tokens(
     any
 }
 
+/// Whether an item imports from the code's own modules (`use self::aba_parts_0::aba_part;`): the shared
+/// module leaves those out, for its functions call none, and an import of a function it does not hold
+/// would reach the code's private import through `use super::*` (E0603).
+fn imports_own_items(item: &syn::Item) -> bool {
+    matches!(item, syn::Item::Use(u) if matches!(&u.tree, syn::UseTree::Path(p) if p.ident == "self"))
+}
+
 /// The shared module's items: the leaves, `#[inline(always)]` and visible to the code; the functions that
-/// call others left out; modules visible to the code.
+/// call others and the imports of the code's own functions left out; modules visible to the code.
 fn shared_tokens(items: Vec<syn::Item>, names: &HashSet<String>) -> Vec<syn::Item> {
     let crate_visible: syn::Visibility = syn::parse_quote!(pub(crate));
     items
         .into_iter()
+        .filter(|item| !imports_own_items(item))
         .filter_map(|item| match item {
             syn::Item::Fn(mut f) => {
                 token_leaf(&f, names)?;
@@ -228,11 +237,26 @@ fn opened_module(trimmed: &str) -> Option<&str> {
     rest.strip_suffix(" {")
 }
 
-/// Whether `text` names one of `names` other than `own` (identifiers of ASCII letters, digits and `_`,
-/// as the generator writes them).
-fn text_names_another(text: &str, names: &HashSet<String>, own: &str) -> bool {
-    text.split(|c: char| !(c.is_ascii_alphanumeric() || c == '_'))
-        .any(|word| !word.is_empty() && word != own && names.contains(word))
+/// Whether a line of text calls one of `names`: the name (identifiers of ASCII letters, digits and `_`,
+/// as the generator writes them), then `(`, as in [`calls_one_of`].
+fn text_calls_one_of(line: &str, names: &HashSet<String>) -> bool {
+    let bytes = line.as_bytes();
+    let word = |b: u8| b.is_ascii_alphanumeric() || b == b'_';
+    let mut i = 0;
+    while i < bytes.len() {
+        if word(bytes[i]) {
+            let start = i;
+            while i < bytes.len() && word(bytes[i]) {
+                i += 1;
+            }
+            if bytes.get(i) == Some(&b'(') && names.contains(&line[start..i]) {
+                return true;
+            }
+        } else {
+            i += 1;
+        }
+    }
+    false
 }
 
 /// The signature of lines `start..=end` as syn reads it: without visibility and the opening brace.
@@ -261,7 +285,7 @@ fn text_function(lines: &[&str], i: usize, names: &HashSet<String>) -> Option<Te
     let close = (signature_end + 1..lines.len()).find(|&k| lines[k] == closing)?;
     let leaf = text_signature(lines, i, signature_end).and_then(|signature| {
         let body = &lines[signature_end + 1..close];
-        if body.iter().any(|l| text_names_another(l, names, &name)) {
+        if body.iter().any(|l| text_calls_one_of(l, names)) {
             None
         } else {
             parameter_names(&signature)
@@ -304,6 +328,18 @@ fn share_text(text: &str, function: &str) -> Option<(String, String)> {
             if trimmed == "}" && indent == open_indent {
                 path.pop();
             }
+        }
+        if trimmed.starts_with("use self::") {
+            // An import of the code's own functions: not in the shared module (`imports_own_items`).
+            loop {
+                calls.push_str(lines[i]);
+                calls.push('\n');
+                i += 1;
+                if lines[i - 1].trim_end().ends_with(';') || i == lines.len() {
+                    break;
+                }
+            }
+            continue;
         }
         if let Some(m) = opened_module(trimmed) {
             path.push((indent.to_string(), m.to_string()));
@@ -452,6 +488,56 @@ mod tests {
             pub fn c((x, y): (S, S)) -> S { x * y }
         };
         assert!(share(&Code::Tokens(pattern), "c").is_none());
+    }
+
+    /// A part is a leaf though a parameter has the function's name (`com`'s output `com`) and a value
+    /// another part's name (a joint `aba_l1_to_x` of link `x`, whose cosine is `aba_l1_to_x_q_cos`, the
+    /// name of a part): only calls count (an attacker's trial, where such parts stayed out of the shared
+    /// module and its copy of their import failed with E0603). A part that does call another stays out,
+    /// and the shared module imports none of the code's functions.
+    #[test]
+    fn only_calls_make_a_function_a_caller_and_the_shared_module_imports_none() {
+        let text = "    mod com_parts_0 {\n        #[allow(unused_imports)]\n        use super::*;\n        #[inline(never)]\n        pub(super) fn com_part0(q: &[S; 2], com: &mut [S; 3], s: &mut [S; 1]) {\n            let com_part1_q_cos = q[0];\n            com[0] = com_part1_q_cos;\n            s[0] = q[1];\n        }\n        #[inline(never)]\n        pub(super) fn com_part1(q: &[S; 2], com: &mut [S; 3], s: &mut [S; 1]) {\n            com[1] = s[0] * q[0];\n        }\n        #[inline(never)]\n        pub(super) fn com_part2(q: &[S; 2], com: &mut [S; 3], s: &mut [S; 1]) {\n            com_part1(q, com, s);\n        }\n    }\n    use self::com_parts_0::{com_part0, com_part1,\n        com_part2};\n    pub fn com(q: &[S; 2], com: &mut [S; 3]) {\n        let mut s: [S; 1] = [0.0; 1];\n        com_part0(q, com, &mut s);\n        com_part2(q, com, &mut s);\n    }\n";
+        let Some((Code::Text(calls), Code::Text(shared))) = share(&Code::Text(text.into()), "com")
+        else {
+            panic!("text has leaves to share")
+        };
+        for leaf in ["com_part0", "com_part1"] {
+            assert!(
+                calls.contains(&format!(
+                    "super::com_shared::com_parts_0::{leaf}(q, com, s)"
+                )),
+                "{calls}"
+            );
+            assert!(
+                shared.contains(&format!("pub(crate) fn {leaf}(")),
+                "{shared}"
+            );
+        }
+        assert!(
+            calls.contains("            com_part1(q, com, s);\n"),
+            "{calls}"
+        );
+        assert!(!shared.contains("fn com_part2("), "{shared}");
+        assert!(!shared.contains("use self::"), "{shared}");
+        syn::parse_str::<syn::File>(&format!("{calls}{shared}")).unwrap();
+
+        let tokens = quote! {
+            mod f_parts_0 {
+                use super::*;
+                pub(super) fn f_part(q: &[S; 2], f: &mut [S; 1]) { let f_caller = q[0]; f[0] = f_caller; }
+                pub(super) fn f_caller(q: &[S; 2], f: &mut [S; 1]) { f_part(q, f) }
+            }
+            use self::f_parts_0::{f_caller, f_part};
+            pub fn f(q: &[S; 2], f: &mut [S; 1]) { f_caller(q, f) }
+        };
+        let Some((_, Code::Tokens(shared))) = share(&Code::Tokens(tokens), "f") else {
+            panic!("f_part is a leaf")
+        };
+        let shared = crate::generate::format_tokens(&shared).unwrap();
+        assert!(shared.contains("pub(crate) fn f_part("), "{shared}");
+        assert!(!shared.contains("fn f_caller("), "{shared}");
+        assert!(!shared.contains("use self::"), "{shared}");
     }
 
     /// With its twin, a leaf's AVX copy calls the same shared body, which is written once.
