@@ -312,29 +312,27 @@ pub fn with_avx_twin(code: &Code, function: &str, helpers: &TokenStream, of: Twi
         TwinOf::Scalar { .. } => crate::shared_bodies::share(code, function),
         TwinOf::Lanes { .. } => None,
     };
-    let calls;
-    let (code, shared) = match shared {
-        Some((with_calls, shared)) => {
-            calls = with_calls;
-            (&calls, Some(shared))
-        }
-        None => (code, None),
-    };
-    match (code, shared) {
-        (Code::Tokens(tokens), shared) => {
-            let mut out = tokens_with_twin(tokens.clone(), &twin);
-            if let Some(Code::Tokens(shared)) = shared {
+    match shared {
+        Some((calls, shared)) => match (code_with_twin(&calls, &twin), shared) {
+            (Code::Tokens(mut out), Code::Tokens(shared)) => {
                 out.extend(shared);
+                Code::Tokens(out)
             }
-            Code::Tokens(out)
-        }
-        (Code::Text(text), shared) => {
-            let mut out = text_with_twin(text, &twin);
-            if let Some(Code::Text(shared)) = shared {
+            (Code::Text(mut out), Code::Text(shared)) => {
                 out.push_str(&shared);
+                Code::Text(out)
             }
-            Code::Text(out)
-        }
+            _ => unreachable!("the shared module is written in the code's own form"),
+        },
+        None => code_with_twin(code, &twin),
+    }
+}
+
+/// `code` as it is with its twins, in the same form.
+fn code_with_twin(code: &Code, twin: &Twin) -> Code {
+    match code {
+        Code::Tokens(tokens) => Code::Tokens(tokens_with_twin(tokens.clone(), twin)),
+        Code::Text(text) => Code::Text(text_with_twin(text, twin)),
     }
 }
 

@@ -242,7 +242,12 @@ pub(crate) fn function_text(
     // reader's part (the returned value to the end); a slot is free again from the part after that.
     // In a long function ([`SPACED_SLOTS_MIN_OPERATIONS`]) each part writes only slots of its own
     // parity (even parts even slots).
-    let spaced = order.len() >= SPACED_SLOTS_MIN_OPERATIONS;
+    // Slot k belongs to pool k % pools, and part c takes its slots from pool c % pools.
+    let pools = if order.len() >= SPACED_SLOTS_MIN_OPERATIONS {
+        2
+    } else {
+        1
+    };
     let mut slot: HashMap<u32, usize> = HashMap::new();
     let mut nslots = 0usize;
     {
@@ -251,9 +256,9 @@ pub(crate) fn function_text(
         let mut release_at: Vec<Vec<usize>> = vec![Vec::new(); parts.len() + 1];
         for (c, range) in part_ranges(&parts, order.len()).enumerate() {
             for k in release_at[c].drain(..).rev() {
-                free[if spaced { k % 2 } else { 0 }].push(k);
+                free[k % pools].push(k);
             }
-            let parity = if spaced { c % 2 } else { 0 };
+            let pool = c % pools;
             for &n in &order[range] {
                 let last = if returned == Some(n) {
                     usize::MAX
@@ -263,13 +268,9 @@ pub(crate) fn function_text(
                         _ => continue,
                     }
                 };
-                let k = free[parity].pop().unwrap_or_else(|| {
-                    used[parity] += 1;
-                    let k = if spaced {
-                        2 * (used[parity] - 1) + parity
-                    } else {
-                        used[parity] - 1
-                    };
+                let k = free[pool].pop().unwrap_or_else(|| {
+                    used[pool] += 1;
+                    let k = pools * (used[pool] - 1) + pool;
                     nslots = nslots.max(k + 1);
                     k
                 });

@@ -267,11 +267,16 @@ fn text_signature(lines: &[&str], start: usize, end: usize) -> Option<syn::Signa
         .collect::<Vec<_>>()
         .join(" ");
     let joined = joined.trim_end().strip_suffix('{')?.trim_end();
-    let joined = ["pub(super) ", "pub(crate) ", "pub "]
+    syn::parse_str(without_visibility(joined)).ok()
+}
+
+/// A trimmed item line without its visibility (`pub`, `pub(super)`, `pub(crate)`, as the emitters
+/// write them).
+fn without_visibility(trimmed: &str) -> &str {
+    ["pub(super) ", "pub(crate) ", "pub "]
         .iter()
-        .find_map(|p| joined.strip_prefix(p))
-        .unwrap_or(joined);
-    syn::parse_str(joined).ok()
+        .find_map(|p| trimmed.strip_prefix(p))
+        .unwrap_or(trimmed)
 }
 
 fn text_function(lines: &[&str], i: usize, names: &HashSet<String>) -> Option<TextFunction> {
@@ -375,11 +380,7 @@ fn share_text(text: &str, function: &str) -> Option<(String, String)> {
                         !a.starts_with("#[inline") && !a.starts_with("///")
                     }));
                     shared.push(format!("{indent}#[inline(always)]"));
-                    let first = signature[0].trim_start();
-                    let first = ["pub(super) ", "pub(crate) ", "pub "]
-                        .iter()
-                        .find_map(|p| first.strip_prefix(p))
-                        .unwrap_or(first);
+                    let first = without_visibility(signature[0].trim_start());
                     shared.push(format!("{indent}pub(crate) {first}"));
                     shared.extend(signature[1..].iter().map(|l| l.to_string()));
                     shared.extend(
