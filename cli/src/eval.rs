@@ -279,7 +279,8 @@ fn read_samples(model64: &Model<f64>, query: &Query, input: &str) -> Result<Samp
         optional,
         links: takes_wrenches(query.algo).then_some(&links[..]),
     };
-    let samples = Samples::parse_with(input, &request, &extras)?;
+    let samples =
+        Samples::parse_with(input, &request, &extras).map_err(|e| e.with_floating_hint(model64))?;
     let on_configurations = matches!(
         query.algo,
         EvalAlgo::Dynamics(a) if on_configuration_space(a)

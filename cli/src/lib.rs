@@ -565,7 +565,9 @@ pub enum InputError {
     SamplesNotArray,
     /// A field of a sample has more entries than the model needs (refused as soon as the first extra
     /// entry is read).
-    #[error("sample {sample}: field `{field}` has more than {len} entries, the model needs {len}")]
+    #[error(
+        "sample {sample}: field `{field}` has more than {len} entries, the model needs {len}{hint}"
+    )]
     TooManyEntries {
         /// The sample, counted from 0.
         sample: usize,
@@ -573,7 +575,34 @@ pub enum InputError {
         field: &'static str,
         /// The entries the model needs.
         len: usize,
+        /// [`FLOATING_HINT`] for `q` and `v` of a model without a free joint, else empty.
+        hint: &'static str,
     },
+}
+
+/// What an overlong `q` or `v` of a model without a free joint adds to its error: the usual cause is a
+/// state of the robot with a free-floating base (example-robot-data's humanoids, whose files leave the
+/// free joint out), read without `--floating` (a new user's trial with the G1, 2026-12-05).
+pub const FLOATING_HINT: &str =
+    "; a free-floating base adds 7 entries to `q` and 6 to `v`: for such a state pass `--floating`";
+
+impl CliError {
+    /// [`FLOATING_HINT`] added to an overlong `q` or `v` when the model has no free joint.
+    pub(crate) fn with_floating_hint(self, model: &embedyn_runtime::Model<f64>) -> CliError {
+        match self {
+            CliError::Input(InputError::TooManyEntries {
+                sample, field, len, ..
+            }) if matches!(field, "q" | "v") && !model.joints.iter().any(|j| j.nq() == 7) => {
+                CliError::Input(InputError::TooManyEntries {
+                    sample,
+                    field,
+                    len,
+                    hint: FLOATING_HINT,
+                })
+            }
+            other => other,
+        }
+    }
 }
 
 /// Why a sample's state cannot be evaluated or completed.
@@ -1098,7 +1127,9 @@ mod kind_tests {
         ));
         let q = vec!["0"; nq + 1].join(", ");
         match refused(&format!(r#"{{"samples": [{{"q": [{q}], "v": []}}]}}"#)) {
-            CliError::Input(InputError::TooManyEntries { sample, field, len }) => {
+            CliError::Input(InputError::TooManyEntries {
+                sample, field, len, ..
+            }) => {
                 assert_eq!((sample, field, len), (0, "q", nq));
             }
             other => panic!("{other:?}"),

@@ -576,6 +576,7 @@ impl<'de> Visitor<'de> for FieldSeed<'_> {
                     sample,
                     field: name,
                     len,
+                    hint: "",
                 }));
             }
             match entry {

@@ -360,6 +360,38 @@ fn an_overlong_vector_is_refused_while_reading() {
     );
 }
 
+/// A state of a free-floating robot read without `--floating` (a new user's trial with the G1, whose file
+/// leaves the free joint out): the overlong `q` or `v` says what a floating base adds and names the flag;
+/// with `--floating` (a free joint in the model) an overlong vector is refused without the hint.
+#[test]
+fn an_overlong_state_of_a_fixed_model_hints_at_floating() {
+    let model = repo("models/arm7.urdf");
+    let floating_state =
+        json!({"samples": [{"q": vec![0.0; 14], "v": vec![0.0; 13], "tau": vec![0.0; 13]}]});
+    for args in [
+        &["eval", &model, "--algo", "aba"][..],
+        &["eval", &model, "--algo", "crba"],
+        &["complete", &model],
+    ] {
+        let e = error_of(args, &floating_state.to_string());
+        assert!(
+            e.contains("sample 0: field `q` has more than 7 entries, the model needs 7; a free-floating base adds 7 entries to `q` and 6 to `v`: for such a state pass `--floating`"),
+            "{args:?}: {e}"
+        );
+    }
+    let too_long =
+        json!({"samples": [{"q": vec![0.0; 15], "v": vec![0.0; 13], "tau": vec![0.0; 13]}]});
+    let e = error_of(
+        &["eval", &model, "--floating", "--algo", "aba"],
+        &too_long.to_string(),
+    );
+    assert!(
+        e.contains("field `q` has more than 14 entries, the model needs 14"),
+        "{e}"
+    );
+    assert!(!e.contains("--floating"), "{e}");
+}
+
 /// What the typed reading of the samples keeps from reading a JSON tree: fields a command does not use
 /// are ignored whatever they hold, a sample that is not an object has no fields, a repeated key counts
 /// once with its last value, the length is judged before the entries, and invalid JSON anywhere (even
