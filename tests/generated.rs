@@ -3,7 +3,7 @@
 
 use crate::common;
 
-use common::{load_model, Rng};
+use common::{load_model, Rng, UNWRITTEN};
 use embedyn::{
     aba, crba, forward_kinematics, link_poses, mass_matrix_inverse, relative_error, rnea, Model,
     Workspace,
@@ -122,7 +122,7 @@ macro_rules! check {
             let v: [f64; NV] = rng.vec(NV, -2.0, 2.0).try_into().unwrap();
             let x: [f64; NV] = rng.vec(NV, -10.0, 10.0).try_into().unwrap();
             let mut out = [0.0; NV];
-            let mut mat = [[0.0; NV]; NV];
+            let mut mat = [[UNWRITTEN; NV]; NV];
             // Consistent with couplings: project v onto the constraints; q of a gear is linear anyway.
             let (q, v) = if model.has_constraints() {
                 // Near the zero pose, where every bundled loop assembles: independent coordinates within
@@ -168,7 +168,7 @@ macro_rules! check {
             worst[2] = worst[2].max(relative_error(&flat, &want_flat));
             $(
                 let _ = stringify!($f32);
-                let mut mat32 = [[0.0f32; NV]; NV];
+                let mut mat32 = [[UNWRITTEN as f32; NV]; NV];
                 $m::f32::crba(&q.map(|a| a as f32), &mut mat32);
                 let flat32: Vec<f64> = (0..NV * NV).map(|k| mat32[k / NV][k % NV] as f64).collect();
                 worst[6] = worst[6].max(relative_error(&flat32, &want_flat));
@@ -185,12 +185,12 @@ macro_rules! check {
                 .collect();
             let names: Vec<&str> = link_poses(&model, &ws).map(|(n, _)| n).collect();
             assert_eq!(names, $m::FRAMES.to_vec());
-            let mut frames = [[0.0; 12]; $m::FRAMES.len()];
+            let mut frames = [[UNWRITTEN; 12]; $m::FRAMES.len()];
             $m::f64::kinematics(&q, &mut frames);
             worst[7] = worst[7].max(relative_error(frames.as_flattened(), &want));
             $(
                 let _ = stringify!($f32);
-                let mut frames32 = [[0.0f32; 12]; $m::FRAMES.len()];
+                let mut frames32 = [[UNWRITTEN as f32; 12]; $m::FRAMES.len()];
                 $m::f32::kinematics(&q.map(|a| a as f32), &mut frames32);
                 let f32_as_f64: Vec<f64> = frames32.as_flattened().iter().map(|&a| a as f64).collect();
                 worst[8] = worst[8].max(relative_error(&f32_as_f64, &want));
@@ -217,7 +217,7 @@ macro_rules! check {
 
 macro_rules! check_minv {
     ($m:ident, $q:expr, $want:expr, $worst:expr, $nv:expr) => {{
-        let mut mat = [[0.0; $nv]; $nv];
+        let mut mat = [[UNWRITTEN; $nv]; $nv];
         $m::f64::minv(&$q, &mut mat);
         let flat: Vec<f64> = (0..$nv * $nv).map(|k| mat[k / $nv][k % $nv]).collect();
         let want_flat: Vec<f64> = (0..$nv * $nv).map(|k| $want[(k / $nv, k % $nv)]).collect();
@@ -328,7 +328,7 @@ fn generated_completion_and_embedding_match_interpreted() {
                     $path
                 );
                 worst_q = worst_q.max(relative_error(&q_gen, &q));
-                let mut x = [[0.0; NI]; NV];
+                let mut x = [[UNWRITTEN; NI]; NV];
                 let cond = $m::f64::embedding(&q.clone().try_into().unwrap(), &mut x);
                 let want = embedyn::embedding_map(&model, &mut ws, &q).unwrap();
                 let flat: Vec<f64> = x.iter().flatten().copied().collect();
@@ -350,7 +350,7 @@ fn generated_completion_and_embedding_match_interpreted() {
                 );
                 assert!(cond < 1e3, "{}: cond(Y1) {cond:e} near the zero pose", $path);
                 // Xᵀ M X over the independent coordinates, with the same measure.
-                let mut m = [[0.0; NI]; NI];
+                let mut m = [[UNWRITTEN; NI]; NI];
                 let cond_m = $m::f64::crba_independent(&q.clone().try_into().unwrap(), &mut m);
                 assert_eq!(cond_m, cond);
                 let want = embedyn::reduced_mass_matrix(&model, &mut ws, &q).unwrap();
@@ -662,7 +662,7 @@ fn only_generates_the_functions_named_and_the_same_code() {
         assert_eq!((a, ra), (b, rb));
         let want = aba(&model, &mut ws, &q, &v, &tau).unwrap().to_vec();
         assert!(relative_error(&a, &want) <= 1e-12);
-        let mut frames = [[0.0; 12]; four_bar_aba_only::FRAMES.len()];
+        let mut frames = [[UNWRITTEN; 12]; four_bar_aba_only::FRAMES.len()];
         four_bar_aba_only::f64::kinematics(&q, &mut frames);
         assert_eq!(four_bar_aba_only::FRAMES, four_bar::FRAMES);
     }

@@ -4,7 +4,7 @@
 
 use crate::common;
 
-use common::{load_model, Rng};
+use common::{load_model, Rng, UNWRITTEN};
 use embedyn::{
     aba, crba, forward_kinematics, link_poses, mass_matrix_inverse, relative_error, rnea, Model,
     Workspace,
@@ -55,8 +55,8 @@ fn split_chain_generated_matches_interpreted() {
         );
         let mut out = [0.0; NV];
         let mut out32 = [0.0f32; NV];
-        let mut mat = [[0.0; NV]; NV];
-        let mut mat32 = [[0.0f32; NV]; NV];
+        let mut mat = [[UNWRITTEN; NV]; NV];
+        let mut mat32 = [[UNWRITTEN as f32; NV]; NV];
 
         let want = aba(&model, &mut ws, &q, &v, &x).unwrap().to_vec();
         chain24::f64::aba(&q, &v, &x, &mut out);
@@ -90,7 +90,7 @@ fn split_chain_generated_matches_interpreted() {
                 f
             })
             .collect();
-        let mut frames = [[0.0; 12]; chain24::FRAMES.len()];
+        let mut frames = [[UNWRITTEN; 12]; chain24::FRAMES.len()];
         chain24::f64::kinematics(&q, &mut frames);
         worst[4] = worst[4].max(relative_error(frames.as_flattened(), &want));
     }
@@ -132,7 +132,7 @@ fn paired_parts_of_twin_arms_match_interpreted() {
     for _ in 0..10 {
         let q: [f64; NQ] = rng.configuration(&model).try_into().unwrap();
         let want = crba(&model, &mut ws, &q).unwrap().clone();
-        let mut mat = [[0.0; NV]; NV];
+        let mut mat = [[UNWRITTEN; NV]; NV];
         twin_arms::f64::crba(&q, &mut mat);
         let want: Vec<f64> = (0..NV * NV).map(|k| want[(k / NV, k % NV)]).collect();
         worst = worst.max(relative_error(mat.as_flattened(), &want));

@@ -6,7 +6,7 @@
 //! Pinocchio 4.1 on UR5 (local), floating Solo-12 (world) and floating ANYmal B (local_world_aligned)
 //! (tests/data/pinocchio/*_contact.json, the `Contact` reference of contact.rs) to 1e-9.
 
-use crate::common::{load_model, Rng};
+use crate::common::{load_model, Rng, UNWRITTEN};
 use crate::constraint_embedding::consistent_state;
 use crate::contact::{linear_angular, row_major, Contact};
 use crate::pinocchio_reference::vecf;
@@ -129,17 +129,17 @@ macro_rules! generated {
             },
             nle_ext: $nle,
             frames: vec![$(($link, |q, v, pose, j, bias| {
-                let mut jacobian = [[0.0; $m::NV]; 6];
+                let mut jacobian = [[UNWRITTEN; $m::NV]; 6];
                 $m::f64::$f(q.try_into().unwrap(), v.try_into().unwrap(), pose, &mut jacobian, bias);
                 j.copy_from_slice(jacobian.as_flattened());
             })),*],
             com: |q, v, com, vcom, j| {
-                let mut j_com = [[0.0; $m::NV]; 3];
+                let mut j_com = [[UNWRITTEN; $m::NV]; 3];
                 $m::f64::com(q.try_into().unwrap(), v.try_into().unwrap(), com, vcom, &mut j_com);
                 j.copy_from_slice(j_com.as_flattened());
             },
             centroidal: |q, v, h_g, a, dh_g| {
-                let mut a_g = [[0.0; $m::NV]; 6];
+                let mut a_g = [[UNWRITTEN; $m::NV]; 6];
                 $m::f64::centroidal(q.try_into().unwrap(), v.try_into().unwrap(), h_g, &mut a_g);
                 $m::f64::centroidal_bias(q.try_into().unwrap(), v.try_into().unwrap(), dh_g);
                 a.copy_from_slice(a_g.as_flattened());
@@ -336,7 +336,7 @@ fn generated_contact_functions_match_interpreted_on_ur5() {
     let mut ws = Workspace::new(&model);
     let qdd = aba(&model, &mut ws, q, v, &tau).unwrap();
     assert!(relative_error(&qdd_ext, qdd) <= 1e-14);
-    let (mut pose, mut j, mut bias) = ([0.0; 12], [[0.0; ur5::NV]; 6], [0.0; 6]);
+    let (mut pose, mut j, mut bias) = ([0.0; 12], [[UNWRITTEN; ur5::NV]; 6], [0.0; 6]);
     ur5::f64::frame_base_link(q, v, &mut pose, &mut j, &mut bias);
     assert!(j.as_flattened().iter().chain(&bias).all(|&x| x == 0.0));
 }

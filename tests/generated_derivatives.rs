@@ -5,7 +5,7 @@
 //! `aba_derivatives_independent` along the constraint manifold, each returning the singularity measure);
 //! the generated `step` and its Jacobian against the interpreted ones on the UR5.
 
-use crate::common::{load_model, repo_path, Rng};
+use crate::common::{load_model, repo_path, Rng, UNWRITTEN};
 use embedyn::constraints::constraint_condition;
 use embedyn::constraints::{complete_configuration, complete_velocity};
 use embedyn::nalgebra::DMatrix;
@@ -240,10 +240,18 @@ fn generated_derivatives_match_pinocchio_on_the_ur5() {
         let (q, v) = (ours(numbers(&s["q"])), ours(numbers(&s["v"])));
         let (tau, a) = (ours(numbers(&s["tau"])), ours(numbers(&s["qdd_for_rnea"])));
         let mut qdd = [0.0; N];
-        let (mut dq, mut dv, mut dt) = ([[0.0; N]; N], [[0.0; N]; N], [[0.0; N]; N]);
+        let (mut dq, mut dv, mut dt) = (
+            [[UNWRITTEN; N]; N],
+            [[UNWRITTEN; N]; N],
+            [[UNWRITTEN; N]; N],
+        );
         ur5::f64::aba_derivatives(&q, &v, &tau, &mut qdd, &mut dq, &mut dv, &mut dt);
         let mut t = [0.0; N];
-        let (mut tq, mut tv, mut m) = ([[0.0; N]; N], [[0.0; N]; N], [[0.0; N]; N]);
+        let (mut tq, mut tv, mut m) = (
+            [[UNWRITTEN; N]; N],
+            [[UNWRITTEN; N]; N],
+            [[UNWRITTEN; N]; N],
+        );
         ur5::f64::rnea_derivatives(&q, &v, &a, &mut t, &mut tq, &mut tv, &mut m);
         let errors = [
             rel_vec(&qdd, &ours(numbers(&reference["qdd"]))),
@@ -260,7 +268,11 @@ fn generated_derivatives_match_pinocchio_on_the_ur5() {
         // f32: the same functions in single precision, to 1e-3 of Pinocchio's answer.
         let narrow = |x: &[f64; N]| -> [f32; N] { x.map(|y| y as f32) };
         let mut qdd32 = [0.0f32; N];
-        let (mut dq32, mut dv32, mut dt32) = ([[0.0f32; N]; N], [[0.0f32; N]; N], [[0.0f32; N]; N]);
+        let (mut dq32, mut dv32, mut dt32) = (
+            [[UNWRITTEN as f32; N]; N],
+            [[UNWRITTEN as f32; N]; N],
+            [[UNWRITTEN as f32; N]; N],
+        );
         ur5::f32::aba_derivatives(
             &narrow(&q),
             &narrow(&v),
@@ -342,7 +354,11 @@ fn generated_derivatives_match_the_interpreted_on_a_loop() {
         let arr = |x: &[f64]| -> [f64; NV] { std::array::from_fn(|i| x[i]) };
         let condition = constraint_condition(dws.value_workspace());
         let mut qdd = [0.0; NV];
-        let (mut dq, mut dv, mut dt) = ([[0.0; NV]; NV], [[0.0; NV]; NV], [[0.0; NV]; NV]);
+        let (mut dq, mut dv, mut dt) = (
+            [[UNWRITTEN; NV]; NV],
+            [[UNWRITTEN; NV]; NV],
+            [[UNWRITTEN; NV]; NV],
+        );
         let generated_condition = four_bar::f64::aba_derivatives(
             &arr(&q),
             &arr(&v),
@@ -364,7 +380,11 @@ fn generated_derivatives_match_the_interpreted_on_a_loop() {
 
         aba_derivatives_independent(&model, &mut dws, &q, &v, &tau, &[], &mut m).unwrap();
         let mut qdd_i = [0.0; NI];
-        let (mut mq, mut mv, mut mt) = ([[0.0; NI]; NI], [[0.0; NI]; NI], [[0.0; NV]; NI]);
+        let (mut mq, mut mv, mut mt) = (
+            [[UNWRITTEN; NI]; NI],
+            [[UNWRITTEN; NI]; NI],
+            [[UNWRITTEN; NV]; NI],
+        );
         let generated_condition = four_bar::f64::aba_derivatives_independent(
             &arr(&q),
             &arr(&v),
@@ -655,7 +675,11 @@ fn generated_f32_forward_derivatives_keep_their_digits() {
         )
         .unwrap();
         let mut qdd = [0.0f32; N];
-        let (mut dq, mut dv, mut dt) = ([[0.0f32; N]; N], [[0.0f32; N]; N], [[0.0f32; N]; N]);
+        let (mut dq, mut dv, mut dt) = (
+            [[UNWRITTEN as f32; N]; N],
+            [[UNWRITTEN as f32; N]; N],
+            [[UNWRITTEN as f32; N]; N],
+        );
         z1::f32::aba_derivatives(&q32, &v32, &t32, &mut qdd, &mut dq, &mut dv, &mut dt);
         let errors = [
             rel_vec(&wide(qdd), d.qdd.as_slice()),

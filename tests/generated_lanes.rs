@@ -4,7 +4,7 @@
 //! free flyer's quaternion, sines and cosines through the batch), on a four-bar (run-time pivoting by
 //! `select_gt`, the returned singularity measure) and on the Z1 in f32 with 8 lanes.
 
-use crate::common::{load_model, Rng};
+use crate::common::{load_model, Rng, UNWRITTEN};
 use embedyn::codegen_support::{F32x8, F64x4};
 use embedyn::random::SplitMix64;
 use embedyn::{random_configuration_within_limits, Model};
@@ -180,7 +180,7 @@ fn lane_functions_equal_the_scalar_ones_bit_for_bit_on_a_floating_quadruped() {
             assert_eq!(bits(&lane(&qdd, k)), bits(&expected), "aba, lane {k}");
             anymal::f64::rnea(&q[k], &v[k], &u[k], &mut expected);
             assert_eq!(bits(&lane(&tau, k)), bits(&expected), "rnea, lane {k}");
-            let mut mass = [[0.0; NV]; NV];
+            let mut mass = [[UNWRITTEN; NV]; NV];
             anymal::f64::crba(&q[k], &mut mass);
             for r in 0..NV {
                 assert_eq!(
@@ -291,7 +291,7 @@ fn batch_functions_equal_the_scalar_ones_for_any_number_of_states() {
     let mut m = vec![[[f64::NAN; NV]; NV]; n];
     assert!(anymal::f64x4::crba_batch(q, &mut m));
     for k in 0..n {
-        let mut mass = [[0.0; NV]; NV];
+        let mut mass = [[UNWRITTEN; NV]; NV];
         anymal::f64::crba(&q[k], &mut mass);
         for r in 0..NV {
             assert_eq!(bits(&m[k][r]), bits(&mass[r]), "crba row {r}, state {k}");

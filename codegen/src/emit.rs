@@ -4,6 +4,7 @@
 
 use crate::trace::{Op, Sym, Tape};
 use crate::value_names::{body_list, part_names, Owners, ValueNames};
+use crate::zero_stores::{self, ZeroWrites};
 use proc_macro2::{Ident, Literal, TokenStream};
 use quote::{format_ident, quote};
 use std::cmp::Reverse;
@@ -430,7 +431,7 @@ pub fn function(
     let paired = pairing.as_ref().and_then(|p| {
         // Trace order, not `schedule`'s: see there.
         let (order, batch) = batch_angles(nodes, order.clone(), &sin_of, &cos_of);
-        let angles = batch_args(nodes, &batch);
+        let angles = batch_args(nodes, &batch, module.lanes);
         let writer = Writer {
             nodes,
             names: &names,
@@ -470,7 +471,7 @@ pub fn function(
     }
     if order.len() > SCHEDULE_LIMIT && paired.is_none() {
         let (order, batch) = batch_angles(nodes, order, &sin_of, &cos_of);
-        let angles = batch_args(nodes, &batch);
+        let angles = batch_args(nodes, &batch, module.lanes);
         let helpers = helpers.to_string().replace(' ', "");
         let operations = order.len();
         let text = crate::emit_large::function_text(
@@ -499,6 +500,7 @@ pub fn function(
         });
     }
     let places = output_places(outputs, nodes);
+    let zero_writes = ZeroWrites::of(outputs, order.len());
     let is_paired = paired.is_some();
     let statement_count = paired
         .as_ref()
@@ -525,7 +527,7 @@ pub fn function(
             (order, batch, None)
         }
     };
-    let angles = batch_args(nodes, &batch);
+    let angles = batch_args(nodes, &batch, module.lanes);
     // A paired body short enough for one function is one function.
     let chunks: Vec<&[u32]> = if order.is_empty() || paired_body.is_some() {
         vec![&order[..]]
@@ -591,12 +593,11 @@ pub fn function(
         writes: out_stmts,
         ret_type,
         ret_value,
-    } = output_tokens(outputs, split, &slot, &operand, nodes, args);
+    } = output_tokens(outputs, &zero_writes, split, &slot, &operand, nodes, args);
     let out_names = output_names(outputs);
     let chunk_bodies: Vec<Vec<&str>> = chunks.iter().map(|ns| names.bodies(ns.iter())).collect();
     let chunk_names = part_names(name, &chunk_bodies, module.taken);
-    let mut chunk_fns = Vec::new();
-    let mut bodies = Vec::new();
+    let mut chunk_stmts = Vec::new();
     for (c, ns) in chunks.iter().enumerate() {
         let mut stmts = Vec::new();
         let mut defined: HashSet<u32> = HashSet::new();
@@ -644,6 +645,14 @@ pub fn function(
                     stmts.push(quote!(s[#k] = #id;));
                 }
             }
+        }
+        chunk_stmts.push(stmts);
+    }
+    let chunk_stmts = zero_stores::spread(chunk_stmts, zero_run_tokens(&zero_writes, &operand));
+    let mut chunk_fns = Vec::new();
+    let mut bodies = Vec::new();
+    for (c, stmts) in chunk_stmts.into_iter().enumerate() {
+        if split {
             let fname = format_ident!("{}", chunk_names[c]);
             let part_lines = doc_lines(&part_doc(name, c, chunks.len(), &chunk_bodies[c]));
             chunk_fns.push(quote! {
@@ -713,6 +722,24 @@ pub fn function(
             }
         }),
     })
+}
+
+/// The statements writing the structural zeros by runs ([`zero_stores`]), `operand` writing the zero:
+/// [`zero_stores::ZeroRun::text`]'s statements, the one form of a run the text emission writes too.
+fn zero_run_tokens(
+    zero_writes: &ZeroWrites,
+    operand: &dyn Fn(&Sym) -> TokenStream,
+) -> Vec<TokenStream> {
+    let zero = operand(&Sym::Const(0.0)).to_string();
+    zero_writes
+        .runs()
+        .iter()
+        .map(|run| {
+            run.text(&zero)
+                .parse()
+                .expect("a run is statements of an output's name, indices and the zero")
+        })
+        .collect()
 }
 
 /// Where each computed value goes in the output arrays (`m[3][4]`, `qdd[2]`; a symmetric matrix's
@@ -787,6 +814,7 @@ fn write_places(
 /// `s` when `split`).
 fn output_tokens(
     outputs: &[Output],
+    zero_writes: &ZeroWrites,
     split: bool,
     slot: &HashMap<u32, usize>,
     operand: &dyn Fn(&Sym) -> TokenStream,
@@ -825,8 +853,10 @@ fn output_tokens(
             } => {
                 let id = format_ident!("{}", oname);
                 out_params.extend(o.param());
+                // Zeroed whole first, or by runs spread through the body (`zero_stores`): either
+                // way its structural zeros are not written one by one.
                 let filled = zero_filled(values);
-                if filled {
+                if zero_writes.filled().contains(oname) {
                     let (zero, r, c) = (operand(&Sym::Const(0.0)), num(*rows), num(*cols));
                     fill_stmts.push(quote!(*#id = [[#zero; #c]; #r];));
                 }
@@ -857,7 +887,7 @@ fn output_tokens(
 struct OutputTokens {
     /// The output parameters.
     params: Vec<TokenStream>,
-    /// The statements that zero whole matrices first ([`zero_filled`]), before any entry is written.
+    /// The statements that zero whole matrices first (those [`ZeroWrites`] does not write by runs).
     fill: Vec<TokenStream>,
     /// The writes of the entries no statement computes.
     writes: Vec<TokenStream>,
@@ -865,13 +895,15 @@ struct OutputTokens {
     ret_value: TokenStream,
 }
 
-/// Constant `+0.0` entries of an output matrix from which it is zeroed whole at the start
-/// (`*m = [[0.0; 38]; 38];`, a `memset`) and those entries are not written one by one. The floating
-/// TALOS's M has 762 such entries of 1,444 (joints on different branches): one store instruction each
-/// (8 KB of code) took its `crba` 1.1× the time of the fill (2026-12-03, one binary).
+/// Constant `+0.0` entries of an output matrix from which its structural zeros are not written one by
+/// one but zeroed together: by runs spread through the body or whole first ([`crate::zero_stores`]).
+/// The floating TALOS's M has 762 such entries of 1,444 (joints on different branches): one store
+/// instruction each (8 KB of code) took its `crba` 1.1× the time of a whole fill (2026-12-03, one
+/// binary).
 pub(crate) const ZERO_FILL_MIN: usize = 16;
 
-/// Whether an output matrix of these values is zeroed whole first ([`ZERO_FILL_MIN`]).
+/// Whether the structural zeros of an output matrix of these values are zeroed together
+/// ([`ZERO_FILL_MIN`]).
 pub(crate) fn zero_filled(values: &[Sym]) -> bool {
     values.iter().filter(|v| is_positive_zero(v)).count() >= ZERO_FILL_MIN
 }
@@ -992,8 +1024,21 @@ fn schedule(nodes: &[Op], order: Vec<u32>) -> Vec<u32> {
     out
 }
 
-/// The angles of the batched sine/cosine call, in order of first appearance.
-fn batch_args(nodes: &[Op], batch: &[u32]) -> Vec<Sym> {
+/// A batch of this many angles or more is padded with zeros to a whole number of [`SINCOS_PAD`]: from 24
+/// angles the batch runs 4 angles to an AVX instruction (the runtime's `sincos_batch_f64`), 8 in an
+/// AVX-512 twin, and angles left over run one at a time, branches and all. The floating G1's 29 angles
+/// padded to 32 took its `crba` 0.90× the time in its AVX-512 twin (445 against 494 ns), 0.965× in its
+/// AVX twin, 1.02× with no AVX at all (2026-12-05, one binary, the same bits); `aba` and `rnea` 0.97–1.01×.
+/// Shorter batches gain nothing (the Z1's 7 angles padded to 8: 0.99–1.01×), and lane functions, whose
+/// angles are vectors already, are not padded.
+const SINCOS_PAD_MIN: usize = 24;
+
+/// See [`SINCOS_PAD_MIN`].
+const SINCOS_PAD: usize = 8;
+
+/// The angles of the batched sine/cosine call, in order of first appearance (then the padding of
+/// [`SINCOS_PAD_MIN`]).
+fn batch_args(nodes: &[Op], batch: &[u32], lanes: bool) -> Vec<Sym> {
     let mut args: Vec<Sym> = Vec::new();
     for &n in batch {
         if let Op::Sin(a) | Op::Cos(a) = nodes[n as usize] {
@@ -1001,6 +1046,9 @@ fn batch_args(nodes: &[Op], batch: &[u32]) -> Vec<Sym> {
                 args.push(a);
             }
         }
+    }
+    if !lanes && args.len() >= SINCOS_PAD_MIN {
+        args.resize(args.len().next_multiple_of(SINCOS_PAD), Sym::Const(0.0));
     }
     args
 }
@@ -1533,15 +1581,16 @@ fn paired_parts(
         .collect();
     let chunk_names = part_names(name, &chunk_bodies, module.taken);
     let operand = |v: &Sym| writer.operand(v);
+    let zero_writes = ZeroWrites::of(outputs, order.len());
     let OutputTokens {
         params: out_params,
         fill: fill_stmts,
         writes: out_stmts,
         ret_type,
         ret_value,
-    } = output_tokens(outputs, true, &slot, &operand, nodes, args);
+    } = output_tokens(outputs, &zero_writes, true, &slot, &operand, nodes, args);
     let out_names = output_names(outputs);
-    let mut chunk_fns = Vec::new();
+    let mut chunk_stmts = Vec::new();
     for (c, part) in chunks.iter().enumerate() {
         let mut stmts: Vec<TokenStream> = Vec::new();
         let mut scalar_reads: Vec<u32> = part
@@ -1596,6 +1645,11 @@ fn paired_parts(
                 }
             }
         }
+        chunk_stmts.push(stmts);
+    }
+    let chunk_stmts = zero_stores::spread(chunk_stmts, zero_run_tokens(&zero_writes, &operand));
+    let mut chunk_fns = Vec::new();
+    for (c, stmts) in chunk_stmts.into_iter().enumerate() {
         let fname = format_ident!("{}", chunk_names[c]);
         let part_lines = doc_lines(&part_doc(name, c, chunks.len(), &chunk_bodies[c]));
         chunk_fns.push(quote! {

@@ -27,6 +27,7 @@ use crate::emit::{
 };
 use crate::trace::{Op, Sym};
 use crate::value_names::{part_names, ValueNames};
+use crate::zero_stores::ZeroWrites;
 use std::collections::HashMap;
 use std::fmt::Write;
 
@@ -329,29 +330,44 @@ pub(crate) fn function_text(
     let part_functions = part_names(name, &part_bodies, taken);
     // Contiguous parts share a module (see `PART_MODULES`), which the parent imports them from. Part
     // text is written one level out and indented as the module's.
+    // The parts' statements, one a line, with the runs of structural zeros spread among them.
+    let zero_writes = ZeroWrites::of(outputs, order.len());
+    let mut bodies: Vec<Vec<String>> = Vec::new();
+    for c in 0..ranges.len() {
+        let part = Part {
+            nodes,
+            order: &order[ranges[c].clone()],
+            part_of: &part_of,
+            index: c,
+            slot: &slot,
+            destinations: &destinations,
+            outputs,
+            args,
+            batched: &batched,
+            angles,
+            sin_of,
+            cos_of,
+            helpers,
+            names,
+            lanes,
+        };
+        let mut body = String::new();
+        part.write_body(&mut body);
+        bodies.push(body.lines().map(str::to_string).collect());
+    }
+    let zero = constant_text(0.0, lanes);
+    let runs = zero_writes
+        .runs()
+        .iter()
+        .map(|run| format!("        {}", run.text(&zero)))
+        .collect();
+    let mut bodies = crate::zero_stores::spread(bodies, runs).into_iter();
     for (module, members) in part_module_ranges(ranges.len()).enumerate() {
         let module_name = part_module_name(name, module);
         writeln!(text, "    mod {module_name} {{").unwrap();
         writeln!(text, "        #[allow(unused_imports)]").unwrap();
         writeln!(text, "        use super::*;").unwrap();
         for c in members.clone() {
-            let part = Part {
-                nodes,
-                order: &order[ranges[c].clone()],
-                part_of: &part_of,
-                index: c,
-                slot: &slot,
-                destinations: &destinations,
-                outputs,
-                args,
-                batched: &batched,
-                angles,
-                sin_of,
-                cos_of,
-                helpers,
-                names,
-                lanes,
-            };
             let mut part_text = String::new();
             write_doc(
                 &mut part_text,
@@ -365,7 +381,10 @@ pub(crate) fn function_text(
                 "    pub(super) fn {part_function}({part_params}) {{"
             )
             .unwrap();
-            part.write_body(&mut part_text);
+            for line in bodies.next().expect("a body per part") {
+                part_text.push_str(&line);
+                part_text.push('\n');
+            }
             writeln!(part_text, "    }}").unwrap();
             for line in part_text.lines() {
                 text.push_str("    ");
@@ -394,17 +413,16 @@ pub(crate) fn function_text(
     writeln!(text, "    #[allow(unused_variables, clippy::all)]").unwrap();
     let ret = if returns { " -> S" } else { "" };
     writeln!(text, "    pub fn {name}({public_params}){ret} {{").unwrap();
-    // Matrices mostly of zeros are zeroed whole first, and their zero entries not written one by one.
+    // Matrices of too many runs of structural zeros are zeroed whole first (`zero_stores`).
     for out in outputs {
         if let Output::Matrix {
             name: o,
             rows,
             cols,
-            values,
+            ..
         } = out
         {
-            if crate::emit::zero_filled(values) {
-                let zero = constant_text(0.0, lanes);
+            if zero_writes.filled().contains(o) {
                 writeln!(text, "        *{o} = [[{zero}; {cols}]; {rows}];").unwrap();
             }
         }

@@ -1792,6 +1792,54 @@ pub fn generation_model(loaded: &Loaded, options: &ModelOptions) -> Result<Model
 mod tests {
     use super::*;
 
+    /// A batch of 24 angles or more is padded with zeros to a multiple of 8 (`SINCOS_PAD_MIN`,
+    /// `SINCOS_PAD`); a shorter one, and a lane function's, is left as it is.
+    #[test]
+    fn long_sine_batches_are_padded_to_whole_vectors() {
+        // The entries of every batch (`sincos_batch([a, b, …])`) and how many of them are `0.0` padding.
+        fn batches(text: &str) -> Vec<(usize, usize)> {
+            text.match_indices("sincos_batch([")
+                .map(|(at, m)| {
+                    let rest = &text[at + m.len()..];
+                    let entries: Vec<&str> = rest[..rest.find(']').unwrap()]
+                        .split(',')
+                        .map(str::trim)
+                        .filter(|e| !e.is_empty())
+                        .collect();
+                    let zeros = entries.iter().rev().take_while(|e| **e == "0.0").count();
+                    (entries.len(), zeros)
+                })
+                .collect()
+        }
+        let models = concat!(env!("CARGO_MANIFEST_DIR"), "/../models/");
+        // 29 joint angles: padded to 32.
+        let humanoid = crate::load(format!("{models}humanoid34.urdf").as_ref()).unwrap();
+        let found = batches(&f64_source(&humanoid, Algorithm::Crba));
+        assert!(!found.is_empty());
+        assert!(found.iter().all(|&b| b == (32, 3)), "{found:?}");
+        // Fewer than 24: as they are.
+        let z1 = crate::load(format!("{models}peers/z1.urdf").as_ref()).unwrap();
+        let found = batches(&f64_source(&z1, Algorithm::Crba));
+        assert!(
+            !found.is_empty() && found.iter().all(|&(n, zeros)| n < 24 && zeros == 0),
+            "{found:?}"
+        );
+        // Lane functions: their angles are vectors already.
+        let options = GenerateOptions {
+            f32: false,
+            lanes: 4,
+            ..GenerateOptions::default()
+        }
+        .with_requested(Some(vec![Algorithm::Crba]), &[]);
+        let text = generate_source(&humanoid, &options).unwrap();
+        let lanes = &text[text.find("pub mod f64x4").unwrap()..];
+        let found = batches(lanes);
+        assert!(
+            !found.is_empty() && found.iter().all(|&b| b == (29, 0)),
+            "{found:?}"
+        );
+    }
+
     /// The scratch stores of each part of a long unpaired function (`SPACED_SLOTS_MIN_OPERATIONS`) go to
     /// slots of one parity (the part's own), so that none are adjacent; a short one's parts
     /// store to adjacent slots, numbered without gaps.

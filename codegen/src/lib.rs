@@ -35,6 +35,7 @@ pub mod trace;
 mod urdf;
 mod value_names;
 mod xml_text;
+mod zero_stores;
 
 pub use algorithm::UnknownAlgorithm;
 pub use assemble::{build_model, inertial_about_link, ModelOptions, ROOT_JOINT};

@@ -5,6 +5,10 @@ use embedyn::random::SplitMix64;
 use embedyn::{load, Model, ModelOptions, Real};
 use std::path::PathBuf;
 
+/// What the output arrays hold before a generated function writes them: an entry it leaves unwritten
+/// (a structural zero it fails to store) shows as an error of 1e9.
+pub const UNWRITTEN: f64 = 1.0e9;
+
 pub fn repo_path(rel: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(rel)
 }
