@@ -60,6 +60,11 @@ def main():
                     f"| {robot} | `{call}` | {build} | {theirs:,.0f} | {scalar:,.0f} | {scalar / theirs:.2f} | "
                     f"{per_state:,.0f} | {per_state / theirs:.3f} | {per_state / scalar:.2f} | {batch_text} | "
                     f"{f'≤ {target}' if target else ''} |")
+    lines += ["", "2026-12-05, this run (a new machine of the same kind as the day before: AMD EPYC, 2 vCPUs, "
+              "AVX-512): the floating ANYmal B's scalar `aba` ran at 506 ns in this binary, against 346 ns in "
+              "the floating-bases table of the same hour: one of the slow levels of the shared host (see the "
+              "note under \"Floating bases\"); against 346 ns its lanes' 212 ns per state are 0.61×, not 0.42×. "
+              "Pinocchio's Z1 `aba` took 1,924 ns, against 1,386 ns on the host of 2026-12-04."]
     lines += ["", "The lanes pay where the scalar code leaves the vector units idle: each operation of the scalar "
               "function becomes one operation on four states. What they do not remove is the scalar code's own cost "
               "per operation (spills of long functions, issue 13's first item), which the lane values, four times "
