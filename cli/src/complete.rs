@@ -29,7 +29,7 @@ pub fn complete(
 ) -> Result<Completed, CliError> {
     let model = loaded.model::<f64>(options)?;
     let samples = Samples::parse(input, &[("q", model.nq()), ("v", model.nv())])
-        .map_err(|e| e.with_floating_hint(&model))?;
+        .map_err(|e| e.with_state_hint(&model, options))?;
     let mut ws = Workspace::new(&model);
     let mut out = Vec::with_capacity(samples.len());
     for i in 0..samples.len() {

@@ -231,7 +231,7 @@ pub fn eval(
     // resolution of typical angles).
     let model64 = loaded.model::<f64>(options)?;
     let frame = query.frame(&model64)?;
-    let samples = read_samples(&model64, query, input)?;
+    let samples = read_samples(&model64, options, query, input)?;
     if engine == Engine::Generated {
         // Before anything is compiled.
         samples.check_all()?;
@@ -252,7 +252,12 @@ pub fn eval(
 }
 
 /// The samples of `input` for `query` on `model`, each state checked against the constraints.
-fn read_samples(model64: &Model<f64>, query: &Query, input: &str) -> Result<Samples, CliError> {
+fn read_samples(
+    model64: &Model<f64>,
+    options: &ModelOptions,
+    query: &Query,
+    input: &str,
+) -> Result<Samples, CliError> {
     // Only the fields the algorithm uses are read, at the lengths the model needs.
     // The sample's fields are the function's inputs (its descriptor's).
     let (nq, nv) = (model64.nq(), model64.nv());
@@ -279,8 +284,8 @@ fn read_samples(model64: &Model<f64>, query: &Query, input: &str) -> Result<Samp
         optional,
         links: takes_wrenches(query.algo).then_some(&links[..]),
     };
-    let samples =
-        Samples::parse_with(input, &request, &extras).map_err(|e| e.with_floating_hint(model64))?;
+    let samples = Samples::parse_with(input, &request, &extras)
+        .map_err(|e| e.with_state_hint(model64, options))?;
     let on_configurations = matches!(
         query.algo,
         EvalAlgo::Dynamics(a) if on_configuration_space(a)
@@ -434,7 +439,7 @@ pub fn eval_generated_together(
     let mut reference = None;
     for (query, scalar, input) in queries {
         query.frame(&model64)?;
-        let samples = read_samples(&model64, query, input)?;
+        let samples = read_samples(&model64, options, query, input)?;
         samples.check_all()?;
         let plan = Plan::new(&model64, query, &samples)?;
         for a in super::runner::runner_algorithms(&[plan.function], constrained) {

@@ -563,10 +563,11 @@ pub enum InputError {
     /// The field `samples` is not an array.
     #[error("the input's field `samples` must be an array")]
     SamplesNotArray,
-    /// A field of a sample has more entries than the model needs (refused as soon as the first extra
-    /// entry is read).
+    /// A field of a sample has more entries than the model needs (refused within 8 entries past the
+    /// model's length, `samples::EXTRA_COUNTED`).
     #[error(
-        "sample {sample}: field `{field}` has more than {len} entries, the model needs {len}{hint}"
+        "sample {sample}: field `{field}` has {} entries, the model needs {len}{hint}",
+        entries_given(*.given, *.exact)
     )]
     TooManyEntries {
         /// The sample, counted from 0.
@@ -575,33 +576,82 @@ pub enum InputError {
         field: &'static str,
         /// The entries the model needs.
         len: usize,
-        /// [`FLOATING_HINT`] for `q` and `v` of a model without a free joint, else empty.
+        /// The entries read: all of them when `exact`, else the reading stopped there.
+        given: usize,
+        /// Whether `given` is the field's whole length.
+        exact: bool,
+        /// [`FLOATING_HINT`] or [`LOCK_HINT`] where one applies, else empty.
         hint: &'static str,
     },
 }
 
-/// What an overlong `q` or `v` of a model without a free joint adds to its error: the usual cause is a
-/// state of the robot with a free-floating base (example-robot-data's humanoids, whose files leave the
-/// free joint out), read without `--floating` (a new user's trial with the G1, 2026-12-05).
+/// `36`, or `more than 37` where the reading stopped.
+fn entries_given(given: usize, exact: bool) -> String {
+    if exact {
+        given.to_string()
+    } else {
+        format!("more than {}", given)
+    }
+}
+
+/// What an overlong `q` (or `q1`) 7 entries too long, or `v` (`tau`, `qdd`) 6 too long, of a model without a
+/// free joint adds to its error: the usual cause is a state of the robot with a free-floating base
+/// (example-robot-data's G1, whose file has its free joint in a comment), read without `--floating` (a new
+/// user's trial with the G1, 2026-12-05).
 pub const FLOATING_HINT: &str =
     "; a free-floating base adds 7 entries to `q` and 6 to `v`: for such a state pass `--floating`";
 
+/// What any other overlong state vector of a model with `--lock` adds to its error (an attacker's trial:
+/// the full `q` of an arm with one joint locked was told to pass `--floating`).
+pub const LOCK_HINT: &str = "; `--lock` removes the locked joints' entries from `q` and `v` (`embedyn info` with the same options lists the joints left)";
+
+/// The fields laid out as `q`, and as `v`.
+const Q_FIELDS: [&str; 2] = ["q", "q1"];
+const V_FIELDS: [&str; 3] = ["v", "tau", "qdd"];
+
 impl CliError {
-    /// [`FLOATING_HINT`] added to an overlong `q` or `v` when the model has no free joint.
-    pub(crate) fn with_floating_hint(self, model: &embedyn_runtime::Model<f64>) -> CliError {
-        match self {
-            CliError::Input(InputError::TooManyEntries {
-                sample, field, len, ..
-            }) if matches!(field, "q" | "v") && !model.joints.iter().any(|j| j.nq() == 7) => {
-                CliError::Input(InputError::TooManyEntries {
-                    sample,
-                    field,
-                    len,
-                    hint: FLOATING_HINT,
-                })
+    /// [`FLOATING_HINT`] added to a state vector exactly a floating base's entries too long when the
+    /// model has no free joint; else [`LOCK_HINT`] to an overlong state vector when joints are locked.
+    pub(crate) fn with_state_hint(
+        self,
+        model: &embedyn_runtime::Model<f64>,
+        options: &ModelOptions,
+    ) -> CliError {
+        let CliError::Input(InputError::TooManyEntries {
+            sample,
+            field,
+            len,
+            given,
+            exact,
+            ..
+        }) = self
+        else {
+            return self;
+        };
+        let floating_extra = if Q_FIELDS.contains(&field) {
+            Some(7)
+        } else if V_FIELDS.contains(&field) {
+            Some(6)
+        } else {
+            None
+        };
+        let hint = match floating_extra {
+            Some(extra)
+                if exact && given == len + extra && !model.joints.iter().any(|j| j.nq() == 7) =>
+            {
+                FLOATING_HINT
             }
-            other => other,
-        }
+            Some(_) if !options.locks.is_empty() => LOCK_HINT,
+            _ => "",
+        };
+        CliError::Input(InputError::TooManyEntries {
+            sample,
+            field,
+            len,
+            given,
+            exact,
+            hint,
+        })
     }
 }
 
@@ -842,7 +892,7 @@ pub enum Printed {
 pub fn run(cli: Cli) -> Result<Printed, CliError> {
     match cli.command {
         Command::Info { model, scene } => {
-            let loaded = load_reporting(&model)?;
+            let loaded = load_reporting(&model, &scene)?;
             info::info(&loaded, &scene.options_for(&loaded)).map(Printed::Json)
         }
         Command::Bench {
@@ -851,7 +901,7 @@ pub fn run(cli: Cli) -> Result<Printed, CliError> {
             json,
             max_compile_memory,
         } => {
-            let loaded = load_reporting(&model)?;
+            let loaded = load_reporting(&model, &scene)?;
             let result = bench::bench(&loaded, &scene.options_for(&loaded), max_compile_memory)?;
             Ok(if json {
                 Printed::Json(result)
@@ -866,7 +916,7 @@ pub fn run(cli: Cli) -> Result<Printed, CliError> {
             svg,
             max_compile_memory,
         } => {
-            let loaded = load_reporting(&model)?;
+            let loaded = load_reporting(&model, &scene)?;
             if scene.rotors.is_some() {
                 output::note("embedyn tradeoff: measures every rotor choice; --rotors is ignored");
             }
@@ -914,7 +964,7 @@ pub fn run(cli: Cli) -> Result<Printed, CliError> {
                         .into(),
                 });
             }
-            let loaded = load_reporting(&model)?;
+            let loaded = load_reporting(&model, &scene)?;
             let options = embedyn_codegen::GenerateOptions {
                 lanes: lanes.unwrap_or(0),
                 avx_twins: embedyn_codegen::AvxTwins::from_name(&avx_twins)
@@ -967,7 +1017,7 @@ pub fn run(cli: Cli) -> Result<Printed, CliError> {
             scene,
             input,
         } => {
-            let loaded = load_reporting(&model)?;
+            let loaded = load_reporting(&model, &scene)?;
             let text = read_input(input.as_deref())?;
             complete::complete(&loaded, &scene.options_for(&loaded), &text).map(Printed::Completed)
         }
@@ -983,7 +1033,7 @@ pub fn run(cli: Cli) -> Result<Printed, CliError> {
             max_compile_memory,
         } => {
             let query = eval::Query::new(algo, frame, reference)?;
-            let loaded = load_reporting(&model)?;
+            let loaded = load_reporting(&model, &scene)?;
             let text = read_input(input.as_deref())?;
             eval::eval(
                 &loaded,
@@ -1073,16 +1123,27 @@ fn as_value<T: serde::Serialize>(document: &T) -> Result<serde_json::Value, CliE
 pub const MAX_PRINTED_WARNINGS: usize = 20;
 
 /// Loads the model and prints its warnings to stderr (at most [`MAX_PRINTED_WARNINGS`], then how many
-/// more).
-fn load_reporting(path: &Path) -> Result<Loaded, CliError> {
+/// more), but not the floating joint left in a comment when `--floating` makes the root free anyway.
+fn load_reporting(path: &Path, scene: &SceneArgs) -> Result<Loaded, CliError> {
     let loaded = load(path)?;
-    for w in loaded.warnings.iter().take(MAX_PRINTED_WARNINGS) {
+    let shown: Vec<&embedyn_codegen::Warning> = loaded
+        .warnings
+        .iter()
+        .filter(|w| {
+            !(scene.floating
+                && matches!(
+                    w.kind,
+                    embedyn_codegen::WarningKind::FloatingJointInComment { .. }
+                ))
+        })
+        .collect();
+    for w in shown.iter().take(MAX_PRINTED_WARNINGS) {
         output::note(&w.to_string());
     }
-    if loaded.warnings.len() > MAX_PRINTED_WARNINGS {
+    if shown.len() > MAX_PRINTED_WARNINGS {
         output::note(&format!(
             "and {} more warnings",
-            loaded.warnings.len() - MAX_PRINTED_WARNINGS
+            shown.len() - MAX_PRINTED_WARNINGS
         ));
     }
     Ok(loaded)

@@ -532,6 +532,10 @@ impl<'de> Visitor<'de> for SampleSeed<'_> {
     });
 }
 
+/// How many entries past a field's length are counted before it is refused (a free-floating base adds 7
+/// to `q`; one more tells that state from a longer one).
+pub(crate) const EXTRA_COUNTED: usize = 8;
+
 /// A requested field of one sample: an array of exactly the needed number of finite numbers.
 struct FieldSeed<'a> {
     reader: &'a mut Reader,
@@ -540,6 +544,19 @@ struct FieldSeed<'a> {
 }
 
 impl FieldSeed<'_> {
+    /// Refuses the field for its length: `given` entries, exactly or at least.
+    fn too_many<E: de::Error>(&mut self, len: usize, given: usize, exact: bool) -> E {
+        let (sample, field) = (self.sample, self.reader.samples.request[self.field].0);
+        self.reader.refuse(InputError::TooManyEntries {
+            sample,
+            field,
+            len,
+            given,
+            exact,
+            hint: "",
+        })
+    }
+
     /// Replaces what is recorded about this field (a repeated key replaces the earlier value).
     fn record(&mut self, problem: Option<Problem>) {
         let (sample, field) = (self.sample, self.field);
@@ -564,20 +581,21 @@ impl<'de> Visitor<'de> for FieldSeed<'_> {
         f.write_str("an array of numbers")
     }
     fn visit_seq<A: SeqAccess<'de>>(mut self, mut seq: A) -> Result<(), A::Error> {
-        let (name, len) = self.reader.samples.request[self.field];
+        let len = self.reader.samples.request[self.field].1;
         let start =
             self.sample * self.reader.samples.stride + self.reader.samples.offsets[self.field];
         let mut count = 0;
         let mut first_bad = None;
         while let Some(entry) = seq.next_element::<Entry>()? {
-            if count == len {
-                let sample = self.sample;
-                return Err(self.reader.refuse(InputError::TooManyEntries {
-                    sample,
-                    field: name,
-                    len,
-                    hint: "",
-                }));
+            if count >= len {
+                // Entries past the model's length are counted, not kept, up to EXTRA_COUNTED more: the
+                // message then gives the length (a floating base's state is 7 longer in `q`), and the
+                // reading still stops within a few entries of the model's length.
+                if count == len + EXTRA_COUNTED {
+                    return Err(self.too_many(len, count, false));
+                }
+                count += 1;
+                continue;
             }
             match entry {
                 Entry::Number(x) if x.is_finite() => self.reader.samples.numbers[start + count] = x,
@@ -589,6 +607,9 @@ impl<'de> Visitor<'de> for FieldSeed<'_> {
                 }
             }
             count += 1;
+        }
+        if count > len {
+            return Err(self.too_many(len, count, true));
         }
         // The length is judged before the entries, as it always was.
         let problem = if count < len {

@@ -198,6 +198,29 @@ fn info_floating_adds_root_joint_first() {
     assert_eq!(info["joints"][1]["v_index"], 6);
 }
 
+/// A file whose free joint is left in a comment (example-robot-data's G1; a new user's trial): every
+/// command warns that the root stays fixed and names `--floating`; with `--floating` the warning is not
+/// printed.
+#[test]
+fn a_floating_joint_in_a_comment_is_warned_of_unless_floating() {
+    let model = repo("tests/data/commented_floating_base.urdf");
+    let (ok, out, err) = embedyn(&["info", &model], "");
+    assert!(ok, "{err}");
+    assert!(
+        err.contains(
+            "commented_floating_base.urdf:5: comment: a joint of type \"floating\" is written only inside a comment, so the root link `pelvis` is fixed to the world as the file stands; for a free-floating base pass --floating"
+        ),
+        "{err}"
+    );
+    let info: Value = serde_json::from_str(&out).unwrap();
+    assert_eq!((&info["nq"], &info["nv"]), (&json!(1), &json!(1)));
+    let (ok, out, err) = embedyn(&["info", &model, "--floating"], "");
+    assert!(ok, "{err}");
+    assert!(!err.contains("comment"), "{err}");
+    let info: Value = serde_json::from_str(&out).unwrap();
+    assert_eq!((&info["nq"], &info["nv"]), (&json!(8), &json!(7)));
+}
+
 /// Pinocchio's answers (tests/data/pinocchio) through the command line, mapped by joint name.
 #[test]
 fn eval_reproduces_pinocchio_through_the_cli() {
@@ -326,9 +349,10 @@ fn bad_input_names_the_sample_and_the_field() {
 /// The input was parsed whole into a `serde_json::Value` tree (about 70 bytes per byte of text) before any
 /// length was checked: a `q` of 25 million zeros took 3.6 GB to be refused, and an input near the 512 MiB
 /// limit was killed for memory instead of refused. The samples are now read straight into the numbers
-/// the model needs, and a vector is refused at its first entry beyond the model's length. That it is
-/// refused while reading shows without timing: the same vector in a document cut off after it is still
-/// refused for its length, not for the end of the text.
+/// the model needs, and a vector is refused within `EXTRA_COUNTED` (8) entries beyond the model's length,
+/// which are counted, not kept, so that the message gives a short vector's length. That it is refused
+/// while reading shows without timing: the same vector in a document cut off after it is still refused for
+/// its length, not for the end of the text.
 #[test]
 fn an_overlong_vector_is_refused_while_reading() {
     let model = repo("models/arm7.urdf");
@@ -336,7 +360,7 @@ fn an_overlong_vector_is_refused_while_reading() {
     let long_q = format!("{{\"samples\": [{{\"q\": [{zeros}]");
     let complete_document =
         format!("{long_q}, \"v\": [0,0,0,0,0,0,0], \"tau\": [0,0,0,0,0,0,0]}}]}}");
-    let expected = "sample 0: field `q` has more than 7 entries, the model needs 7";
+    let expected = "sample 0: field `q` has more than 15 entries, the model needs 7";
     for text in [&complete_document, &long_q] {
         for args in [
             &["eval", &model, "--algo", "aba"][..],
@@ -355,16 +379,20 @@ fn an_overlong_vector_is_refused_while_reading() {
         &json!({"samples": [ok, long_v]}).to_string(),
     );
     assert!(
-        e.contains("sample 1: field `v` has more than 7 entries, the model needs 7"),
+        e.contains("sample 1: field `v` has 8 entries, the model needs 7"),
         "{e}"
     );
 }
 
 /// A state of a free-floating robot read without `--floating` (a new user's trial with the G1, whose file
-/// leaves the free joint out): the overlong `q` or `v` says what a floating base adds and names the flag;
-/// with `--floating` (a free joint in the model) an overlong vector is refused without the hint.
+/// has its free joint in a comment): a `q` (or `q1`) 7 entries too long, or a `v` (`tau`, `qdd`) 6 too long,
+/// says what a floating base adds and names the flag. Not where it would mislead (an attacker's trial): a
+/// vector of another length, a model with a free joint, a model with locked joints whose full state was
+/// given (there the message names `--lock`).
 #[test]
 fn an_overlong_state_of_a_fixed_model_hints_at_floating() {
+    const FLOATING: &str = "a free-floating base adds 7 entries to `q` and 6 to `v`: for such a state pass `--floating`";
+    const LOCK: &str = "`--lock` removes the locked joints' entries from `q` and `v`";
     let model = repo("models/arm7.urdf");
     let floating_state =
         json!({"samples": [{"q": vec![0.0; 14], "v": vec![0.0; 13], "tau": vec![0.0; 13]}]});
@@ -375,21 +403,71 @@ fn an_overlong_state_of_a_fixed_model_hints_at_floating() {
     ] {
         let e = error_of(args, &floating_state.to_string());
         assert!(
-            e.contains("sample 0: field `q` has more than 7 entries, the model needs 7; a free-floating base adds 7 entries to `q` and 6 to `v`: for such a state pass `--floating`"),
+            e.contains(&format!(
+                "sample 0: field `q` has 14 entries, the model needs 7; {FLOATING}"
+            )),
             "{args:?}: {e}"
         );
     }
+    // `q1` is laid out as `q`; `tau` as `v`.
+    let e = error_of(
+        &["eval", &model, "--algo", "difference"],
+        &json!({"samples": [{"q": vec![0.0; 7], "q1": vec![0.0; 14]}]}).to_string(),
+    );
+    assert!(
+        e.contains(&format!(
+            "field `q1` has 14 entries, the model needs 7; {FLOATING}"
+        )),
+        "{e}"
+    );
+    let e = error_of(
+        &["eval", &model, "--algo", "aba"],
+        &json!({"samples": [{"q": vec![0.0; 7], "v": vec![0.0; 7], "tau": vec![0.0; 13]}]})
+            .to_string(),
+    );
+    assert!(
+        e.contains(&format!(
+            "field `tau` has 13 entries, the model needs 7; {FLOATING}"
+        )),
+        "{e}"
+    );
+    // One entry too many: no floating state, no hint.
+    let e = error_of(
+        &["eval", &model, "--algo", "aba"],
+        &json!({"samples": [{"q": vec![0.0; 8], "v": vec![0.0; 7], "tau": vec![0.0; 7]}]})
+            .to_string(),
+    );
+    assert!(
+        e.contains("field `q` has 8 entries, the model needs 7"),
+        "{e}"
+    );
+    assert!(!e.contains("--floating"), "{e}");
+    // With `--floating` (a free joint in the model): no hint.
     let too_long =
-        json!({"samples": [{"q": vec![0.0; 15], "v": vec![0.0; 13], "tau": vec![0.0; 13]}]});
+        json!({"samples": [{"q": vec![0.0; 21], "v": vec![0.0; 13], "tau": vec![0.0; 13]}]});
     let e = error_of(
         &["eval", &model, "--floating", "--algo", "aba"],
         &too_long.to_string(),
     );
     assert!(
-        e.contains("field `q` has more than 14 entries, the model needs 14"),
+        e.contains("field `q` has 21 entries, the model needs 14"),
         "{e}"
     );
-    assert!(!e.contains("--floating"), "{e}");
+    assert!(!e.contains("pass `--floating`"), "{e}");
+    // A locked joint: the full state of the arm names `--lock`, not `--floating`.
+    let full_state =
+        json!({"samples": [{"q": vec![0.0; 7], "v": vec![0.0; 7], "tau": vec![0.0; 6]}]});
+    let e = error_of(
+        &["eval", &model, "--lock", "joint1=0.1", "--algo", "aba"],
+        &full_state.to_string(),
+    );
+    assert!(
+        e.contains(&format!(
+            "field `q` has 7 entries, the model needs 6; {LOCK}"
+        )),
+        "{e}"
+    );
+    assert!(!e.contains("pass `--floating`"), "{e}");
 }
 
 /// What the typed reading of the samples keeps from reading a JSON tree: fields a command does not use

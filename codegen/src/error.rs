@@ -1008,6 +1008,14 @@ pub enum WarningKind {
         /// How many joints it names.
         joints: usize,
     },
+    /// A file without a floating joint that has one inside a comment (example-robot-data's G1: "uncomment
+    /// when convert to mujoco"): read as written, its root is fixed to the world, which a user of a
+    /// legged robot rarely means. Tools that know the scene's options drop it where the root is made free.
+    #[error("a joint of type \"floating\" is written only inside a comment, so the root link `{root}` is fixed to the world as the file stands; for a free-floating base pass --floating (`floating` in robot! and ModelOptions)")]
+    FloatingJointInComment {
+        /// The root link of the file's tree.
+        root: String,
+    },
     /// Joint damping or friction, which the dynamics does not model.
     #[error("<dynamics damping/friction> of {} joint(s) ({}) ignored: embedyn computes the dynamics of ideal joints (as Pinocchio's algorithms do); add the losses to tau", .joints.len(), listed(.joints.iter().map(|j| format!("\"{j}\""))))]
     JointDynamicsIgnored {

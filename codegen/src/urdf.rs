@@ -385,6 +385,11 @@ impl<'a, 'input> Parser<'a, 'input> {
         self.finish()?;
         self.warn_ignored_joint_dynamics(root);
         self.warn_repeated_elements(root);
+        let root_name = links
+            .get(root_link)
+            .map_or("", |l| l.name.as_str())
+            .to_string();
+        self.warn_floating_joint_in_comment(root, &joints, &root_name);
         fold_repeated_warnings(&mut self.warnings);
         Ok(Robot {
             name,
@@ -838,6 +843,25 @@ impl<'a, 'input> Parser<'a, 'input> {
     /// first, as urdfdom (and so Pinocchio) does, and says so, since which one a file meant is a guess.
     /// `<mimic>` may repeat (several drivers add up: docs/model-format.md), `<visual>` and `<collision>`
     /// too.
+    /// [`WarningKind::FloatingJointInComment`]: no joint of the file is floating, and a comment among
+    /// `<robot>`'s children holds a `<joint` with `type="floating"` (either quote).
+    fn warn_floating_joint_in_comment(&mut self, root: Node, joints: &[Joint], root_link: &str) {
+        if joints.iter().any(|j| j.kind == JointKind::Floating) {
+            return;
+        }
+        let commented = root.children().filter(|n| n.is_comment()).find(|n| {
+            let text = n.text().unwrap_or("");
+            text.contains("<joint")
+                && (text.contains("type=\"floating\"") || text.contains("type='floating'"))
+        });
+        if let Some(comment) = commented {
+            let kind = WarningKind::FloatingJointInComment {
+                root: root_link.to_string(),
+            };
+            self.warn(comment, "comment", kind);
+        }
+    }
+
     fn warn_repeated_elements(&mut self, root: Node) {
         const JOINT_ONCE: [&str; 8] = [
             "origin",
@@ -1469,6 +1493,62 @@ mod kind_tests {
             w.to_string(),
             "warning: m.urdf:4: joint \"g0\": <mimic> on a fixed joint has nothing to drive; ignored (the same for joint \"g1\", joint \"g2\")"
         );
+    }
+
+    /// A floating joint left in a comment (example-robot-data's G1: "uncomment when convert to mujoco")
+    /// is warned of at the comment, naming the root that stays fixed; not when the file has a floating
+    /// joint of its own, nor for a comment that only mentions the word.
+    #[test]
+    fn a_floating_joint_in_a_comment_is_warned_of() {
+        let commented = robot_of(
+            r#"<!-- uncomment for a free base: <link name="world"/>
+  <joint name="base" type="floating"><parent link="world"/><child link="pelvis"/></joint> -->
+<link name="pelvis"/><link name="thigh"/>
+<joint name="hip" type="revolute"><parent link="pelvis"/><child link="thigh"/><axis xyz="0 1 0"/></joint>"#,
+        );
+        let loaded = parse_urdf(&commented, Path::new("g1.urdf")).unwrap();
+        let kinds: Vec<&WarningKind> = loaded.warnings.iter().map(|w| &w.kind).collect();
+        assert_eq!(
+            kinds,
+            [&WarningKind::FloatingJointInComment {
+                root: "pelvis".into()
+            }]
+        );
+        assert_eq!(loaded.warnings[0].location.line, Some(2));
+        assert!(
+            loaded.warnings[0].to_string().contains("pass --floating"),
+            "{}",
+            loaded.warnings[0]
+        );
+        // Single quotes count too.
+        let single = commented.replace(r#"type="floating""#, "type='floating'");
+        assert_eq!(
+            parse_urdf(&single, Path::new("g1.urdf"))
+                .unwrap()
+                .warnings
+                .len(),
+            1
+        );
+        // A floating joint of its own: the comment is an alternative, not a missing base.
+        let own = robot_of(
+            r#"<!-- <joint name="old" type="floating"/> -->
+<link name="world"/><link name="pelvis"/>
+<joint name="base" type="floating"><parent link="world"/><child link="pelvis"/></joint>"#,
+        );
+        assert!(parse_urdf(&own, Path::new("m.urdf"))
+            .unwrap()
+            .warnings
+            .is_empty());
+        // A comment that names no joint of that type.
+        let prose = robot_of(
+            r#"<!-- the base is floating in simulation; <joint> elements below are revolute -->
+<link name="a"/><link name="b"/>
+<joint name="j" type="revolute"><parent link="a"/><child link="b"/><axis xyz="0 0 1"/></joint>"#,
+        );
+        assert!(parse_urdf(&prose, Path::new("m.urdf"))
+            .unwrap()
+            .warnings
+            .is_empty());
     }
 
     /// An element URDF has once, given twice (the attacker's joint with two `<axis>`): the first is read,
