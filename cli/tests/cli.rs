@@ -409,65 +409,51 @@ fn an_overlong_state_of_a_fixed_model_hints_at_floating() {
             "{args:?}: {e}"
         );
     }
-    // `q1` is laid out as `q`; `tau` as `v`.
-    let e = error_of(
-        &["eval", &model, "--algo", "difference"],
-        &json!({"samples": [{"q": vec![0.0; 7], "q1": vec![0.0; 14]}]}).to_string(),
-    );
-    assert!(
-        e.contains(&format!(
-            "field `q1` has 14 entries, the model needs 7; {FLOATING}"
-        )),
-        "{e}"
-    );
-    let e = error_of(
-        &["eval", &model, "--algo", "aba"],
-        &json!({"samples": [{"q": vec![0.0; 7], "v": vec![0.0; 7], "tau": vec![0.0; 13]}]})
-            .to_string(),
-    );
-    assert!(
-        e.contains(&format!(
-            "field `tau` has 13 entries, the model needs 7; {FLOATING}"
-        )),
-        "{e}"
-    );
-    // One entry too many: no floating state, no hint.
-    let e = error_of(
-        &["eval", &model, "--algo", "aba"],
-        &json!({"samples": [{"q": vec![0.0; 8], "v": vec![0.0; 7], "tau": vec![0.0; 7]}]})
-            .to_string(),
-    );
-    assert!(
-        e.contains("field `q` has 8 entries, the model needs 7"),
-        "{e}"
-    );
-    assert!(!e.contains("--floating"), "{e}");
-    // With `--floating` (a free joint in the model): no hint.
-    let too_long =
-        json!({"samples": [{"q": vec![0.0; 21], "v": vec![0.0; 13], "tau": vec![0.0; 13]}]});
-    let e = error_of(
-        &["eval", &model, "--floating", "--algo", "aba"],
-        &too_long.to_string(),
-    );
-    assert!(
-        e.contains("field `q` has 21 entries, the model needs 14"),
-        "{e}"
-    );
-    assert!(!e.contains("pass `--floating`"), "{e}");
-    // A locked joint: the full state of the arm names `--lock`, not `--floating`.
-    let full_state =
-        json!({"samples": [{"q": vec![0.0; 7], "v": vec![0.0; 7], "tau": vec![0.0; 6]}]});
-    let e = error_of(
-        &["eval", &model, "--lock", "joint1=0.1", "--algo", "aba"],
-        &full_state.to_string(),
-    );
-    assert!(
-        e.contains(&format!(
-            "field `q` has 7 entries, the model needs 6; {LOCK}"
-        )),
-        "{e}"
-    );
-    assert!(!e.contains("pass `--floating`"), "{e}");
+    // (options, sample, what the message says, whether it names `--floating`): `q1` is laid out as `q`,
+    // `tau` as `v`; one entry too many is no floating state; with `--floating` (a free joint in the
+    // model) no hint; with a locked joint the full state of the arm names `--lock`.
+    let zeros = |n: usize| vec![0.0; n];
+    let cases = [
+        (
+            &["--algo", "difference"][..],
+            json!({"q": zeros(7), "q1": zeros(14)}),
+            format!("field `q1` has 14 entries, the model needs 7; {FLOATING}"),
+            true,
+        ),
+        (
+            &["--algo", "aba"],
+            json!({"q": zeros(7), "v": zeros(7), "tau": zeros(13)}),
+            format!("field `tau` has 13 entries, the model needs 7; {FLOATING}"),
+            true,
+        ),
+        (
+            &["--algo", "aba"],
+            json!({"q": zeros(8), "v": zeros(7), "tau": zeros(7)}),
+            "field `q` has 8 entries, the model needs 7".to_string(),
+            false,
+        ),
+        (
+            &["--floating", "--algo", "aba"],
+            json!({"q": zeros(21), "v": zeros(13), "tau": zeros(13)}),
+            "field `q` has 21 entries, the model needs 14".to_string(),
+            false,
+        ),
+        (
+            &["--lock", "joint1=0.1", "--algo", "aba"],
+            json!({"q": zeros(7), "v": zeros(7), "tau": zeros(6)}),
+            format!("field `q` has 7 entries, the model needs 6; {LOCK}"),
+            false,
+        ),
+    ];
+    for (options, sample, expected, hinted) in cases {
+        let args: Vec<&str> = ["eval", model.as_str()]
+            .into_iter()
+            .chain(options.iter().copied())
+            .collect();
+        let e = error_of(&args, &json!({ "samples": [sample] }).to_string());
+        assert!(e.contains(&expected), "{args:?}: {e}");
+        assert_eq!(e.contains("pass `--floating`"), hinted, "{args:?}: {e}");
+    }
 }
 
 /// What the typed reading of the samples keeps from reading a JSON tree: fields a command does not use
