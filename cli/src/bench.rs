@@ -3,9 +3,9 @@
 //! random states, no I/O inside the timed loops.
 
 use super::runner::{build_runner, run, RowShape};
-use super::CliError;
+use super::{output, CliError};
 use crate::sampling::{consistent_states, NoConsistentStates};
-use embedyn_codegen::{Algorithm, GenerateOptions, Loaded, ModelOptions};
+use embedyn_codegen::{Algorithm, GenerateOptions, LoadErrorKind, Loaded, ModelOptions};
 use embedyn_runtime::random::SplitMix64;
 use embedyn_runtime::{Model, Workspace};
 use serde_json::{json, Value};
@@ -129,19 +129,30 @@ pub fn bench(
         })
     };
     let timed: Vec<Algorithm> = Algorithm::timed_by_bench().collect();
-    let binary = build_runner(
-        loaded,
-        &GenerateOptions {
-            model: options.clone(),
-            // What is timed, nothing more.
-            algorithms: super::runner::runner_algorithms(&timed, constrained),
-            exact: true,
-            max_compile_memory_mb: Some(max_compile_memory_mb),
-            // The f64 lane module's `_batch` forms are timed too (ns per state).
-            lanes: LANES,
-            ..Default::default()
-        },
-    )?;
+    let generate = |lanes| GenerateOptions {
+        model: options.clone(),
+        // What is timed, nothing more.
+        algorithms: super::runner::runner_algorithms(&timed, constrained),
+        exact: true,
+        max_compile_memory_mb: Some(max_compile_memory_mb),
+        // The f64 lane module's `_batch` forms are timed too (ns per state).
+        lanes,
+        ..Default::default()
+    };
+    // The lane module is what `bench` adds to the functions: where the code fits the compile-memory
+    // limit only without it (GRBDA's jvrc1 humanoid at 2 GB, whose `crba_independent` alone is 27k
+    // operations), the batch forms are left untimed rather than the whole benchmark refused.
+    let (binary, lanes) = match build_runner(loaded, &generate(LANES)) {
+        Err(CliError::Load(e)) if matches!(e.kind, LoadErrorKind::TooLargeToCompile(_)) => {
+            let binary = build_runner(loaded, &generate(0))?;
+            output::note(&format!(
+                "embedyn bench: the lane module does not fit the compile-memory limit of {max_compile_memory_mb} MB: \
+                 no `generated_f64_batch` (raise the limit with --max-compile-memory to time the batch forms)"
+            ));
+            (binary, 0)
+        }
+        built => (built?, LANES),
+    };
     let rows: Vec<Vec<f64>> = st
         .iter()
         .map(|(q, v, x)| q.iter().chain(v).chain(x).chain(q).copied().collect())
@@ -153,7 +164,7 @@ pub fn bench(
         let g64 = time_generated(&binary, algo, "f64", &rows)?;
         let g32 = time_generated(&binary, algo, "f32", &rows)?;
         // The lane module's `_batch` forms of the three dynamics algorithms.
-        let batch = if super::runner::BATCH_TIMED.contains(&algo) {
+        let batch = if lanes > 0 && super::runner::BATCH_TIMED.contains(&algo) {
             json!(time_generated(
                 &binary,
                 algo,
@@ -163,16 +174,17 @@ pub fn bench(
         } else {
             Value::Null
         };
-        result.insert(
-            algo.into(),
-            json!({
-                "interpreted_f64": i,
-                "generated_f64": g64,
-                "generated_f32": g32,
-                "generated_f64_batch": batch,
-                "lanes": LANES,
-            }),
-        );
+        let mut entry = json!({
+            "interpreted_f64": i,
+            "generated_f64": g64,
+            "generated_f32": g32,
+        });
+        // Where lane functions were built (CONTRACT: the keys exist where they do).
+        if lanes > 0 {
+            entry["generated_f64_batch"] = batch;
+            entry["lanes"] = json!(lanes);
+        }
+        result.insert(algo.into(), entry);
     }
     Ok(Value::Object(result))
 }

@@ -209,6 +209,9 @@ fn derivatives_predicted_beyond_the_limit_are_judged_on_the_traced_code() {
             },
             max_compile_memory_mb: Some(mb),
             f32: false,
+            // The function alone: the default's AVX twin gives way to a limit the function fits
+            // only without it, which would hide the refusal below.
+            avx_twins: embedyn_codegen::AvxTwins::None,
             ..only(&[Algorithm::AbaDerivatives])
         };
         generate_source(&loaded, &options)
@@ -228,10 +231,11 @@ fn derivatives_predicted_beyond_the_limit_are_judged_on_the_traced_code() {
         .unwrap_or_else(|e| panic!("predicted {predicted_mb:.0} MB, limit {limit} MB: {e}"));
     assert!(source.contains("pub fn aba_derivatives"));
     // A limit below the traced code's estimate, though within four times the prediction: refused on the
-    // traced count (the floating ANYmal B, 2026-12-03: 283 MB predicted, 230 MB traced).
+    // traced count (the floating ANYmal B, 2026-12-05: 283 MB predicted, 182 MB traced; 230 MB on
+    // 2026-12-03).
     let anymal = "../tests/data/pinocchio/anymal_b.urdf";
     let predicted_mb = estimated_mb(&generate(anymal, true, 1).unwrap_err().to_string());
-    let error = generate(anymal, true, (predicted_mb / 1.5) as u64)
+    let error = generate(anymal, true, (predicted_mb / 2.0) as u64)
         .unwrap_err()
         .to_string();
     assert!(error.contains("counted in the traced code"), "{error}");

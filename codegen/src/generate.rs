@@ -632,6 +632,8 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
     let mut f64_twins = Vec::new();
     let mut lane_functions = Vec::new();
     let mut lane_twins = Vec::new();
+    // Whether the f64 copy of each function gets an AVX twin by its size, once it is known to fit.
+    let mut large_twins: Vec<bool> = Vec::new();
     // The AVX lane type of the lane module of 256-bit values, if one is generated.
     let avx_type = scalars
         .iter()
@@ -686,7 +688,11 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
             };
             // Whether the f64 module's copy gets an AVX twin by its size (f64 only: the twin doubles the
             // function's compile time, src/dispatch.rs); the twins are written once all are chosen, below.
-            let twinned = options.f64 && options.avx_twins.twins(function.statements);
+            // Asked for (`avx_twins = all`), the twin counts here and a limit it passes refuses the code;
+            // by default (`large`) it is a speed-up like the budget twins, added below where it fits.
+            let by_size = options.f64 && options.avx_twins.twins(function.statements);
+            let twinned = by_size && options.avx_twins == crate::AvxTwins::All;
+            large_twins.push(by_size && !twinned);
             // The lane function's copy with an AVX twin, for the lane module of 256-bit values.
             let lane_twin = lane_function.as_ref().and_then(|lane| {
                 let avx_type =
@@ -758,6 +764,14 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
         };
         let mut avx512 = vec![false; functions.len()];
         if options.f64 {
+            // The default's twins by size, in the order of the functions, each where the estimate of the
+            // compiler's memory stays within the limit (a new user's trial: GRBDA's jvrc1 humanoid, whose
+            // five functions fit 2 GB without the twins of `aba` and `rnea`, was refused by `embedyn bench`).
+            for k in (0..functions.len()).filter(|&k| large_twins[k]) {
+                if add_copy(&mut sizes, k) {
+                    sizes[k].twinned = true;
+                }
+            }
             let statements: Vec<usize> = functions.iter().map(|f| f.statements).collect();
             // Smaller functions' twins, under the module's budget (src/dispatch.rs): decided once every
             // function is traced, as the budget is shared. They are a speed-up, not a request: one that
@@ -2173,6 +2187,34 @@ mod tests {
         for f in ["kinematics", "aba", "rnea", "crba"] {
             assert!(tight.matches(&format!("pub fn {f}(")).count() >= 2, "{f}");
         }
+    }
+
+    /// The twins by size are a speed-up too under the default (`large`): where the code fits the limit only
+    /// without a large function's twin, the twin is left out; asked for (`all`) it still refuses. Measured
+    /// for the humanoid34's `aba` in f64 (a twin by size): it fits 150 MB without its twin, 170 MB with it.
+    #[test]
+    fn large_twins_give_way_to_the_memory_limit_by_default() {
+        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../models/humanoid34.urdf");
+        let loaded = crate::load(path.as_ref()).unwrap();
+        let options = |twins: crate::AvxTwins, limit: Option<u64>| {
+            GenerateOptions {
+                f32: false,
+                avx_twins: twins,
+                max_compile_memory_mb: limit,
+                ..GenerateOptions::default()
+            }
+            .with_requested(Some(vec![Algorithm::Aba]), &[])
+        };
+        let twinned = |text: &str| text.contains("mod aba_avx {");
+        let roomy = generate_source(&loaded, &options(crate::AvxTwins::Large, None)).unwrap();
+        assert!(twinned(&roomy));
+        let tight = generate_source(&loaded, &options(crate::AvxTwins::Large, Some(160))).unwrap();
+        assert!(!twinned(&tight));
+        assert!(tight.contains("pub fn aba("));
+        let refusal = generate_source(&loaded, &options(crate::AvxTwins::All, Some(160)))
+            .unwrap_err()
+            .to_string();
+        assert!(refusal.contains("--avx-twins none"), "{refusal}");
     }
 
     /// A refusal for size names each frame function by its own name, not the algorithm's `frame` (a new
