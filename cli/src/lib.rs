@@ -613,45 +613,39 @@ impl CliError {
     /// [`FLOATING_HINT`] added to a state vector exactly a floating base's entries too long when the
     /// model has no free joint; else [`LOCK_HINT`] to an overlong state vector when joints are locked.
     pub(crate) fn with_state_hint(
-        self,
+        mut self,
         model: &embedyn_runtime::Model<f64>,
         options: &ModelOptions,
     ) -> CliError {
-        let CliError::Input(InputError::TooManyEntries {
-            sample,
-            field,
-            len,
-            given,
-            exact,
-            ..
-        }) = self
-        else {
-            return self;
-        };
-        let floating_extra = if Q_FIELDS.contains(&field) {
-            Some(7)
-        } else if V_FIELDS.contains(&field) {
-            Some(6)
-        } else {
-            None
-        };
-        let hint = match floating_extra {
-            Some(extra)
-                if exact && given == len + extra && !model.joints.iter().any(|j| j.nq() == 7) =>
-            {
-                FLOATING_HINT
-            }
-            Some(_) if !options.locks.is_empty() => LOCK_HINT,
-            _ => "",
-        };
-        CliError::Input(InputError::TooManyEntries {
-            sample,
+        if let CliError::Input(InputError::TooManyEntries {
             field,
             len,
             given,
             exact,
             hint,
-        })
+            ..
+        }) = &mut self
+        {
+            let floating_extra = if Q_FIELDS.contains(field) {
+                Some(7)
+            } else if V_FIELDS.contains(field) {
+                Some(6)
+            } else {
+                None
+            };
+            *hint = match floating_extra {
+                Some(extra)
+                    if *exact
+                        && *given == *len + extra
+                        && !model.joints.iter().any(|j| j.nq() == 7) =>
+                {
+                    FLOATING_HINT
+                }
+                Some(_) if !options.locks.is_empty() => LOCK_HINT,
+                _ => "",
+            };
+        }
+        self
     }
 }
 

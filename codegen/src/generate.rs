@@ -632,8 +632,6 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
     let mut f64_twins = Vec::new();
     let mut lane_functions = Vec::new();
     let mut lane_twins = Vec::new();
-    // Whether the f64 copy of each function gets an AVX twin by its size, once it is known to fit.
-    let mut large_twins: Vec<bool> = Vec::new();
     // The AVX lane type of the lane module of 256-bit values, if one is generated.
     let avx_type = scalars
         .iter()
@@ -690,9 +688,7 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
             // function's compile time, src/dispatch.rs); the twins are written once all are chosen, below.
             // Asked for (`avx_twins = all`), the twin counts here and a limit it passes refuses the code;
             // by default (`large`) it is a speed-up like the budget twins, added below where it fits.
-            let by_size = options.f64 && options.avx_twins.twins(function.statements);
-            let twinned = by_size && options.avx_twins == crate::AvxTwins::All;
-            large_twins.push(by_size && !twinned);
+            let twinned = options.f64 && options.avx_twins == crate::AvxTwins::All;
             // The lane function's copy with an AVX twin, for the lane module of 256-bit values.
             let lane_twin = lane_function.as_ref().and_then(|lane| {
                 let avx_type =
@@ -767,7 +763,11 @@ fn generate_items(loaded: &Loaded, options: &GenerateOptions) -> Result<Generate
             // The default's twins by size, in the order of the functions, each where the estimate of the
             // compiler's memory stays within the limit (a new user's trial: GRBDA's jvrc1 humanoid, whose
             // five functions fit 2 GB without the twins of `aba` and `rnea`, was refused by `embedyn bench`).
-            for k in (0..functions.len()).filter(|&k| large_twins[k]) {
+            let by_size = |k: &usize| {
+                options.avx_twins == crate::AvxTwins::Large
+                    && options.avx_twins.twins(functions[*k].statements)
+            };
+            for k in (0..functions.len()).filter(by_size) {
                 if add_copy(&mut sizes, k) {
                     sizes[k].twinned = true;
                 }
